@@ -1,0 +1,53 @@
+#include "core/bvh_stats.h"
+
+#include <algorithm>
+#include <utility>
+#include <vector>
+
+namespace sahbench {
+
+double sah_cost(const Bvh& bvh, const SahCost& cost) {
+  if (bvh.nodes.empty()) return 0.0;
+  const double root_area = bvh.root().bounds.half_area();
+  // A flat or point-sized scene has no area to weigh by; every node then counts fully.
+  const bool degenerate = !(root_area > 0.0);
+  double total = 0.0;
+  for (const Node& node : bvh.nodes) {
+    const double weight = degenerate ? 1.0 : node.bounds.half_area() / root_area;
+    total += weight * (node.is_leaf() ? cost.leaf_cost(node.prim_count) : cost.c_trav);
+  }
+  return total;
+}
+
+BvhStats compute_stats(const Bvh& bvh, std::size_t prim_count, const SahCost& cost) {
+  BvhStats stats;
+  stats.nodes = static_cast<uint32_t>(bvh.nodes.size());
+  stats.bytes = bvh.bytes();
+  stats.sah_cost = sah_cost(bvh, cost);
+  stats.refs_per_prim = prim_count ? static_cast<double>(bvh.prim_refs.size()) / prim_count : 0.0;
+  if (bvh.nodes.empty()) return stats;
+
+  // Depth-first walk with an explicit stack of (node, depth); the validator guarantees a tree.
+  std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};
+  double depth_sum = 0.0;
+  uint64_t refs_in_leaves = 0;
+  while (!stack.empty()) {
+    const auto [index, depth] = stack.back();
+    stack.pop_back();
+    const Node& node = bvh.nodes[index];
+    stats.max_depth = std::max(stats.max_depth, depth);
+    if (node.is_leaf()) {
+      ++stats.leaves;
+      depth_sum += depth;
+      refs_in_leaves += node.prim_count;
+      stats.max_leaf_size = std::max<uint32_t>(stats.max_leaf_size, node.prim_count);
+      continue;
+    }
+    for (uint32_t c = 0; c < node.child_count; ++c) stack.emplace_back(node.first + c, depth + 1);
+  }
+  stats.mean_leaf_depth = depth_sum / stats.leaves;
+  stats.mean_leaf_size = static_cast<double>(refs_in_leaves) / stats.leaves;
+  return stats;
+}
+
+}  // namespace sahbench

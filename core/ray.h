@@ -1,0 +1,33 @@
+#pragma once
+// Rays and hit records shared by every kernel, the brute-force reference and (later) Embree.
+
+#include <cstdint>
+#include <limits>
+
+#include "core/vec3.h"
+
+namespace sahbench {
+
+/// A ray is the segment org + t * dir for t in [tmin, tmax]. `dir` need not be normalised and may have
+/// +0 or -0 components; every kernel must accept both.
+struct Ray {
+  Vec3 org;
+  float tmin = 0.0f;
+  Vec3 dir{0.0f, 0.0f, 1.0f};
+  float tmax = std::numeric_limits<float>::infinity();
+};
+
+inline constexpr uint32_t kInvalidPrim = 0xFFFFFFFFu;
+
+/// Closest-hit result. `prim` is the scene triangle index, or kInvalidPrim for a miss. (u, v) are the
+/// barycentric coordinates of the hit with respect to v1 and v2: p = (1-u-v)*v0 + u*v1 + v*v2.
+struct Hit {
+  uint32_t prim = kInvalidPrim;
+  float t = std::numeric_limits<float>::infinity();
+  float u = 0.0f;
+  float v = 0.0f;
+
+  constexpr bool found() const { return prim != kInvalidPrim; }
+};
+
+}  // namespace sahbench

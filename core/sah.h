@@ -1,0 +1,31 @@
+#pragma once
+// The one SAH cost model (Goldsmith and Salmon 1987; MacDonald and Booth 1990) used by every builder
+// and by the statistics, so that a tree's cost is computed with the constants it was built with.
+
+#include <cstdint>
+
+namespace sahbench {
+
+struct SahCost {
+  /// Cost of visiting one inner node (box tests of its children), relative to one triangle test.
+  /// 1 : 1 as in Embree's and madmann91/bvh's SAH statistics, so SAH figures compare with theirs.
+  float c_trav = 1.0f;
+  /// Cost of one ray/triangle test.
+  float c_isect = 1.0f;
+
+  /// Cost of a leaf holding `count` primitives, relative to its own area.
+  constexpr float leaf_cost(uint32_t count) const { return c_isect * static_cast<float>(count); }
+
+  /// Cost of splitting a node of half-area `parent_area` into two children, relative to the parent's
+  /// area. The terms are left unnormalised (area * count) so callers may compare candidates without
+  /// dividing.
+  constexpr float split_cost(float parent_area, float left_area, uint32_t left_count, float right_area,
+                             uint32_t right_count) const {
+    return c_trav + c_isect * (left_area * static_cast<float>(left_count) +
+                               right_area * static_cast<float>(right_count)) / parent_area;
+  }
+
+  friend constexpr bool operator==(const SahCost&, const SahCost&) = default;
+};
+
+}  // namespace sahbench

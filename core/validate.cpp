@@ -1,0 +1,162 @@
+#include "core/validate.h"
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace sahbench {
+namespace {
+
+// Enough messages to diagnose a broken builder without flooding the terminal.
+constexpr std::size_t kMaxMessages = 32;
+
+bool has_nan(const Aabb& b) {
+  for (std::size_t a = 0; a < 3; ++a)
+    if (std::isnan(b.min[a]) || std::isnan(b.max[a])) return true;
+  return false;
+}
+
+std::string box_string(const Aabb& b) {
+  return "[(" + std::to_string(b.min.x) + ", " + std::to_string(b.min.y) + ", " + std::to_string(b.min.z) +
+         ") .. (" + std::to_string(b.max.x) + ", " + std::to_string(b.max.y) + ", " +
+         std::to_string(b.max.z) + ")]";
+}
+
+class Checker {
+ public:
+  Checker(const Bvh& bvh, std::span<const Aabb> prim_bounds) : bvh_(bvh), prim_bounds_(prim_bounds) {}
+
+  ValidationReport run() {
+    if (bvh_.nodes.empty()) {
+      fail("the tree has no nodes");
+      return std::move(report_);
+    }
+    if (bvh_.arity != 2 && bvh_.arity != 4 && bvh_.arity != 8)
+      fail("arity is " + std::to_string(bvh_.arity) + ", expected 2, 4 or 8");
+    walk();
+    check_coverage();
+    return std::move(report_);
+  }
+
+ private:
+  void fail(std::string message) {
+    if (report_.errors.size() < kMaxMessages) report_.errors.push_back(std::move(message));
+  }
+
+  // Visits every node reachable from the root once. A node reached twice means a cycle or a shared
+  // child; the walk does not descend into it again, so it terminates on any input.
+  void walk() {
+    const std::size_t n = bvh_.nodes.size();
+    std::vector<uint8_t> seen(n, 0);
+    std::vector<uint32_t> stack{0};
+    seen[0] = 1;
+    referenced_.assign(prim_bounds_.size(), 0);
+    std::size_t reached = 1;
+    while (!stack.empty()) {
+      const uint32_t index = stack.back();
+      stack.pop_back();
+      const Node& node = bvh_.nodes[index];
+      const std::string where = "node " + std::to_string(index);
+      if (has_nan(node.bounds)) fail(where + " has NaN in its bounds");
+      if ((node.child_count == 0) == (node.prim_count == 0)) {
+        fail(where + " has child_count " + std::to_string(node.child_count) + " and prim_count " +
+             std::to_string(node.prim_count) + "; exactly one must be non-zero");
+        continue;
+      }
+      if (node.is_leaf()) {
+        check_leaf(index, node);
+        continue;
+      }
+      if (node.child_count < 2 || node.child_count > bvh_.arity)
+        fail(where + " has " + std::to_string(node.child_count) + " children, arity is " +
+             std::to_string(bvh_.arity));
+      if (static_cast<uint64_t>(node.first) + node.child_count > n) {
+        fail(where + " has children [" + std::to_string(node.first) + ", +" +
+             std::to_string(node.child_count) + ") outside the " + std::to_string(n) + " nodes");
+        continue;
+      }
+      for (uint32_t c = node.first; c < node.first + node.child_count; ++c) {
+        if (seen[c]) {
+          fail("node " + std::to_string(c) + " is reached twice (cycle or shared child), again from " + where);
+          continue;
+        }
+        seen[c] = 1;
+        ++reached;
+        if (!node.bounds.contains(bvh_.nodes[c].bounds))
+          fail("child node " + std::to_string(c) + " " + box_string(bvh_.nodes[c].bounds) +
+               " is not inside its parent " + where + " " + box_string(node.bounds));
+        stack.push_back(c);
+      }
+    }
+    if (reached != n) fail(std::to_string(n - reached) + " nodes are not reachable from the root");
+  }
+
+  void check_leaf(uint32_t index, const Node& node) {
+    const std::string where = "leaf " + std::to_string(index);
+    if (static_cast<uint64_t>(node.first) + node.prim_count > bvh_.prim_refs.size()) {
+      fail(where + " references [" + std::to_string(node.first) + ", +" + std::to_string(node.prim_count) +
+           ") outside the " + std::to_string(bvh_.prim_refs.size()) + " references");
+      return;
+    }
+    for (uint32_t r = node.first; r < node.first + node.prim_count; ++r) {
+      const uint32_t prim = bvh_.prim_refs[r];
+      if (prim >= prim_bounds_.size()) {
+        fail(where + " references primitive " + std::to_string(prim) + ", but there are only " +
+             std::to_string(prim_bounds_.size()));
+        continue;
+      }
+      referenced_[prim] = 1;
+      // Spatial splits may clip a reference to a part of the primitive, so only the intersection of
+      // the two boxes must be non-empty for those; without repeats the whole box must be inside.
+      const Aabb& pb = prim_bounds_[prim];
+      const bool inside = node.bounds.contains(pb);
+      const bool overlaps = !merge_intersection(node.bounds, pb).is_empty();
+      if (!inside && !(allow_clipped() && overlaps))
+        fail(where + " does not contain primitive " + std::to_string(prim) + " " + box_string(pb) +
+             "; leaf box " + box_string(node.bounds));
+    }
+  }
+
+  static Aabb merge_intersection(const Aabb& a, const Aabb& b) {
+    return {max(a.min, b.min), min(a.max, b.max)};
+  }
+
+  // References repeat only when a builder split primitives; then leaves hold clipped parts.
+  bool allow_clipped() const { return bvh_.prim_refs.size() > prim_bounds_.size(); }
+
+  void check_coverage() {
+    std::size_t missing = 0;
+    uint32_t first_missing = 0;
+    for (std::size_t p = 0; p < referenced_.size(); ++p) {
+      if (!referenced_[p] && missing++ == 0) first_missing = static_cast<uint32_t>(p);
+    }
+    if (missing)
+      fail(std::to_string(missing) + " primitives are not referenced by any leaf (first: " +
+           std::to_string(first_missing) + ")");
+  }
+
+  const Bvh& bvh_;
+  std::span<const Aabb> prim_bounds_;
+  std::vector<uint8_t> referenced_;
+  ValidationReport report_;
+};
+
+}  // namespace
+
+std::string ValidationReport::summary() const {
+  std::string out;
+  for (const auto& e : errors) out += e + "\n";
+  return out;
+}
+
+ValidationReport validate(const Bvh& bvh, std::span<const Aabb> prim_bounds) {
+  return Checker(bvh, prim_bounds).run();
+}
+
+ValidationReport validate(const Bvh& bvh, std::span<const Triangle> triangles) {
+  std::vector<Aabb> bounds(triangles.size());
+  for (std::size_t i = 0; i < triangles.size(); ++i) bounds[i] = triangles[i].bounds();
+  return validate(bvh, bounds);
+}
+
+}  // namespace sahbench

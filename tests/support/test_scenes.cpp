@@ -1,0 +1,92 @@
+#include "tests/support/test_scenes.h"
+
+#include <random>
+
+#include "core/aabb.h"
+
+namespace sahbench::test {
+
+std::vector<Triangle> random_triangles(std::size_t count, uint64_t seed, float extent, float max_edge) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> pos(-extent, extent);
+  std::uniform_real_distribution<float> edge(-max_edge, max_edge);
+  std::vector<Triangle> tris(count);
+  for (auto& t : tris) {
+    t.v0 = {pos(rng), pos(rng), pos(rng)};
+    t.v1 = t.v0 + Vec3{edge(rng), edge(rng), edge(rng)};
+    t.v2 = t.v0 + Vec3{edge(rng), edge(rng), edge(rng)};
+  }
+  return tris;
+}
+
+std::vector<Triangle> cube_grid(int n, float h) {
+  std::vector<Triangle> tris;
+  // For each face: a fixed axis and sign, and the two in-plane axes.
+  for (int axis = 0; axis < 3; ++axis) {
+    for (float sign : {-1.0f, 1.0f}) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      auto point = [&](int i, int j) {
+        Vec3 p;
+        p[axis] = sign * h;
+        p[u] = -h + 2.0f * h * static_cast<float>(i) / static_cast<float>(n);
+        p[v] = -h + 2.0f * h * static_cast<float>(j) / static_cast<float>(n);
+        return p;
+      };
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+          tris.push_back({point(i, j), point(i + 1, j), point(i + 1, j + 1)});
+          tris.push_back({point(i, j), point(i + 1, j + 1), point(i, j + 1)});
+        }
+    }
+  }
+  return tris;
+}
+
+std::vector<Ray> random_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed) {
+  Aabb box;
+  for (const auto& t : scene) box.extend(t.bounds());
+  const Vec3 c = box.center();
+  const float r = length(box.extent()) * 0.5f + 1.0f;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> kind(0, 5);
+  std::vector<Ray> rays(count);
+  for (auto& ray : rays) {
+    const Vec3 inside = c + Vec3{unit(rng), unit(rng), unit(rng)} * (r * 0.5f);
+    switch (kind(rng)) {
+      case 0:  // from outside towards a random point inside
+      case 1: {
+        const Vec3 from = c + normalize(Vec3{unit(rng), unit(rng), unit(rng)}) * (2.0f * r);
+        ray.org = from;
+        ray.dir = inside - from;
+        break;
+      }
+      case 2:  // from inside in a random direction
+        ray.org = inside;
+        ray.dir = {unit(rng), unit(rng), unit(rng)};
+        break;
+      case 3: {  // axis-parallel, with +0 or -0 in the other components
+        ray.org = inside;
+        const int axis = static_cast<int>(rng() % 3);
+        ray.dir = {(rng() & 1) ? 0.0f : -0.0f, (rng() & 1) ? 0.0f : -0.0f, (rng() & 1) ? 0.0f : -0.0f};
+        ray.dir[axis] = (rng() & 1) ? 1.0f : -1.0f;
+        break;
+      }
+      case 4: {  // in a coordinate plane: one zero component of either sign
+        ray.org = inside;
+        ray.dir = {unit(rng), unit(rng), unit(rng)};
+        ray.dir[rng() % 3] = (rng() & 1) ? 0.0f : -0.0f;
+        break;
+      }
+      default:  // a bounded segment
+        ray.org = inside;
+        ray.dir = {unit(rng), unit(rng), unit(rng)};
+        ray.tmin = 0.01f;
+        ray.tmax = r * 0.3f;
+        break;
+    }
+  }
+  return rays;
+}
+
+}  // namespace sahbench::test

@@ -1,0 +1,24 @@
+#pragma once
+// Random and adversarial inputs shared by the test suites. Deterministic from a seed.
+
+#include <cstdint>
+#include <vector>
+
+#include "core/ray.h"
+#include "core/triangle.h"
+
+namespace sahbench::test {
+
+/// `count` triangles with vertices uniform in [-extent, extent]^3 and edges up to `max_edge` long.
+std::vector<Triangle> random_triangles(std::size_t count, uint64_t seed, float extent = 10.0f,
+                                       float max_edge = 2.0f);
+
+/// A closed, watertight grid of quads (two triangles each) on the six faces of a cube: every interior
+/// edge and vertex is shared, so a leak through it is a kernel error.
+std::vector<Triangle> cube_grid(int quads_per_side, float half_size);
+
+/// A mix of rays aimed at the scene's box: random origins outside and inside, random directions, and
+/// rays whose direction has +0 and -0 components (axis-parallel and in coordinate planes).
+std::vector<Ray> random_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed);
+
+}  // namespace sahbench::test

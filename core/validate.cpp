@@ -28,7 +28,8 @@ class Checker {
 
   ValidationReport run() {
     if (bvh_.nodes.empty()) {
-      fail("the tree has no nodes");
+      // An empty scene has an empty tree; any primitive makes a root necessary.
+      if (!prim_bounds_.empty()) fail("the tree has no nodes but there are " + std::to_string(prim_bounds_.size()) + " primitives");
       return std::move(report_);
     }
     if (bvh_.arity != 2 && bvh_.arity != 4 && bvh_.arity != 8)

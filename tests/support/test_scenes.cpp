@@ -1,5 +1,6 @@
 #include "tests/support/test_scenes.h"
 
+#include <cmath>
 #include <random>
 
 #include "core/aabb.h"
@@ -49,7 +50,8 @@ std::vector<Ray> random_rays(const std::vector<Triangle>& scene, std::size_t cou
   const float r = length(box.extent()) * 0.5f + 1.0f;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
-  std::uniform_int_distribution<int> kind(0, 5);
+  std::uniform_int_distribution<int> kind(0, 7);
+  std::uniform_int_distribution<std::size_t> pick(0, scene.empty() ? 0 : scene.size() - 1);
   std::vector<Ray> rays(count);
   for (auto& ray : rays) {
     const Vec3 inside = c + Vec3{unit(rng), unit(rng), unit(rng)} * (r * 0.5f);
@@ -76,6 +78,17 @@ std::vector<Ray> random_rays(const std::vector<Triangle>& scene, std::size_t cou
         ray.org = inside;
         ray.dir = {unit(rng), unit(rng), unit(rng)};
         ray.dir[rng() % 3] = (rng() & 1) ? 0.0f : -0.0f;
+        break;
+      }
+      case 6:  // at a random point of a random triangle (so sparse scenes are hit too), from outside
+      case 7: {
+        if (scene.empty()) continue;
+        const Triangle& t = scene[pick(rng)];
+        float a = std::fabs(unit(rng)), b = std::fabs(unit(rng));
+        if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
+        const Vec3 target = t.v0 + (t.v1 - t.v0) * a + (t.v2 - t.v0) * b;
+        ray.org = c + normalize(Vec3{unit(rng), unit(rng), unit(rng)}) * (2.0f * r);
+        ray.dir = target - ray.org;
         break;
       }
       default:  // a bounded segment

@@ -1,0 +1,71 @@
+#include "builders/registry.h"
+
+#include <algorithm>
+
+#include "builders/binned_sah.h"
+#include "builders/sweep_sah.h"
+#include "core/error.h"
+
+namespace sahbench {
+namespace {
+
+// Parameters every top-down SAH builder takes. Defaults: leaves of up to 8 primitives where the SAH
+// prefers them (the usual choice for BVH2 with triangle leaves, e.g. Embree's and pbrt's defaults of 8
+// and 255 bound it from above; 8 keeps leaves cheap to test); SAH constants from core/sah.h.
+std::vector<ParamSpec> top_down_params() {
+  const SahCost defaults;
+  const TopDownConfig config;
+  return {
+      {"min_leaf", ParamType::kInt, double(config.min_leaf), 1, kMaxLeafPrims,
+       "nodes with this many primitives or fewer become leaves"},
+      {"max_leaf", ParamType::kInt, double(config.max_leaf), 1, kMaxLeafPrims,
+       "nodes with more primitives are always split"},
+      {"c_trav", ParamType::kFloat, defaults.c_trav, 0, 1e6, "SAH cost of visiting an inner node"},
+      {"c_isect", ParamType::kFloat, defaults.c_isect, 1e-6, 1e6, "SAH cost of one ray/triangle test"},
+  };
+}
+
+TopDownConfig top_down_config(const ParamSet& p) {
+  return {p.get_uint("min_leaf"), p.get_uint("max_leaf"), sah_cost_of(p)};
+}
+
+BuilderInfo binned_sah_info() {
+  auto params = top_down_params();
+  params.insert(params.begin(), {"bins", ParamType::kInt, double(BinnedSahParams{}.bins), kMinBins, kMaxBins,
+                                 "centroid bins per axis"});
+  return {"binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", std::move(params),
+          [](const BuildInput& input, const ParamSet& p) {
+            return build_binned_sah(input, {p.get_uint("bins"), top_down_config(p)});
+          }};
+}
+
+BuilderInfo sweep_sah_info() {
+  return {"sweep_sah", "full-sweep SAH over presorted centroids (MacDonald and Booth 1990)", top_down_params(),
+          [](const BuildInput& input, const ParamSet& p) { return build_sweep_sah(input, {top_down_config(p)}); }};
+}
+
+const std::vector<BuilderInfo>& registry() {
+  // One line per builder.
+  static const std::vector<BuilderInfo> all = {
+      binned_sah_info(),
+      sweep_sah_info(),
+  };
+  return all;
+}
+
+}  // namespace
+
+std::span<const BuilderInfo> builders() { return registry(); }
+
+const BuilderInfo& find_builder(std::string_view name) {
+  const auto& all = registry();
+  const auto it = std::find_if(all.begin(), all.end(), [&](const BuilderInfo& b) { return b.name == name; });
+  if (it != all.end()) return *it;
+  std::string known;
+  for (const auto& b : all) known += (known.empty() ? "" : ", ") + b.name;
+  throw Error("unknown builder '" + std::string(name) + "' (known: " + known + ")");
+}
+
+SahCost sah_cost_of(const ParamSet& params) { return {params.get_float("c_trav"), params.get_float("c_isect")}; }
+
+}  // namespace sahbench

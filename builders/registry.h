@@ -1,0 +1,35 @@
+#pragma once
+// Maps builder names to builders. A config or the CLI names a builder and overrides any of its declared
+// parameters; unknown names and parameters are errors that name them.
+
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "builders/params.h"
+#include "core/build_input.h"
+#include "core/bvh.h"
+#include "core/sah.h"
+
+namespace sahbench {
+
+struct BuilderInfo {
+  std::string name;
+  std::string summary;  ///< one line, with the paper it implements
+  std::vector<ParamSpec> params;
+  std::function<Bvh(const BuildInput&, const ParamSet&)> build;
+};
+
+/// Every registered builder, in registration order.
+std::span<const BuilderInfo> builders();
+
+/// The builder called `name`; an unknown name is an error listing the known ones.
+const BuilderInfo& find_builder(std::string_view name);
+
+/// The SAH constants a builder ran with (every builder declares c_trav and c_isect), for statistics
+/// and the CSV.
+SahCost sah_cost_of(const ParamSet& params);
+
+}  // namespace sahbench

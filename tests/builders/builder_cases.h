@@ -1,0 +1,85 @@
+#pragma once
+// The builder variants and scenes every builder test runs over.
+
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "builders/registry.h"
+#include "core/triangle.h"
+#include "tests/support/test_scenes.h"
+
+namespace sahbench::test {
+
+struct BuilderVariant {
+  std::string builder;
+  ParamOverrides params;
+  std::string label() const {
+    std::string s = builder;
+    for (const auto& [k, v] : params) s += "_" + k + v;
+    for (char& c : s)
+      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    return s;
+  }
+};
+
+/// Every registered builder with its defaults, plus the parameter extremes.
+inline std::vector<BuilderVariant> builder_variants() {
+  std::vector<BuilderVariant> out;
+  for (const auto& b : builders()) out.push_back({b.name, {}});
+  out.push_back({"binned_sah", {{"bins", "4"}}});
+  out.push_back({"binned_sah", {{"bins", "256"}}});
+  out.push_back({"binned_sah", {{"max_leaf", "1"}}});
+  out.push_back({"binned_sah", {{"min_leaf", "4"}, {"max_leaf", "16"}, {"c_trav", "3"}}});
+  out.push_back({"sweep_sah", {{"max_leaf", "1"}}});
+  return out;
+}
+
+struct SceneCase {
+  std::string name;
+  std::vector<Triangle> triangles;
+};
+
+inline Triangle translated(Triangle t, Vec3 d) { return {t.v0 + d, t.v1 + d, t.v2 + d}; }
+
+/// Random scenes of several sizes and adversarial ones: identical triangles, nested triangles sharing a
+/// centroid, everything in one plane, needles, a closed cube grid, tiny detail in a huge box, and one
+/// large enough to take the parallel binning and partitioning paths.
+inline std::vector<SceneCase> scene_cases() {
+  std::vector<SceneCase> out;
+  for (std::size_t n : {1u, 2u, 3u, 17u, 1000u, 20000u}) out.push_back({"random" + std::to_string(n), random_triangles(n, n)});
+  out.push_back({"random_parallel_paths", random_triangles(70000, 5, 50.0f)});
+
+  const Triangle base{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  out.push_back({"identical", std::vector<Triangle>(1000, base)});
+
+  std::vector<Triangle> nested;
+  for (int i = 1; i <= 500; ++i) {
+    const float s = static_cast<float>(i);
+    nested.push_back({{-s, -s, 0}, {s, -s, 0}, {0, s, 0.5f * s}});
+  }
+  out.push_back({"nested_same_centroid_box", nested});
+
+  std::vector<Triangle> planar = random_triangles(3000, 11);
+  for (auto& t : planar) t.v0.z = t.v1.z = t.v2.z = 0.0f;
+  out.push_back({"planar", planar});
+
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-20.0f, 20.0f);
+  std::vector<Triangle> needles;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3 a{u(rng), u(rng), u(rng)}, d = normalize(Vec3{u(rng), u(rng), u(rng)}) * 30.0f;
+    needles.push_back({a, a + d, a + d + Vec3{0.01f, 0.0f, 0.02f}});
+  }
+  out.push_back({"needles", needles});
+
+  out.push_back({"cube_grid", cube_grid(12, 3.0f)});
+
+  std::vector<Triangle> multiscale = cube_grid(2, 1000.0f);
+  for (const auto& t : random_triangles(2000, 17, 1e-2f, 1e-3f)) multiscale.push_back(translated(t, {1, 2, 3}));
+  out.push_back({"multiscale", multiscale});
+  return out;
+}
+
+}  // namespace sahbench::test

@@ -5,6 +5,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <array>
+#include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
@@ -50,7 +51,12 @@ struct BinMapping {
 
   BinMapping(const Aabb& centroid_bounds, uint32_t bins) : offset(centroid_bounds.min), bin_count(bins) {
     const Vec3 extent = centroid_bounds.extent();
-    for (int a = 0; a < 3; ++a) scale[a] = extent[a] > 0.0f ? static_cast<float>(bins) / extent[a] : 0.0f;
+    // An extent so small that bins / extent overflows (denormals) is treated as no extent, so that
+    // (c - min) * scale is always finite and the bin index well defined.
+    for (int a = 0; a < 3; ++a) {
+      const float s = extent[a] > 0.0f ? static_cast<float>(bins) / extent[a] : 0.0f;
+      scale[a] = std::isfinite(s) ? s : 0.0f;
+    }
   }
 
   uint32_t bin(float c, int axis) const {
@@ -84,33 +90,45 @@ struct BinSet {
 };
 
 // SAH sweep over the bins: right-to-left accumulates the right side's areas, left-to-right evaluates
-// the cost of splitting after each bin. Ties keep the first candidate (lowest axis, lowest bin).
+// the split before each bin. Only non-empty bins are visited (a plane between two empty bins gives the
+// same partition as its neighbour), which keeps small nodes cheap whatever the bin count. Candidates
+// are compared by weighted area and only the winner is converted to a cost (SahCost explains why that
+// picks the same split). Ties keep the first candidate (lowest axis, lowest bin).
 Split best_split(const BinSet& set, const BinMapping& mapping, float parent_area, const SahCost& cost) {
   Split best;
   if (!(parent_area > 0.0f)) return best;  // a point-sized node: areas carry no information
-  std::array<float, kMaxBins> right_area;
-  std::array<uint32_t, kMaxBins> right_count;
+  float best_weighted = std::numeric_limits<float>::infinity();
+  std::array<uint32_t, kMaxBins> used;  // indices of the non-empty bins, in order
+  std::array<float, kMaxBins> right_weighted;
   for (int a = 0; a < 3; ++a) {
     if (mapping.scale[a] == 0.0f) continue;
-    const auto& bins = set.bins[a];
+    const Bin* bins = set.bins[a];
+    uint32_t k = 0;
+    for (uint32_t b = 0; b < set.bin_count; ++b)
+      if (bins[b].count) used[k++] = b;
+    if (k < 2) continue;
     Aabb acc;
     uint32_t count = 0;
-    for (uint32_t b = set.bin_count - 1; b > 0; --b) {
-      acc.extend(bins[b].box());
-      count += bins[b].count;
-      right_area[b] = acc.half_area();
-      right_count[b] = count;
+    for (uint32_t j = k; j-- > 1;) {
+      acc.extend(bins[used[j]].box());
+      count += bins[used[j]].count;
+      right_weighted[j] = acc.half_area() * static_cast<float>(count);
     }
     acc = Aabb{};
     count = 0;
-    for (uint32_t b = 1; b < set.bin_count; ++b) {
-      acc.extend(bins[b - 1].box());
-      count += bins[b - 1].count;
-      if (count == 0 || right_count[b] == 0) continue;
-      const float c = cost.split_cost(parent_area, acc.half_area(), count, right_area[b], right_count[b]);
-      if (c < best.cost) best = {c, static_cast<uint32_t>(a), b};
+    for (uint32_t j = 1; j < k; ++j) {
+      acc.extend(bins[used[j - 1]].box());
+      count += bins[used[j - 1]].count;
+      const float weighted = acc.half_area() * static_cast<float>(count) + right_weighted[j];
+      if (weighted < best_weighted) {
+        best_weighted = weighted;
+        best.axis = static_cast<uint32_t>(a);
+        best.position = used[j];
+      }
     }
   }
+  if (best_weighted < std::numeric_limits<float>::infinity())
+    best.cost = cost.split_cost_from_weighted(parent_area, best_weighted);
   return best;
 }
 
@@ -134,13 +152,13 @@ class BinnedSplitter {
   }
 
   Split find_split(const NodeRange& range) const {
-    const BinMapping mapping(range.centroid_bounds, params_.bins);
+    const BinMapping mapping(range.centroid_bounds, bins_for_node(params_, range.size()));
     const BinSet set = bin(range, mapping);
     return best_split(set, mapping, range.bounds.half_area(), params_.top_down.cost);
   }
 
   Partition partition(const NodeRange& range, const Split& split) {
-    const BinMapping mapping(range.centroid_bounds, params_.bins);
+    const BinMapping mapping(range.centroid_bounds, bins_for_node(params_, range.size()));
     const int axis = static_cast<int>(split.axis);
     auto goes_left = [&](const PrimRef& r) { return mapping.bin(r.centroid()[axis], axis) < split.position; };
     return range.size() >= kParallelThreshold ? partition_parallel(range, goes_left)
@@ -169,7 +187,7 @@ class BinnedSplitter {
 
  private:
   BinSet bin(const NodeRange& range, const BinMapping& mapping) const {
-    const uint32_t bins = params_.bins;
+    const uint32_t bins = mapping.bin_count;
     auto bin_chunk = [&](uint32_t begin, uint32_t end) {
       BinSet set(bins);
       for (uint32_t i = begin; i < end; ++i) set.add(mapping, refs_[i]);
@@ -276,6 +294,11 @@ std::vector<PrimRef> make_prim_refs(const BuildInput& input, NodeRange& root) {
 }
 
 }  // namespace
+
+uint32_t bins_for_node(const BinnedSahParams& params, uint32_t prim_count) {
+  if (!params.adaptive_bins) return params.bins;
+  return std::min(params.bins, kMinBins + prim_count / 20);
+}
 
 Bvh build_binned_sah(const BuildInput& input, const BinnedSahParams& params) {
   check_bins(params.bins);

@@ -12,8 +12,15 @@ namespace sahbench {
 
 struct BinnedSahParams {
   uint32_t bins = 32;  ///< Wald 2007 finds 16 to 32 bins within a few percent of a full sweep
+  /// Use fewer bins on small nodes: min(bins, 4 + n / 20) for n primitives, Embree's rule
+  /// (kernels/builders/heuristic_binning.h). Small nodes are most nodes, and resetting and sweeping
+  /// 32 bins per axis for a handful of primitives is most of the build time; off gives textbook binning.
+  bool adaptive_bins = true;
   TopDownConfig top_down;
 };
+
+/// Bins used for a node of `prim_count` primitives.
+uint32_t bins_for_node(const BinnedSahParams& params, uint32_t prim_count);
 
 inline constexpr uint32_t kMinBins = 4;
 inline constexpr uint32_t kMaxBins = 256;

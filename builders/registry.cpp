@@ -31,11 +31,14 @@ TopDownConfig top_down_config(const ParamSet& p) {
 
 BuilderInfo binned_sah_info() {
   auto params = top_down_params();
-  params.insert(params.begin(), {"bins", ParamType::kInt, double(BinnedSahParams{}.bins), kMinBins, kMaxBins,
-                                 "centroid bins per axis"});
+  const BinnedSahParams defaults;
+  params.insert(params.begin(), {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins,
+                                  "centroid bins per axis"},
+                                 {"adaptive_bins", ParamType::kInt, double(defaults.adaptive_bins), 0, 1,
+                                  "1: min(bins, 4 + n/20) bins on a node of n primitives (Embree's rule)"}});
   return {"binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", std::move(params),
           [](const BuildInput& input, const ParamSet& p) {
-            return build_binned_sah(input, {p.get_uint("bins"), top_down_config(p)});
+            return build_binned_sah(input, {p.get_uint("bins"), p.get_uint("adaptive_bins") != 0, top_down_config(p)});
           }};
 }
 

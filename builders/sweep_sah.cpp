@@ -5,6 +5,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <array>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -85,19 +86,27 @@ class SweepSplitter {
   Split sweep_axis(const NodeRange& range, int axis, float parent_area) const {
     const auto& order = order_[axis];
     const uint32_t n = range.size();
-    std::vector<float> right_area(n);
+    // Weighted areas (area * count) compared as in the binned search; only the winner becomes a cost.
+    std::vector<float> right_weighted(n);
     Aabb acc;
     for (uint32_t i = n; i-- > 1;) {
       acc.extend(input_.bounds[order[range.begin + i]]);
-      right_area[i] = acc.half_area();
+      right_weighted[i] = acc.half_area() * static_cast<float>(n - i);
     }
     Split best;
+    float best_weighted = std::numeric_limits<float>::infinity();
     acc = Aabb{};
     for (uint32_t i = 1; i < n; ++i) {
       acc.extend(input_.bounds[order[range.begin + i - 1]]);
-      const float c = cost_.split_cost(parent_area, acc.half_area(), i, right_area[i], n - i);
-      if (c < best.cost) best = {c, static_cast<uint32_t>(axis), i};
+      const float weighted = acc.half_area() * static_cast<float>(i) + right_weighted[i];
+      if (weighted < best_weighted) {
+        best_weighted = weighted;
+        best.axis = static_cast<uint32_t>(axis);
+        best.position = i;
+      }
     }
+    if (best_weighted < std::numeric_limits<float>::infinity())
+      best.cost = cost_.split_cost_from_weighted(parent_area, best_weighted);
     return best;
   }
 

@@ -21,8 +21,15 @@ struct SahCost {
   /// dividing.
   constexpr float split_cost(float parent_area, float left_area, uint32_t left_count, float right_area,
                              uint32_t right_count) const {
-    return c_trav + c_isect * (left_area * static_cast<float>(left_count) +
-                               right_area * static_cast<float>(right_count)) / parent_area;
+    return split_cost_from_weighted(parent_area, left_area * static_cast<float>(left_count) +
+                                                     right_area * static_cast<float>(right_count));
+  }
+
+  /// split_cost from the children's weighted area, left_area * left_count + right_area * right_count.
+  /// Split searches minimise that sum and convert only the winner; the conversion is monotone, so the
+  /// winner is the same as when every candidate is converted.
+  constexpr float split_cost_from_weighted(float parent_area, float weighted_area) const {
+    return c_trav + c_isect * weighted_area / parent_area;
   }
 
   friend constexpr bool operator==(const SahCost&, const SahCost&) = default;

@@ -30,6 +30,7 @@ inline std::vector<BuilderVariant> builder_variants() {
   for (const auto& b : builders()) out.push_back({b.name, {}});
   out.push_back({"binned_sah", {{"bins", "4"}}});
   out.push_back({"binned_sah", {{"bins", "256"}}});
+  out.push_back({"binned_sah", {{"bins", "16"}, {"adaptive_bins", "0"}}});
   out.push_back({"binned_sah", {{"max_leaf", "1"}}});
   out.push_back({"binned_sah", {{"min_leaf", "4"}, {"max_leaf", "16"}, {"c_trav", "3"}}});
   out.push_back({"sweep_sah", {{"max_leaf", "1"}}});

@@ -26,9 +26,9 @@ TEST(BuilderRegistry, KnowsBinnedAndSweep) {
 
 TEST(BuilderRegistry, DefaultsAppearInCsvForm) {
   const auto& info = find_builder("binned_sah");
-  EXPECT_EQ(resolve_params(info.name, info.params, {}).to_string(), "bins=32;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
+  EXPECT_EQ(resolve_params(info.name, info.params, {}).to_string(), "bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
   EXPECT_EQ(resolve_params(info.name, info.params, {{"bins", "16"}, {"c_trav", "0.5"}}).to_string(),
-            "bins=16;min_leaf=1;max_leaf=8;c_trav=0.5;c_isect=1");
+            "bins=16;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=0.5;c_isect=1");
 }
 
 TEST(BuilderRegistry, BadParametersAreErrorsThatNameThem) {

@@ -32,6 +32,7 @@ TEST(BuilderSplitSearch, SweepNeverCostsMoreThanBinned) {
       for (uint32_t bins : {4u, 8u, 16u, 32u, 64u, 256u}) {
         BinnedSahParams params;
         params.bins = bins;
+        params.adaptive_bins = (bins % 16) == 0;
         const Split binned = find_binned_split(input, prims, params);
         if (!binned.valid()) continue;
         ++compared;

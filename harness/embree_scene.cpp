@@ -1,0 +1,104 @@
+#include "harness/embree_scene.h"
+
+#include <chrono>
+#include <string>
+
+#include "core/error.h"
+
+namespace sahbench {
+namespace {
+
+const char* error_name(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE: return "none";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+    default: return "unknown error";
+  }
+}
+
+}  // namespace
+
+EmbreeQuality parse_embree_quality(std::string_view text) {
+  if (text == "low") return EmbreeQuality::kLow;
+  if (text == "medium") return EmbreeQuality::kMedium;
+  if (text == "high") return EmbreeQuality::kHigh;
+  throw Error("Embree quality '" + std::string(text) + "' is not one of low, medium, high");
+}
+
+std::string to_string(EmbreeQuality quality) {
+  switch (quality) {
+    case EmbreeQuality::kLow: return "low";
+    case EmbreeQuality::kMedium: return "medium";
+    case EmbreeQuality::kHigh: return "high";
+  }
+  return "?";
+}
+
+EmbreeDevice::EmbreeDevice(int threads) {
+  const std::string config = "threads=" + std::to_string(threads);
+  device_ = rtcNewDevice(config.c_str());
+  if (!device_) throw Error("Embree: rtcNewDevice(\"" + config + "\") failed: " + error_name(rtcGetDeviceError(nullptr)));
+  rtcSetDeviceMemoryMonitorFunction(device_, &EmbreeDevice::monitor, this);
+}
+
+EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }
+
+bool EmbreeDevice::monitor(void* user, ssize_t bytes, bool /*post*/) {
+  auto* self = static_cast<EmbreeDevice*>(user);
+  const int64_t now = self->bytes_.fetch_add(bytes) + bytes;
+  int64_t peak = self->peak_.load();
+  while (now > peak && !self->peak_.compare_exchange_weak(peak, now)) {
+  }
+  return true;  // never refuse an allocation
+}
+
+void EmbreeDevice::check(const char* what) const {
+  const RTCError code = rtcGetDeviceError(device_);
+  if (code != RTC_ERROR_NONE) throw Error(std::string("Embree: ") + what + " failed: " + error_name(code));
+}
+
+EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangles, EmbreeQuality quality) {
+  scene_ = rtcNewScene(device.get());
+  const RTCBuildQuality q = quality == EmbreeQuality::kLow    ? RTC_BUILD_QUALITY_LOW
+                            : quality == EmbreeQuality::kHigh ? RTC_BUILD_QUALITY_HIGH
+                                                              : RTC_BUILD_QUALITY_MEDIUM;
+  rtcSetSceneBuildQuality(scene_, q);
+  RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetGeometryBuildQuality(geometry, q);
+  const std::size_t n = triangles.size();
+  // Embree-managed buffers: the vertex buffer gets Embree's own padding.
+  auto* vertices = static_cast<float*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
+  auto* indices = static_cast<uint32_t*>(
+      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), n));
+  device.check("rtcSetNewGeometryBuffer");
+  for (std::size_t i = 0; i < n; ++i) {
+    const Triangle& t = triangles[i];
+    for (int v = 0; v < 3; ++v) {
+      const Vec3& p = v == 0 ? t.v0 : (v == 1 ? t.v1 : t.v2);
+      vertices[9 * i + 3 * v + 0] = p.x;
+      vertices[9 * i + 3 * v + 1] = p.y;
+      vertices[9 * i + 3 * v + 2] = p.z;
+      indices[3 * i + v] = static_cast<uint32_t>(3 * i + v);
+    }
+  }
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(scene_, geometry);
+  rtcReleaseGeometry(geometry);
+  device.check("geometry set-up");
+
+  const int64_t before = device.bytes();
+  const auto start = std::chrono::steady_clock::now();
+  rtcCommitScene(scene_);
+  commit_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  device.check("rtcCommitScene");
+  bytes_ = device.bytes() - before;
+}
+
+EmbreeScene::~EmbreeScene() { rtcReleaseScene(scene_); }
+
+}  // namespace sahbench

@@ -1,0 +1,35 @@
+#pragma once
+// Repetition statistics: the harness quotes medians with their spread, never single timings.
+
+#include <algorithm>
+#include <chrono>
+#include <vector>
+
+namespace sahbench {
+
+struct TimingSummary {
+  double median = 0.0, min = 0.0, max = 0.0;
+  std::size_t reps = 0;
+};
+
+inline TimingSummary summarize(std::vector<double> samples) {
+  TimingSummary s;
+  s.reps = samples.size();
+  if (samples.empty()) return s;
+  std::sort(samples.begin(), samples.end());
+  const std::size_t n = samples.size();
+  s.median = n % 2 ? samples[n / 2] : 0.5 * (samples[n / 2 - 1] + samples[n / 2]);
+  s.min = samples.front();
+  s.max = samples.back();
+  return s;
+}
+
+/// Milliseconds `f` takes.
+template <class F>
+double time_ms(F&& f) {
+  const auto start = std::chrono::steady_clock::now();
+  f();
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace sahbench

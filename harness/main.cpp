@@ -8,6 +8,7 @@
 #include "builders/params.h"
 #include "core/error.h"
 #include "harness/build_command.h"
+#include "harness/list_command.h"
 
 int main(int argc, char** argv) {
   using namespace sahbench;
@@ -26,12 +27,17 @@ int main(int argc, char** argv) {
   build_cmd->add_option("--reps", build.reps, "timed repetitions (median reported)")->capture_default_str();
   build_cmd->add_option("--warmup", build.warmup, "untimed builds first")->capture_default_str();
 
+  auto* list_cmd = app.add_subcommand("list", "Builders and their parameters, procedural scene kinds, shared scenes found");
+  auto* list_scenes_cmd = app.add_subcommand("list-scenes", "Names of the shared scenes found, one per line");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*build_cmd) {
       for (const auto& p : params) build.params.push_back(parse_override(p));
       return run_build_command(build, std::cout, std::cerr);
     }
+    if (*list_cmd) print_catalogue(std::cout);
+    if (*list_scenes_cmd) print_scene_names(std::cout);
   } catch (const Error& e) {
     std::cerr << "sahbench: error: " << e.what() << "\n";
     return 2;

@@ -1,0 +1,45 @@
+#include "harness/list_command.h"
+
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+
+#include <ostream>
+
+#include "builders/registry.h"
+#include "scenes/procedural.h"
+#include "scenes/scene_path.h"
+
+namespace sahbench {
+
+void print_catalogue(std::ostream& out) {
+  fmt::print(out, "builders (--builder NAME[:key=value,...]):\n");
+  for (const auto& b : builders()) {
+    fmt::print(out, "  {:<14} {}\n", b.name, b.summary);
+    for (const auto& p : b.params)
+      fmt::print(out, "      {:<14} default {:<8} range [{}, {}]  {}\n", p.name, p.default_value, p.min_value,
+                 p.max_value, p.help);
+  }
+  fmt::print(out, "  {:<14} {}\n", "embree_low", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_LOW");
+  fmt::print(out, "  {:<14} {}\n", "embree_medium", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_MEDIUM");
+  fmt::print(out, "  {:<14} {}\n", "embree_high", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_HIGH (spatial splits)");
+
+  fmt::print(out, "\nprocedural scenes (--scene proc:KIND[:key=value,...]):\n");
+  for (const auto& kind : procedural_kinds()) {
+    fmt::print(out, "  {:<14} {}\n", kind.name, kind.help);
+    for (const auto& p : kind.params)
+      fmt::print(out, "      {:<14} default {:<10} range [{}, {}]  {}\n", p.name, p.default_value, p.min, p.max, p.help);
+  }
+
+  fmt::print(out, "\nshared scenes (--scene NAME), search path:");
+  const auto dirs = scene_search_path();
+  if (dirs.empty()) fmt::print(out, " none found (set SAHBENCH_SCENE_PATH)");
+  for (const auto& d : dirs) fmt::print(out, " {}", d.string());
+  fmt::print(out, "\n");
+  for (const auto& s : list_shared_scenes()) fmt::print(out, "  {:<22} {}\n", s.name, s.path.string());
+}
+
+void print_scene_names(std::ostream& out) {
+  for (const auto& s : list_shared_scenes()) out << s.name << "\n";
+}
+
+}  // namespace sahbench

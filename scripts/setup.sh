@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs what sahbench needs (Debian 12 packages) and builds it in build/release.
+# Safe to run again: installs only missing packages and rebuilds incrementally.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  cmake ninja-build g++ git pkg-config
+  libembree-dev libtbb-dev libtinygltf-dev libtinyobjloader-dev nlohmann-json3-dev
+  libopenimageio-dev libcgal-dev libgmp-dev libmpfr-dev
+  libbenchmark-dev libgtest-dev libtomlplusplus-dev libcli11-dev libfmt-dev
+  python3-matplotlib python3-pandas
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}" >&2
+  sudo_cmd=()
+  [[ $(id -u) -eq 0 ]] || sudo_cmd=(sudo)
+  export DEBIAN_FRONTEND=noninteractive
+  "${sudo_cmd[@]}" apt-get update -qq
+  "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+preset=${SAHBENCH_PRESET:-release}
+cmake --preset "$preset" >/dev/null
+cmake --build --preset "$preset"

@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Installs, builds and runs the whole test suite (GoogleTest through ctest). Shared scenes are used
+# when ../shared/scenes (or SAHBENCH_SCENE_PATH) has them; tests that need one skip with a message.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SAHBENCH_PRESET=${SAHBENCH_PRESET:-release} bash scripts/setup.sh
+ctest --preset "${SAHBENCH_PRESET:-release}" -j "$(nproc)"

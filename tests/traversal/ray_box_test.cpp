@@ -1,0 +1,196 @@
+// Ray/box tests: hand-made cases (origin on a face plane with +-0 direction components, grazing rays,
+// flat boxes, [tmin, tmax]) for both tests, and a randomized check that RobustRayBox never misses a box
+// that a double-precision slab test hits.
+
+#include "traversal/ray_box.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+
+namespace sahbench {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+const Aabb kUnitBox{{0.0f, 0.0f, 0.0f}, {1.0f, 1.0f, 1.0f}};
+
+Ray make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = kInf) {
+  return {org, tmin, dir, tmax};
+}
+
+template <class BoxTest>
+class TravRayBoxBoth : public ::testing::Test {};
+using BoxTests = ::testing::Types<RobustRayBox, FastRayBox>;
+TYPED_TEST_SUITE(TravRayBoxBoth, BoxTests);
+
+template <class BoxTest>
+bool hits(const Ray& ray, const Aabb& box, float* t_entry = nullptr) {
+  float t = -1.0f;
+  const bool hit = BoxTest(ray).intersect(box, ray.tmin, ray.tmax, t);
+  if (t_entry) *t_entry = t;
+  return hit;
+}
+
+TYPED_TEST(TravRayBoxBoth, AxisParallelHitAndEntryDistance) {
+  float t = 0.0f;
+  EXPECT_TRUE(hits<TypeParam>(make_ray({-1.0f, 0.5f, 0.5f}, {1.0f, 0.0f, 0.0f}), kUnitBox, &t));
+  EXPECT_EQ(t, 1.0f);
+  EXPECT_TRUE(hits<TypeParam>(make_ray({2.0f, 0.5f, 0.5f}, {-2.0f, -0.0f, 0.0f}), kUnitBox, &t));
+  EXPECT_EQ(t, 0.5f);
+  // Parallel to a slab and outside it: a miss whatever the other axes say.
+  EXPECT_FALSE(hits<TypeParam>(make_ray({-1.0f, 1.5f, 0.5f}, {1.0f, 0.0f, 0.0f}), kUnitBox));
+  EXPECT_FALSE(hits<TypeParam>(make_ray({-1.0f, -0.5f, 0.5f}, {1.0f, -0.0f, 0.0f}), kUnitBox));
+  // Pointing away.
+  EXPECT_FALSE(hits<TypeParam>(make_ray({-1.0f, 0.5f, 0.5f}, {-1.0f, 0.0f, 0.0f}), kUnitBox));
+}
+
+TYPED_TEST(TravRayBoxBoth, OriginOnFacePlaneWithSignedZeroDirection) {
+  // (plane - org) * (1 / +-0) = 0 * inf = NaN on the planes the origin lies on; the NaN must count as
+  // inside the slab for every sign combination of the zero components.
+  for (float zy : {0.0f, -0.0f}) {
+    for (float zz : {0.0f, -0.0f}) {
+      for (float y : {0.0f, 1.0f}) {
+        for (float z : {0.0f, 0.5f, 1.0f}) {
+          SCOPED_TRACE(testing::Message() << "y=" << y << " z=" << z << " dy=" << zy << " dz=" << zz);
+          float t = -1.0f;
+          EXPECT_TRUE(hits<TypeParam>(make_ray({-1.0f, y, z}, {1.0f, zy, zz}), kUnitBox, &t));
+          EXPECT_EQ(t, 1.0f);
+          EXPECT_TRUE(hits<TypeParam>(make_ray({3.0f, y, z}, {-1.0f, zy, zz}), kUnitBox, &t));
+          EXPECT_EQ(t, 2.0f);
+          // Just outside the plane: a miss.
+          const float outside_y = y == 0.0f ? -0x1p-20f : 1.0f + 0x1p-20f;
+          EXPECT_FALSE(hits<TypeParam>(make_ray({-1.0f, outside_y, z}, {1.0f, zy, zz}), kUnitBox));
+        }
+      }
+    }
+  }
+  // All three components of the origin on planes (a corner), direction along the box edge.
+  EXPECT_TRUE(hits<TypeParam>(make_ray({0.0f, 0.0f, 0.0f}, {0.0f, -0.0f, 1.0f}), kUnitBox));
+  EXPECT_TRUE(hits<TypeParam>(make_ray({1.0f, 1.0f, 1.0f}, {-0.0f, 0.0f, -1.0f}), kUnitBox));
+}
+
+TYPED_TEST(TravRayBoxBoth, OriginInsideEntersAtTmin) {
+  float t = -1.0f;
+  EXPECT_TRUE(hits<TypeParam>(make_ray({0.5f, 0.5f, 0.5f}, {0.3f, -0.2f, 0.1f}, 0.25f), kUnitBox, &t));
+  EXPECT_EQ(t, 0.25f);
+}
+
+TYPED_TEST(TravRayBoxBoth, GrazingEdgesAndCornersExactly) {
+  // Along an edge of the box.
+  EXPECT_TRUE(hits<TypeParam>(make_ray({-1.0f, 1.0f, 1.0f}, {1.0f, 0.0f, 0.0f}), kUnitBox));
+  EXPECT_TRUE(hits<TypeParam>(make_ray({-1.0f, 0.0f, 1.0f}, {1.0f, -0.0f, -0.0f}), kUnitBox));
+  // Diagonal through the edge x = 1, y = 0 at t = 1 (exact arithmetic): the slabs meet in one point.
+  float t = -1.0f;
+  EXPECT_TRUE(hits<TypeParam>(make_ray({0.0f, -1.0f, 0.5f}, {1.0f, 1.0f, 0.0f}), kUnitBox, &t));
+  EXPECT_EQ(t, 1.0f);
+  // Through the corner (1, 1, 1) only.
+  EXPECT_TRUE(hits<TypeParam>(make_ray({2.0f, 0.0f, 2.0f}, {-1.0f, 1.0f, -1.0f}), kUnitBox));
+  // Passing just beside that corner.
+  EXPECT_FALSE(hits<TypeParam>(make_ray({2.0f, 0.0f, 2.0f}, {-1.0f, 1.0f, -0.99f}), kUnitBox));
+}
+
+TYPED_TEST(TravRayBoxBoth, FlatBoxIsHit) {
+  // A box of zero thickness (an axis-aligned triangle's bounds), hit perpendicularly and obliquely.
+  const Aabb flat{{0.0f, 0.0f, 1.0f}, {1.0f, 1.0f, 1.0f}};
+  float t = -1.0f;
+  EXPECT_TRUE(hits<TypeParam>(make_ray({0.5f, 0.5f, 0.0f}, {0.0f, -0.0f, 1.0f}), flat, &t));
+  EXPECT_EQ(t, 1.0f);
+  EXPECT_TRUE(hits<TypeParam>(make_ray({0.0f, 0.0f, 0.0f}, {0.5f, 0.25f, 1.0f}), flat, &t));
+  EXPECT_EQ(t, 1.0f);
+}
+
+TYPED_TEST(TravRayBoxBoth, IntervalIsClosedAndRespected) {
+  const Ray base = make_ray({-1.0f, 0.5f, 0.5f}, {1.0f, 0.0f, 0.0f});
+  auto with = [&](float tmin, float tmax) {
+    Ray r = base;
+    r.tmin = tmin;
+    r.tmax = tmax;
+    return r;
+  };
+  EXPECT_TRUE(hits<TypeParam>(with(0.0f, 1.0f), kUnitBox));   // enters at exactly tmax
+  EXPECT_FALSE(hits<TypeParam>(with(0.0f, 0.5f), kUnitBox));  // ends before the box
+  EXPECT_TRUE(hits<TypeParam>(with(2.0f, 3.0f), kUnitBox));   // leaves at exactly tmin
+  EXPECT_FALSE(hits<TypeParam>(with(2.5f, 3.0f), kUnitBox));  // starts after the box
+  EXPECT_FALSE(hits<TypeParam>(with(0.0f, 0.999f), kUnitBox));
+}
+
+// Exact-enough slab test in double: a difference of two floats is exact in double unless their exponents
+// differ by more than 29, and one division adds a relative error of 2^-53, far below float rounding.
+bool double_slab_hits(const Ray& ray, const Aabb& box) {
+  double t_near = 0.0, t_far = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < 3; ++a) {
+    const double o = ray.org[a], d = ray.dir[a], lo = box.min[a], hi = box.max[a];
+    if (d == 0.0) {
+      if (o < lo || o > hi) return false;
+      continue;
+    }
+    double t0 = (lo - o) / d, t1 = (hi - o) / d;
+    if (t0 > t1) std::swap(t0, t1);
+    t_near = std::max(t_near, t0);
+    t_far = std::min(t_far, t1);
+  }
+  return t_near <= t_far;
+}
+
+// The float nearest to x from below and from above.
+float round_down(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -kInf) : f;
+}
+float round_up(double x) {
+  const auto f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, kInf) : f;
+}
+
+TEST(TravRayBoxRobust, NeverMissesWhereDoublePrecisionHits) {
+  // Rays of varied scale and direction (with +-0 components), and boxes as tight as float allows around
+  // a point of the ray computed in double, some grown on random sides so the ray grazes faces or edges.
+  constexpr int kRays = 200000;
+  std::mt19937_64 rng(20240611);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> exponent(-8, 12);
+  std::uniform_int_distribution<int> coin(0, 7);
+  int double_hits = 0, robust_misses = 0, fast_misses = 0;
+  for (int i = 0; i < kRays; ++i) {
+    const float scale = std::ldexp(1.0f, exponent(rng));
+    Ray ray;
+    ray.org = Vec3{unit(rng), unit(rng), unit(rng)} * scale;
+    ray.dir = {unit(rng), unit(rng), unit(rng)};
+    for (std::size_t a = 0; a < 3; ++a) {
+      const int c = coin(rng);
+      if (c == 0) ray.dir[a] = 0.0f;
+      if (c == 1) ray.dir[a] = -0.0f;
+    }
+    if (ray.dir == Vec3{}) ray.dir.x = 1.0f;
+    const double t = std::ldexp(static_cast<double>(unit(rng)) + 1.0, exponent(rng));
+    Aabb box;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const double p = static_cast<double>(ray.org[a]) + t * static_cast<double>(ray.dir[a]);
+      box.min[a] = round_down(p);
+      box.max[a] = round_up(p);
+      // Grow some sides so that the point lies on a face, an edge or a corner of a bigger box.
+      if (coin(rng) < 2) box.min[a] -= scale * static_cast<float>(coin(rng));
+      if (coin(rng) < 2) box.max[a] += scale * static_cast<float>(coin(rng));
+    }
+    if (!double_slab_hits(ray, box)) continue;
+    ++double_hits;
+    float t_entry;
+    if (!RobustRayBox(ray).intersect(box, 0.0f, kInf, t_entry)) {
+      if (++robust_misses <= 5)
+        ADD_FAILURE() << "robust miss: org " << ray.org.x << " " << ray.org.y << " " << ray.org.z << " dir "
+                      << ray.dir.x << " " << ray.dir.y << " " << ray.dir.z;
+    }
+    if (!FastRayBox(ray).intersect(box, 0.0f, kInf, t_entry)) ++fast_misses;
+  }
+  EXPECT_EQ(robust_misses, 0);
+  EXPECT_GT(double_hits, kRays / 2);
+  // Not a requirement, reported so the cost of the fast test is visible.
+  std::printf("[ info ] %d boxes hit in double: RobustRayBox missed %d, FastRayBox missed %d\n", double_hits,
+              robust_misses, fast_misses);
+}
+
+}  // namespace
+}  // namespace sahbench

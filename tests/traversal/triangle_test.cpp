@@ -1,0 +1,239 @@
+// Ray/triangle tests on hand-made cases: hits, back faces, barycentrics, the closed [tmin, tmax], +-0
+// directions, rays exactly through shared edges and vertices, and Möller-Trumbore's epsilon.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "traversal/triangle_tests.h"
+
+namespace sahbench {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+// Exact-input cases below give results within a few ulps; this bounds them loosely.
+constexpr float kBaryTolerance = 1e-6f;
+// Random triangles include slivers, on which Möller-Trumbore's t and (u, v) are off by up to ~1e-4.
+constexpr float kConventionTolerance = 1e-3f;
+
+Ray make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = kInf) {
+  return {org, tmin, dir, tmax};
+}
+
+// A unit right triangle in the plane z = 1.
+const Triangle kTri{{0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 1.0f}};
+
+struct Result {
+  bool hit = false;
+  float t = 0.0f, u = 0.0f, v = 0.0f;
+};
+
+template <class Test>
+Result run(const Ray& ray, const Triangle& tri) {
+  Result r;
+  r.hit = Test(ray).intersect(tri, ray.tmin, ray.tmax, r.t, r.u, r.v);
+  return r;
+}
+
+template <class Test>
+class TravTriangleBoth : public ::testing::Test {};
+using TriangleTests = ::testing::Types<WatertightTriangleTest, MollerTrumboreTest>;
+TYPED_TEST_SUITE(TravTriangleBoth, TriangleTests);
+
+TYPED_TEST(TravTriangleBoth, FrontAndBackFacesHitWithBarycentrics) {
+  for (const Ray& ray :
+       {make_ray({0.25f, 0.5f, 0.0f}, {0.0f, 0.0f, 1.0f}), make_ray({0.25f, 0.5f, 2.0f}, {0.0f, 0.0f, -1.0f}),
+        make_ray({0.25f, 0.5f, 0.0f}, {-0.0f, 0.0f, 1.0f}),
+        make_ray({0.25f, 0.5f, 2.0f}, {0.0f, -0.0f, -1.0f})}) {
+    const Result r = run<TypeParam>(ray, kTri);
+    ASSERT_TRUE(r.hit);
+    EXPECT_FLOAT_EQ(r.t, 1.0f);
+    // p = (1-u-v) v0 + u v1 + v v2 = (u, v, 1).
+    EXPECT_NEAR(r.u, 0.25f, kBaryTolerance);
+    EXPECT_NEAR(r.v, 0.5f, kBaryTolerance);
+  }
+}
+
+TYPED_TEST(TravTriangleBoth, BarycentricsReconstructTheHitPoint) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  int hits = 0;
+  for (int i = 0; i < 1000; ++i) {
+    const Triangle tri{{unit(rng), unit(rng), unit(rng)},
+                       {unit(rng), unit(rng), unit(rng)},
+                       {unit(rng), unit(rng), unit(rng)}};
+    const Vec3 target = tri.v0 * 0.3f + tri.v1 * 0.3f + tri.v2 * 0.4f;
+    const Vec3 org{unit(rng) * 4.0f, unit(rng) * 4.0f, unit(rng) * 4.0f};
+    const Ray ray = make_ray(org, target - org);
+    const Result r = run<TypeParam>(ray, tri);
+    if (!r.hit) continue;  // nearly edge-on triangles may be rejected by Möller-Trumbore's epsilon
+    ++hits;
+    // A check of the (u, v) convention, not of accuracy: Möller-Trumbore loses digits on slivers.
+    const Vec3 on_ray = org + ray.dir * r.t;
+    const Vec3 on_tri = tri.v0 * (1.0f - r.u - r.v) + tri.v1 * r.u + tri.v2 * r.v;
+    EXPECT_LT(length(on_ray - on_tri), kConventionTolerance);
+    EXPECT_NEAR(r.t, 1.0f, kConventionTolerance);
+  }
+  EXPECT_GT(hits, 990);
+}
+
+TYPED_TEST(TravTriangleBoth, MissesOutsideParallelAndBehind) {
+  EXPECT_FALSE(run<TypeParam>(make_ray({0.75f, 0.75f, 0.0f}, {0.0f, 0.0f, 1.0f}), kTri).hit);
+  EXPECT_FALSE(run<TypeParam>(make_ray({-0.1f, 0.5f, 0.0f}, {0.0f, 0.0f, 1.0f}), kTri).hit);
+  // In the triangle's plane (determinant 0).
+  EXPECT_FALSE(run<TypeParam>(make_ray({-1.0f, 0.25f, 1.0f}, {1.0f, 0.0f, 0.0f}), kTri).hit);
+  // The triangle lies behind the origin.
+  EXPECT_FALSE(run<TypeParam>(make_ray({0.25f, 0.25f, 2.0f}, {0.0f, 0.0f, 1.0f}), kTri).hit);
+  // Degenerate (collinear) triangle.
+  const Triangle line{{0.0f, 0.0f, 1.0f}, {1.0f, 1.0f, 1.0f}, {2.0f, 2.0f, 1.0f}};
+  EXPECT_FALSE(run<TypeParam>(make_ray({1.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 1.0f}), line).hit);
+}
+
+TYPED_TEST(TravTriangleBoth, IntervalIsClosed) {
+  const Vec3 org{0.25f, 0.25f, 0.0f}, dir{0.0f, 0.0f, 1.0f};  // hits at t = 1 exactly
+  EXPECT_TRUE(run<TypeParam>(make_ray(org, dir, 0.0f, 1.0f), kTri).hit);
+  EXPECT_TRUE(run<TypeParam>(make_ray(org, dir, 1.0f, 2.0f), kTri).hit);
+  EXPECT_TRUE(run<TypeParam>(make_ray(org, dir, 1.0f, 1.0f), kTri).hit);
+  EXPECT_FALSE(run<TypeParam>(make_ray(org, dir, 0.0f, std::nextafter(1.0f, 0.0f)), kTri).hit);
+  EXPECT_FALSE(run<TypeParam>(make_ray(org, dir, std::nextafter(1.0f, 2.0f), 2.0f), kTri).hit);
+}
+
+// True when `dir` lies in the plane of one of `tris`: such a ray sees that triangle edge-on (a miss by
+// definition), so it proves nothing about gaps. Products of these small dyadic inputs are exact.
+bool in_a_plane(Vec3 dir, const std::vector<Triangle>& tris) {
+  for (const Triangle& t : tris)
+    if (dot(dir, t.normal()) == 0.0f) return true;
+  return false;
+}
+
+// Rays exactly through a point that the triangles share, from directions whose components are small
+// dyadic numbers (so org = point - dir is exact and the ray passes through the point at t = 1).
+std::vector<Ray> rays_through(Vec3 point, const std::vector<Triangle>& tris) {
+  std::vector<Ray> rays;
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> eighths(-16, 16);
+  while (rays.size() < 200) {
+    const Vec3 dir{eighths(rng) / 8.0f, eighths(rng) / 8.0f, eighths(rng) / 8.0f};
+    if (!in_a_plane(dir, tris)) rays.push_back(make_ray(point - dir, dir));
+  }
+  // Axis-parallel, with either zero sign.
+  for (std::size_t axis = 0; axis < 3; ++axis)
+    for (float z0 : {0.0f, -0.0f})
+      for (float z1 : {0.0f, -0.0f})
+        for (float d : {1.0f, -1.0f}) {
+          Vec3 dir{z0, z0, z1};
+          dir[axis] = d;
+          dir[(axis + 1) % 3] = z1;
+          if (!in_a_plane(dir, tris)) rays.push_back(make_ray(point - dir, dir));
+        }
+  return rays;
+}
+
+// Counts the rays that hit none of `tris`.
+int leaks(const std::vector<Triangle>& tris, const std::vector<Ray>& rays) {
+  int missed = 0;
+  for (const Ray& ray : rays) {
+    bool any = false;
+    for (const Triangle& tri : tris) any = any || run<WatertightTriangleTest>(ray, tri).hit;
+    missed += any ? 0 : 1;
+  }
+  return missed;
+}
+
+TEST(TravTriangleWatertight, SharedEdgeOfTwoTriangles) {
+  // A quad split along its diagonal; rays through the diagonal's midpoint and other points on it.
+  const Vec3 a{0.0f, 0.0f, 1.0f}, b{1.0f, 0.0f, 1.0f}, c{1.0f, 1.0f, 1.0f}, d{0.0f, 1.0f, 1.0f};
+  const std::vector<Triangle> quad{{a, b, c}, {a, c, d}};
+  for (float s : {0.5f, 0.25f, 0.125f, 0.875f}) EXPECT_EQ(leaks(quad, rays_through({s, s, 1.0f}, quad)), 0);
+  // A ray exactly through the shared edge is on both triangles' boundary: both report it here.
+  const Ray ray = make_ray({0.5f, 0.5f, 0.0f}, {0.0f, 0.0f, 1.0f});
+  EXPECT_TRUE(run<WatertightTriangleTest>(ray, quad[0]).hit);
+  EXPECT_TRUE(run<WatertightTriangleTest>(ray, quad[1]).hit);
+}
+
+TEST(TravTriangleWatertight, SharedVertexOfAFan) {
+  // Eight triangles around the vertex (0, 0, 1), with both windings.
+  const Vec3 center{0.0f, 0.0f, 1.0f};
+  const Vec3 ring[8] = {{1, 0, 1},  {1, 1, 1},   {0, 1, 1},  {-1, 1, 1},
+                        {-1, 0, 1}, {-1, -1, 1}, {0, -1, 1}, {1, -1, 1}};
+  std::vector<Triangle> fan;
+  for (int i = 0; i < 8; ++i) {
+    const Vec3 p = ring[i], q = ring[(i + 1) % 8];
+    fan.push_back(i % 2 ? Triangle{center, p, q} : Triangle{q, center, p});
+  }
+  EXPECT_EQ(leaks(fan, rays_through(center, fan)), 0);
+  // And through the shared edges (center to a ring vertex), at a dyadic point on each.
+  for (const Vec3& p : ring) EXPECT_EQ(leaks(fan, rays_through((center + p) * 0.5f, fan)), 0);
+}
+
+TEST(TravTriangleWatertight, TiltedSharedEdge) {
+  // Two triangles in the plane x - 2y + z = 0 (aligned with no axis), on either side of their shared edge
+  // from (0,0,0) to (1,1,1); rays through dyadic points on it from many directions. (Coplanar, because an
+  // edge between two triangles that fold is a silhouette for some directions, and a ray that grazes a
+  // silhouette may pass outside both: no hole, but no hit either.)
+  const Vec3 a{0.0f, 0.0f, 0.0f}, b{1.0f, 1.0f, 1.0f}, c{1.0f, 0.5f, 0.0f}, d{0.0f, 0.5f, 1.0f};
+  const std::vector<Triangle> pair{{a, b, c}, {b, a, d}};
+  for (float s : {0.5f, 0.25f, 0.75f, 0.0625f}) EXPECT_EQ(leaks(pair, rays_through(Vec3{s, s, s}, pair)), 0);
+}
+
+TEST(TravTriangleWatertight, WindingDoesNotChangeTheAnswer) {
+  // Reversing a triangle's winding negates its edge functions exactly (no fused multiply-add may round
+  // one product and not the other), so every ray, including those exactly through an edge or vertex,
+  // gets the same hit, the same t and swapped barycentrics (up to the order of a sum).
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> sixteenths(-32, 32);
+  auto dyadic = [&] {
+    return Vec3{sixteenths(rng) / 16.0f, sixteenths(rng) / 16.0f, sixteenths(rng) / 16.0f};
+  };
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  int hits = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Triangle tri{dyadic(), dyadic(), dyadic()};
+    const Triangle reversed{tri.v0, tri.v2, tri.v1};
+    // A point on an edge or a vertex, or a random point, seen from a random direction.
+    const float w = sixteenths(rng) / 64.0f + 0.5f;
+    const Vec3 target = i % 3 == 0 ? tri.v1 : (i % 3 == 1 ? tri.v0 * w + tri.v2 * (1.0f - w) : dyadic());
+    const Vec3 dir = i % 2 ? dyadic() : Vec3{unit(rng), unit(rng), unit(rng)};
+    if (dir == Vec3{}) continue;
+    // An unbounded line, so that only the edge tests decide (not the sign of t near the origin).
+    const Ray ray = make_ray(target - dir, dir, -kInf, kInf);
+    const Result a = run<WatertightTriangleTest>(ray, tri);
+    const Result b = run<WatertightTriangleTest>(ray, reversed);
+    ASSERT_EQ(a.hit, b.hit) << "triangle " << i;
+    if (!a.hit) continue;
+    ++hits;
+    // det and t sum the same terms in another order, so they may differ in the last bits.
+    EXPECT_NEAR(a.t, b.t, 1e-5f * std::max(1.0f, std::abs(a.t)));
+    EXPECT_NEAR(a.u, b.v, 1e-5f);
+    EXPECT_NEAR(a.v, b.u, 1e-5f);
+  }
+  EXPECT_GT(hits, 1000);
+}
+
+TEST(TravTriangleMollerTrumbore, EpsilonAndZeroEpsilon) {
+  const Ray ray = make_ray({0.25f, 0.25f, 0.0f}, {0.0f, 0.0f, 1.0f});
+  float t, u, v;
+  // Simple case: both settings hit.
+  EXPECT_TRUE(MollerTrumboreTest(ray).intersect(kTri, 0.0f, kInf, t, u, v));
+  EXPECT_TRUE(MollerTrumboreTest(ray, 0.0f).intersect(kTri, 0.0f, kInf, t, u, v));
+  EXPECT_FLOAT_EQ(t, 1.0f);
+  // A small triangle: det = |dir| * |e1 x e2| = 2^-22 < 1e-6. The default epsilon rejects it although
+  // the ray hits its middle; epsilon 0 and the watertight test hit it.
+  const float s = 0x1p-11f;
+  const Triangle small{{0.0f, 0.0f, 1.0f}, {s, 0.0f, 1.0f}, {0.0f, s, 1.0f}};
+  const Ray at_small = make_ray({s / 4, s / 4, 0.0f}, {0.0f, 0.0f, 1.0f});
+  EXPECT_FALSE(MollerTrumboreTest(at_small).intersect(small, 0.0f, kInf, t, u, v));
+  EXPECT_TRUE(MollerTrumboreTest(at_small, 0.0f).intersect(small, 0.0f, kInf, t, u, v));
+  EXPECT_FLOAT_EQ(t, 1.0f);
+  EXPECT_TRUE(WatertightTriangleTest(at_small).intersect(small, 0.0f, kInf, t, u, v));
+  // Zero epsilon still rejects the exactly parallel ray (det == 0).
+  EXPECT_FALSE(MollerTrumboreTest(make_ray({-1.0f, 0.25f, 1.0f}, {1.0f, 0.0f, 0.0f}), 0.0f)
+                   .intersect(kTri, 0.0f, kInf, t, u, v));
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -1,0 +1,176 @@
+#pragma once
+// Scalar closest-hit and any-hit kernels on the common format (core/bvh.h), for trees of arity 2 to 8.
+// The ray/box and ray/triangle tests are template parameters, so each combination is its own kernel
+// with no indirect calls, and the statistics kernels are separate instantiations of the same body.
+
+#include <cstdint>
+#include <span>
+
+#include "core/bvh.h"
+#include "core/ray.h"
+#include "core/triangle.h"
+#include "traversal/ray_box.h"
+#include "traversal/triangle_tests.h"
+
+namespace sahbench {
+
+/// Work done by the statistics kernels, summed over every ray traced with the same counters. Per-ray
+/// figures (DESIGN.md's nodes_per_ray, prims_per_ray) are these divided by `rays`.
+struct TraversalCounters {
+  uint64_t rays = 0;
+  uint64_t inner_visits = 0;  ///< inner nodes popped and not culled, i.e. whose children were box-tested
+  uint64_t leaf_visits = 0;   ///< leaves popped and not culled, i.e. whose primitives were tested
+  uint64_t box_tests = 0;     ///< ray/box tests, the root's included
+  uint64_t prim_tests = 0;    ///< ray/triangle tests (a repeated reference counts each time)
+
+  /// Nodes visited: inner nodes and leaves whose contents were examined.
+  uint64_t nodes_visited() const { return inner_visits + leaf_visits; }
+
+  TraversalCounters& operator+=(const TraversalCounters& o) {
+    rays += o.rays;
+    inner_visits += o.inner_visits;
+    leaf_visits += o.leaf_visits;
+    box_tests += o.box_tests;
+    prim_tests += o.prim_tests;
+    return *this;
+  }
+  friend bool operator==(const TraversalCounters&, const TraversalCounters&) = default;
+};
+
+namespace detail {
+
+/// Widest node any kernel here traverses (the common format allows 2..8 children).
+inline constexpr uint32_t kMaxArity = 8;
+
+// Stack bound. Popping an inner node at depth d and pushing its (at most kMaxArity) children leaves at
+// most kMaxArity - 1 entries per level from the root down, and inner nodes lie at depth
+// <= kMaxDepth - 1 when leaves lie at depth <= kMaxDepth. So the stack never holds more than
+// (kMaxArity - 1) * (kMaxDepth - 1) + kMaxArity = (kMaxArity - 1) * kMaxDepth + 1 entries.
+inline constexpr uint32_t kStackBound = (kMaxArity - 1) * kMaxDepth + 1;
+// Rounded up to a power of two as margin; 512 entries of 8 bytes are 4 KiB on the call stack. A tree
+// deeper than kMaxDepth is still caught by the per-node capacity check (which throws), never overrun.
+inline constexpr uint32_t kStackCapacity = 512;
+static_assert(kStackCapacity >= kStackBound, "traversal stack too small for kMaxDepth and kMaxArity");
+
+struct StackEntry {
+  uint32_t node;
+  float t_entry;  ///< distance at which the ray enters the node's box, to cull it after a closer hit
+};
+
+/// Throws sahbench::Error naming the node: a tree deeper than kMaxDepth (the builders guarantee it).
+[[noreturn]] void throw_stack_overflow(uint32_t node, uint32_t child_count);
+
+// The one traversal loop. kAnyHit stops at the first hit in [tmin, tmax]; otherwise the interval's end
+// shrinks to the closest hit so far. kCount adds the statistics, compiled out of the timed kernels.
+//
+// Closest-hit order: the children hit are pushed sorted so that the nearest entry is popped first
+// (for two children one compare and swap), and a popped node entered beyond the current closest hit is
+// skipped. Any-hit pushes in storage order: without an interval to shrink, sorting would only cost.
+//
+// Ties: a hit at exactly the current closest t replaces it only when its primitive index is lower, so
+// among hits at the same float t the lowest index wins, as in the brute-force reference.
+template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
+Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
+             [[maybe_unused]] TraversalCounters* counters) {
+  if constexpr (kCount) ++counters->rays;
+  if (bvh.nodes.empty()) return {};
+  const BoxTest box_test(ray);
+  const TriangleTest triangle_test(ray);
+  if constexpr (kCount) ++counters->box_tests;
+
+  StackEntry stack[kStackCapacity];
+  uint32_t size = 0;
+  float t_entry;
+  if (!box_test.intersect(bvh.nodes[0].bounds, ray.tmin, ray.tmax, t_entry)) return {};
+  stack[size++] = {0, t_entry};
+
+  Hit best;
+  float best_t = ray.tmax;
+  while (size > 0) {
+    const StackEntry entry = stack[--size];
+    if constexpr (!kAnyHit) {
+      // Entered beyond the closest hit: nothing inside can be closer. Equal is kept for the tie rule.
+      if (entry.t_entry > best_t) continue;
+    }
+    const Node& node = bvh.nodes[entry.node];
+
+    if (node.is_leaf()) {
+      if constexpr (kCount) {
+        ++counters->leaf_visits;
+        counters->prim_tests += node.prim_count;
+      }
+      const uint32_t end = node.first + node.prim_count;
+      for (uint32_t r = node.first; r < end; ++r) {
+        const uint32_t prim = bvh.prim_refs[r];
+        float t, u, v;
+        if (!triangle_test.intersect(triangles[prim], ray.tmin, best_t, t, u, v)) continue;
+        if constexpr (kAnyHit) {
+          return {prim, t, u, v};
+        } else {
+          // The test guarantees t <= best_t, so this is "closer, or as close with a lower index".
+          if (t < best_t || prim < best.prim) {
+            best = {prim, t, u, v};
+            best_t = t;
+          }
+        }
+      }
+      continue;
+    }
+
+    if constexpr (kCount) {
+      ++counters->inner_visits;
+      counters->box_tests += node.child_count;
+    }
+    if (size + node.child_count > kStackCapacity) [[unlikely]]
+      throw_stack_overflow(entry.node, node.child_count);
+    const uint32_t base = size;
+    const uint32_t end = node.first + node.child_count;
+    for (uint32_t child = node.first; child < end; ++child) {
+      if (!box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) continue;
+      uint32_t slot = size++;
+      if constexpr (!kAnyHit) {
+        // Insertion sort into this node's part of the stack, nearest on top (highest index).
+        while (slot > base && stack[slot - 1].t_entry < t_entry) {
+          stack[slot] = stack[slot - 1];
+          --slot;
+        }
+      }
+      stack[slot] = {child, t_entry};
+    }
+  }
+  return best;
+}
+
+}  // namespace detail
+
+/// Closest hit of `ray` within [ray.tmin, ray.tmax] among `triangles`, traversing `bvh` (any arity up to
+/// 8, built over `triangles`) depth first with an explicit stack, nearest child first by entry distance
+/// (pbrt-v4's BVHAggregate::Intersect does the same ordered traversal but orders two children by the
+/// sign of the ray direction on the split axis). Among hits at the same t the lowest primitive index
+/// wins. An empty `bvh` (no nodes) is a miss. Throws sahbench::Error for a tree deeper than kMaxDepth.
+template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
+Hit closest_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray) {
+  return detail::traverse<TriangleTest, BoxTest, false, false>(bvh, triangles, ray, nullptr);
+}
+
+/// Whether any triangle is hit within [ray.tmin, ray.tmax] (shadow rays): stops at the first hit found.
+template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
+bool any_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray) {
+  return detail::traverse<TriangleTest, BoxTest, true, false>(bvh, triangles, ray, nullptr).found();
+}
+
+/// closest_hit, also adding this ray's work to `counters`. Same traversal, same result; not for timing.
+template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
+Hit closest_hit_counted(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
+                        TraversalCounters& counters) {
+  return detail::traverse<TriangleTest, BoxTest, false, true>(bvh, triangles, ray, &counters);
+}
+
+/// any_hit, also adding this ray's work to `counters`. Same traversal, same result; not for timing.
+template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
+bool any_hit_counted(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
+                     TraversalCounters& counters) {
+  return detail::traverse<TriangleTest, BoxTest, true, true>(bvh, triangles, ray, &counters).found();
+}
+
+}  // namespace sahbench

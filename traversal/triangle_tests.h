@@ -1,0 +1,149 @@
+#pragma once
+// Ray/triangle tests, set up once per ray and run once per primitive. Both share one contract:
+//
+//   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const
+//
+// returns true when the ray meets the triangle at a distance t with tmin <= t <= tmax (a closed interval,
+// checked on the returned float t), and then sets t and the barycentrics (u, v) of the hit with respect
+// to v1 and v2: p = (1-u-v)*v0 + u*v1 + v*v2 (core/ray.h). Front and back faces are both hit (no
+// culling); a triangle seen edge-on (determinant 0) is missed. On a miss the outputs are unspecified.
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+
+#include "core/ray.h"
+#include "core/triangle.h"
+
+namespace sahbench {
+
+namespace detail {
+
+using Components = std::array<float, 3>;
+static_assert(sizeof(Vec3) == sizeof(Components), "Vec3 must be three packed floats");
+
+// Vec3::operator[] is a chain of conditionals; a per-ray axis permutation wants a plain array index.
+inline Components components(Vec3 a) {
+  return std::bit_cast<Components>(a);
+}
+
+}  // namespace detail
+
+/// Watertight ray/triangle intersection of Woop, Benthin and Wald 2013, "Watertight Ray/Triangle
+/// Intersection" (JCGT 2(1)). The ray is turned into the +z axis by a permutation and a shear computed
+/// once per ray (section 3); the vertices are transformed by the same float operations for every
+/// triangle, so two triangles sharing an edge evaluate that edge's 2D edge function from identical
+/// inputs and cannot both miss a ray through it. An edge function that comes out exactly 0 is
+/// recomputed in double (section 4, exact since a product of two floats fits a double), so its sign is
+/// exact. A ray through a shared edge or vertex hits at least one of the triangles sharing it (unless
+/// the edge is a silhouette seen along the ray, where the surface itself folds away).
+///
+/// The argument needs fl(a*b) - fl(c*d) with both products rounded, so that swapping the two vertices of
+/// an edge negates its edge function exactly. A fused multiply-add breaks that, so every target using
+/// this header compiles with -ffp-contract=off (set PUBLIC by traversal/CMakeLists.txt).
+class WatertightTriangleTest {
+ public:
+  /// `ray.dir` must not be the zero vector.
+  explicit WatertightTriangleTest(const Ray& ray) : org_(ray.org) {
+    const Vec3 abs_dir{std::abs(ray.dir.x), std::abs(ray.dir.y), std::abs(ray.dir.z)};
+    // The axis of largest |dir| becomes z, so the shear below divides by the largest component.
+    kz_ = static_cast<uint8_t>(largest_axis(abs_dir));
+    kx_ = static_cast<uint8_t>((kz_ + 1) % 3);
+    ky_ = static_cast<uint8_t>((kx_ + 1) % 3);
+    // Swapping x and y when the ray points down z keeps the winding, hence the sign of the edge
+    // functions and of the determinant, the same for both directions (section 3).
+    if (ray.dir[kz_] < 0.0f) std::swap(kx_, ky_);
+    sx_ = ray.dir[kx_] / ray.dir[kz_];
+    sy_ = ray.dir[ky_] / ray.dir[kz_];
+    sz_ = 1.0f / ray.dir[kz_];
+  }
+
+  bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
+    // Vertices relative to the origin, then sheared so the ray is the +z axis through (0, 0).
+    const detail::Components a = detail::components(tri.v0 - org_);
+    const detail::Components b = detail::components(tri.v1 - org_);
+    const detail::Components c = detail::components(tri.v2 - org_);
+    const float ax = a[kx_] - sx_ * a[kz_], ay = a[ky_] - sy_ * a[kz_];
+    const float bx = b[kx_] - sx_ * b[kz_], by = b[ky_] - sy_ * b[kz_];
+    const float cx = c[kx_] - sx_ * c[kz_], cy = c[ky_] - sy_ * c[kz_];
+
+    // Scaled barycentrics: e0 weights v0 (edge v1-v2), e1 weights v1 (edge v2-v0), e2 weights v2.
+    float e0 = cx * by - cy * bx;
+    float e1 = ax * cy - ay * cx;
+    float e2 = bx * ay - by * ax;
+    if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f) [[unlikely]] {
+      // The ray passes (to float precision) through an edge: decide its side exactly (section 4).
+      e0 = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
+      e1 = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
+      e2 = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
+    }
+    // Inside when no edge function has the wrong sign; zeros (on an edge) count as inside.
+    if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) return false;
+    const float det = e0 + e1 + e2;
+    if (det == 0.0f) return false;
+
+    // Scaled distance T = t * det. Compare it with [tmin, tmax] * |det| before dividing, so misses
+    // never pay for the division (section 3); flipping both signs makes det positive.
+    const float az = sz_ * a[kz_], bz = sz_ * b[kz_], cz = sz_ * c[kz_];
+    const float scaled_t = e0 * az + e1 * bz + e2 * cz;
+    const float abs_det = std::abs(det);
+    const float signed_t = det < 0.0f ? -scaled_t : scaled_t;
+    if (!(signed_t >= tmin * abs_det && signed_t <= tmax * abs_det)) return false;
+
+    const float inv_det = 1.0f / det;
+    t = scaled_t * inv_det;
+    // The product may round across tmin or tmax; the contract is on the returned t.
+    if (!(t >= tmin && t <= tmax)) return false;
+    u = e1 * inv_det;
+    v = e2 * inv_det;
+    return true;
+  }
+
+ private:
+  Vec3 org_;
+  uint8_t kx_, ky_, kz_;
+  float sx_, sy_, sz_;
+};
+
+/// Default determinant threshold of MollerTrumboreTest: EPSILON = 0.000001 in the code listing of
+/// Möller and Trumbore 1997. It is absolute, so its effect depends on the scale of the scene and of
+/// `ray.dir` (det = dir . (e1 x e2) scales with |dir| |e1| |e2|); with unit directions and edges of
+/// about one unit it rejects rays within about 1e-6 rad of the triangle's plane.
+inline constexpr float kMollerTrumboreEpsilon = 1e-6f;
+
+/// Ray/triangle test of Möller and Trumbore 1997, "Fast, Minimum Storage Ray/Triangle Intersection"
+/// (JGT 2(1)), the non-culling branch: Cramer's rule on the ray/plane system, testing u and v as soon as
+/// each is known. It is not watertight: rays through shared edges can leak. A hit needs
+/// |det| > det_epsilon (strictly), so det_epsilon = 0 rejects only det == 0 (and NaN).
+class MollerTrumboreTest {
+ public:
+  explicit MollerTrumboreTest(const Ray& ray, float det_epsilon = kMollerTrumboreEpsilon)
+      : org_(ray.org), dir_(ray.dir), det_epsilon_(det_epsilon) {}
+
+  bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
+    const Vec3 edge1 = tri.v1 - tri.v0;
+    const Vec3 edge2 = tri.v2 - tri.v0;
+    const Vec3 p = cross(dir_, edge2);
+    const float det = dot(edge1, p);
+    // Written so that a NaN determinant is a miss.
+    if (!(std::abs(det) > det_epsilon_)) return false;
+    const float inv_det = 1.0f / det;
+    const Vec3 s = org_ - tri.v0;
+    u = dot(s, p) * inv_det;
+    if (!(u >= 0.0f && u <= 1.0f)) return false;
+    const Vec3 q = cross(s, edge1);
+    v = dot(dir_, q) * inv_det;
+    if (!(v >= 0.0f && u + v <= 1.0f)) return false;
+    t = dot(edge2, q) * inv_det;
+    return t >= tmin && t <= tmax;
+  }
+
+ private:
+  Vec3 org_;
+  Vec3 dir_;
+  float det_epsilon_;
+};
+
+}  // namespace sahbench

@@ -1,0 +1,104 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "scenes/load.h"
+#include "scenes/obj_loader.h"
+#include "tests/scenes/temp_dir.h"
+
+namespace sahbench {
+namespace {
+
+using test::error_message;
+using test::TempDir;
+
+TEST(SceneObj, QuadsAndPolygonsWithMissingMtl) {
+  TempDir dir;
+  const std::string text =
+      "# a quad, a triangle and a pentagon; the material library does not exist\n"
+      "mtllib missing.mtl\n"
+      "o thing\n"
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+      "vt 0 0\nvn 0 0 1\n"
+      "usemtl nothing\n"
+      "f 1/1/1 2/1/1 3/1/1 4/1/1\n"
+      "v 0 0 3\n"
+      "f 1//1 2//1 5//1\n"
+      "v 2 0 0\nv 3 1 0\nv 2 2 0\nv 1.5 1 0\nv 1.7 0.5 0\n"
+      "f -5 -4 -3 -2 -1\n"  // relative indices: the five vertices just defined
+      "l 1 2\n";
+  const Scene scene = load_obj(dir.write("shape.obj", text));
+  EXPECT_EQ(scene.removed.total(), 0u);
+  ASSERT_EQ(scene.triangles.size(), 2u + 1u + 3u);
+  EXPECT_EQ(scene.triangles[0], (Triangle{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
+  EXPECT_EQ(scene.triangles[1], (Triangle{{0, 0, 0}, {1, 1, 0}, {0, 1, 0}}));
+  EXPECT_EQ(scene.triangles[2], (Triangle{{0, 0, 0}, {1, 0, 0}, {0, 0, 3}}));
+  EXPECT_EQ(scene.triangles[3], (Triangle{{2, 0, 0}, {3, 1, 0}, {2, 2, 0}}));
+  EXPECT_EQ(scene.triangles[5], (Triangle{{2, 0, 0}, {1.5f, 1, 0}, {1.7f, 0.5f, 0}}));
+}
+
+TEST(SceneObj, InvalidTrianglesAreCounted) {
+  TempDir dir;
+  const std::string text =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\n"
+      "f 1 2 3\n"   // valid
+      "f 1 2 9\n"   // past the end
+      "f 1 2 -9\n"  // relative, before the first vertex
+      "f 1 2 4\n"   // collinear
+      "f 1 1 3\n"   // repeated vertex
+      "f 1 2\n";    // two-vertex face
+  const Scene scene = load_obj(dir.write("bad.obj", text));
+  EXPECT_EQ(scene.triangles.size(), 1u);
+  EXPECT_EQ(scene.removed.bad_index, 2u);
+  EXPECT_EQ(scene.removed.zero_area, 3u);
+}
+
+TEST(SceneObj, HugeCoordinateIsNonFinite) {
+  TempDir dir;
+  const Scene scene = load_obj(dir.write("big.obj", "v 0 0 0\nv 1 0 0\nv 0 1e300 0\nf 1 2 3\n"));
+  EXPECT_EQ(scene.triangles.size(), 0u);
+  EXPECT_EQ(scene.removed.non_finite, 1u);
+}
+
+TEST(SceneObj, FaceBeforeItsVertices) {
+  TempDir dir;
+  const Scene scene = load_obj(dir.write("late.obj", "f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"));
+  EXPECT_EQ(scene.triangles.size(), 1u);
+}
+
+TEST(SceneObj, PolygonWithManyVertices) {
+  // More than 255 corners: tinyobjloader's own mesh arrays store the count in a byte; the streaming
+  // path used here does not.
+  TempDir dir;
+  std::string text;
+  constexpr int kCorners = 300;
+  for (int i = 0; i < kCorners; ++i) {
+    const double a = 2.0 * 3.14159265358979 * i / kCorners;
+    text += "v " + std::to_string(std::cos(a));
+    text += ' ';
+    text += std::to_string(std::sin(a)) + " 0\n";
+  }
+  text += "f";
+  for (int i = 1; i <= kCorners; ++i) {
+    text += ' ';
+    text += std::to_string(i);
+  }
+  text += "\n";
+  const Scene scene = load_obj(dir.write("disc.obj", text));
+  EXPECT_EQ(scene.triangles.size() + scene.removed.total(), static_cast<std::size_t>(kCorners - 2));
+  EXPECT_EQ(scene.removed.total(), 0u);
+}
+
+TEST(SceneObj, MissingFile) {
+  TempDir dir;
+  const auto path = dir.path() / "absent.obj";
+  const std::string msg = error_message([&] { load_obj(path); });
+  EXPECT_NE(msg.find(path.string() + ": cannot open file"), std::string::npos) << msg;
+  // Through load_scene, a missing path is named too.
+  const std::string msg2 = error_message([&] { load_scene(path.string()); });
+  EXPECT_NE(msg2.find(path.string() + ": no such file"), std::string::npos) << msg2;
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -46,14 +46,15 @@ struct DecodedPrimitive {
 
 class GltfReader {
  public:
-  GltfReader(const tinygltf::Model& model, std::string file, TriangleFilter& filter)
-      : model_(model), file_(std::move(file)), filter_(filter), decoded_(model.meshes.size()) {}
+  GltfReader(const tinygltf::Model& model, std::string file, TriangleFilter& filter, Scene& scene)
+      : model_(model), file_(std::move(file)), filter_(filter), scene_(scene), decoded_(model.meshes.size()) {}
 
   void read_scene();
 
  private:
   Mat4 local_transform(int node_index) const;
   void place_mesh(int mesh_index, const Mat4& world);
+  void place_camera_and_light(const tinygltf::Node& node, const Mat4& world);
   const std::vector<DecodedPrimitive>& decode_mesh(int mesh_index);
   std::optional<DecodedPrimitive> decode_primitive(const tinygltf::Primitive& p, const std::string& where);
   std::vector<Vec3> read_positions(int accessor_index, const std::string& where) const;
@@ -75,6 +76,7 @@ class GltfReader {
   const tinygltf::Model& model_;
   std::string file_;
   TriangleFilter& filter_;
+  Scene& scene_;
   std::vector<std::optional<std::vector<DecodedPrimitive>>> decoded_;  // per mesh, filled on first use
 };
 
@@ -125,6 +127,7 @@ void GltfReader::read_scene() {
         fail("node " + std::to_string(index) + ": mesh index " + std::to_string(node.mesh) + " out of range");
       place_mesh(node.mesh, world);
     }
+    place_camera_and_light(node, world);
     for (auto it = node.children.rbegin(); it != node.children.rend(); ++it) stack.emplace_back(*it, world);
   }
 }
@@ -163,6 +166,35 @@ Mat4 GltfReader::local_transform(int node_index) const {
               2 * (xz + wy) * sz,       2 * (yz - wx) * sz,       (1 - 2 * (xx + yy)) * sz, 0,
               tx,                       ty,                       tz,                       1};
   // clang-format on
+}
+
+// The first perspective camera found in the hierarchy becomes the scene camera; glTF cameras look
+// down their local -z with +y up. Point and spot lights (KHR_lights_punctual) contribute positions.
+void GltfReader::place_camera_and_light(const tinygltf::Node& node, const Mat4& m) {
+  auto point = [&](double x, double y, double z) {
+    return Vec3{to_float(m[0] * x + m[4] * y + m[8] * z + m[12]), to_float(m[1] * x + m[5] * y + m[9] * z + m[13]),
+                to_float(m[2] * x + m[6] * y + m[10] * z + m[14])};
+  };
+  auto direction = [&](double x, double y, double z) {
+    return Vec3{to_float(m[0] * x + m[4] * y + m[8] * z), to_float(m[1] * x + m[5] * y + m[9] * z),
+                to_float(m[2] * x + m[6] * y + m[10] * z)};
+  };
+  if (!scene_.camera && node.camera >= 0 && static_cast<std::size_t>(node.camera) < model_.cameras.size()) {
+    const tinygltf::Camera& cam = model_.cameras[static_cast<std::size_t>(node.camera)];
+    const Vec3 forward = direction(0, 0, -1), up = direction(0, 1, 0);
+    if (cam.type == "perspective" && cam.perspective.yfov > 0 && length(forward) > 0 && length(cross(forward, up)) > 0) {
+      const Vec3 f = normalize(forward);
+      const Vec3 u = normalize(cross(normalize(cross(f, up)), f));
+      scene_.camera = Camera{point(0, 0, 0), f, u, static_cast<float>(cam.perspective.yfov)};
+    }
+  }
+  const auto ext = node.extensions.find("KHR_lights_punctual");
+  if (ext != node.extensions.end() && ext->second.Has("light")) {
+    const int light = ext->second.Get("light").GetNumberAsInt();
+    if (light >= 0 && static_cast<std::size_t>(light) < model_.lights.size() &&
+        model_.lights[static_cast<std::size_t>(light)].type != "directional")
+      scene_.lights.push_back(point(0, 0, 0));
+  }
 }
 
 void GltfReader::place_mesh(int mesh_index, const Mat4& m) {
@@ -384,7 +416,7 @@ Scene load_gltf(const std::filesystem::path& path, bool binary) {
   Scene scene;
   scene.source = file;
   TriangleFilter filter(scene);
-  GltfReader(model, file, filter).read_scene();
+  GltfReader(model, file, filter, scene).read_scene();
   return scene;
 }
 

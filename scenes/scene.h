@@ -2,6 +2,7 @@
 // A loaded scene: world-space float triangles, with the invalid ones removed and counted.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,11 +19,22 @@ struct RemovedTriangles {
   std::size_t total() const { return non_finite + bad_index + zero_area; }
 };
 
+/// A pinhole camera, for primary rays. From the scene file when it has one (glTF), else absent and the
+/// harness frames the scene automatically.
+struct Camera {
+  Vec3 position;
+  Vec3 forward{0, 0, -1};  ///< unit view direction
+  Vec3 up{0, 1, 0};        ///< unit, orthogonal to forward
+  float yfov = 0.785398f;  ///< vertical field of view in radians
+};
+
 struct Scene {
   std::string name;                 ///< what the user asked for: a path, a shared-scene name or a procedural spec
   std::string source;               ///< the resolved file path, or the normalised procedural spec
   std::vector<Triangle> triangles;  ///< valid triangles only
   RemovedTriangles removed;
+  std::optional<Camera> camera;    ///< the file's first perspective camera, if any
+  std::vector<Vec3> lights;        ///< positions of the file's point and spot lights (KHR_lights_punctual)
 };
 
 }  // namespace sahbench

@@ -131,6 +131,39 @@ TEST(SceneGltf, EmbeddedBufferNodeTransformsAndReusedMesh) {
   expect_near(scene.triangles[3].v2, {-2, 0, 0});
 }
 
+TEST(SceneGltf, CameraAndPointLightAreReadWithTheirNodeTransforms) {
+  TempDir dir;
+  const Bytes buffer = quad_buffer();
+  std::string json = quad_gltf(data_uri(buffer), buffer.size());
+  // A camera node at (0, 0, 5) turned 90 degrees about y (looking down -x), and a light node at (1, 2, 3).
+  replace_once(json, R"("scenes": [{"nodes": [0, 1]}])", R"("scenes": [{"nodes": [0, 1, 3, 4]}])");
+  replace_once(json, R"({"mesh": 0, "scale": [2, 2, 2]}
+  ])", R"({"mesh": 0, "scale": [2, 2, 2]},
+    {"camera": 0, "translation": [0, 0, 5], "rotation": [0, 0.7071067811865476, 0, 0.7071067811865476]},
+    {"translation": [1, 2, 3], "extensions": {"KHR_lights_punctual": {"light": 0}}}
+  ],
+  "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}}],
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point"}]}})");
+  const Scene scene = load_gltf(dir.write("camera.gltf", json), false);
+  ASSERT_TRUE(scene.camera.has_value());
+  expect_near(scene.camera->position, {0, 0, 5});
+  expect_near(scene.camera->forward, {-1, 0, 0});
+  expect_near(scene.camera->up, {0, 1, 0});
+  EXPECT_FLOAT_EQ(scene.camera->yfov, 0.5f);
+  ASSERT_EQ(scene.lights.size(), 1u);
+  expect_near(scene.lights[0], {1, 2, 3});
+  EXPECT_EQ(scene.triangles.size(), 4u);
+}
+
+TEST(SceneGltf, NoCameraOrLightsWhenTheFileHasNone) {
+  TempDir dir;
+  const Bytes buffer = quad_buffer();
+  const Scene scene = load_gltf(dir.write("quad.gltf", quad_gltf(data_uri(buffer), buffer.size())), false);
+  EXPECT_FALSE(scene.camera.has_value());
+  EXPECT_TRUE(scene.lights.empty());
+}
+
 TEST(SceneGltf, SeparateBinWithStrideOffsetUint8IndicesAndMissingImage) {
   TempDir dir;
   // Interleaved: 4 bytes of padding, then per vertex xyz and 4 more bytes (stride 16).

@@ -11,6 +11,7 @@ namespace {
 const char* error_name(RTCError code) {
   switch (code) {
     case RTC_ERROR_NONE: return "none";
+    case RTC_ERROR_UNKNOWN: return "unknown error";
     case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
     case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
     case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
@@ -29,6 +30,15 @@ EmbreeQuality parse_embree_quality(std::string_view text) {
   throw Error("Embree quality '" + std::string(text) + "' is not one of low, medium, high");
 }
 
+RTCBuildQuality to_rtc(EmbreeQuality quality) {
+  switch (quality) {
+    case EmbreeQuality::kLow: return RTC_BUILD_QUALITY_LOW;
+    case EmbreeQuality::kMedium: return RTC_BUILD_QUALITY_MEDIUM;
+    case EmbreeQuality::kHigh: return RTC_BUILD_QUALITY_HIGH;
+  }
+  return RTC_BUILD_QUALITY_MEDIUM;
+}
+
 std::string to_string(EmbreeQuality quality) {
   switch (quality) {
     case EmbreeQuality::kLow: return "low";
@@ -39,10 +49,13 @@ std::string to_string(EmbreeQuality quality) {
 }
 
 EmbreeDevice::EmbreeDevice(int threads) {
-  const std::string config = "threads=" + std::to_string(threads);
+  if (threads < 0) throw Error("Embree: thread count " + std::to_string(threads) + " is negative");
+  // No "threads=" at all for 0: Embree's "threads=0" means the same, but leaving it out says so.
+  const std::string config = threads > 0 ? "threads=" + std::to_string(threads) : std::string();
   device_ = rtcNewDevice(config.c_str());
   if (!device_) throw Error("Embree: rtcNewDevice(\"" + config + "\") failed: " + error_name(rtcGetDeviceError(nullptr)));
   rtcSetDeviceMemoryMonitorFunction(device_, &EmbreeDevice::monitor, this);
+  rtcSetDeviceErrorFunction(device_, &EmbreeDevice::on_error, this);
 }
 
 EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }
@@ -56,16 +69,43 @@ bool EmbreeDevice::monitor(void* user, ssize_t bytes, bool /*post*/) {
   return true;  // never refuse an allocation
 }
 
-void EmbreeDevice::check(const char* what) const {
-  const RTCError code = rtcGetDeviceError(device_);
-  if (code != RTC_ERROR_NONE) throw Error(std::string("Embree: ") + what + " failed: " + error_name(code));
+void EmbreeDevice::on_error(void* user, RTCError /*code*/, const char* message) {
+  auto* self = static_cast<EmbreeDevice*>(user);
+  const std::lock_guard lock(self->message_mutex_);
+  self->last_message_ = message ? message : "";
 }
 
-EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangles, EmbreeQuality quality) {
+void EmbreeDevice::check(const char* what) const {
+  const RTCError code = rtcGetDeviceError(device_);
+  if (code == RTC_ERROR_NONE) return;
+  std::string message;
+  {
+    const std::lock_guard lock(message_mutex_);
+    message = last_message_;
+  }
+  throw Error(std::string("Embree: ") + what + " failed: " + error_name(code) +
+              (message.empty() ? "" : " (" + message + ")"));
+}
+
+EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangles, EmbreeQuality quality,
+                         EmbreeSceneOptions options)
+    : device_(&device), options_(options), triangle_count_(triangles.size()) {
   scene_ = rtcNewScene(device.get());
-  const RTCBuildQuality q = quality == EmbreeQuality::kLow    ? RTC_BUILD_QUALITY_LOW
-                            : quality == EmbreeQuality::kHigh ? RTC_BUILD_QUALITY_HIGH
-                                                              : RTC_BUILD_QUALITY_MEDIUM;
+  device.check("rtcNewScene");
+  // The destructor does not run when a constructor throws; release the scene on any error below.
+  struct ReleaseOnThrow {
+    RTCScene& scene;
+    bool armed = true;
+    ~ReleaseOnThrow() {
+      if (armed) rtcReleaseScene(scene);
+    }
+  } guard{scene_};
+
+  int flags = RTC_SCENE_FLAG_NONE;
+  if (options.robust) flags |= RTC_SCENE_FLAG_ROBUST;
+  if (options.dynamic) flags |= RTC_SCENE_FLAG_DYNAMIC;
+  rtcSetSceneFlags(scene_, static_cast<RTCSceneFlags>(flags));
+  const RTCBuildQuality q = to_rtc(quality);
   rtcSetSceneBuildQuality(scene_, q);
   RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetGeometryBuildQuality(geometry, q);
@@ -75,7 +115,12 @@ EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangl
       rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
   auto* indices = static_cast<uint32_t*>(
       rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), n));
-  device.check("rtcSetNewGeometryBuffer");
+  try {
+    device.check("rtcSetNewGeometryBuffer");
+  } catch (...) {
+    rtcReleaseGeometry(geometry);
+    throw;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const Triangle& t = triangles[i];
     for (int v = 0; v < 3; ++v) {
@@ -97,6 +142,7 @@ EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangl
   commit_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   device.check("rtcCommitScene");
   bytes_ = device.bytes() - before;
+  guard.armed = false;
 }
 
 EmbreeScene::~EmbreeScene() { rtcReleaseScene(scene_); }

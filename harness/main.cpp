@@ -8,10 +8,17 @@
 #include "builders/params.h"
 #include "core/error.h"
 #include "harness/build_command.h"
+#include "harness/embree_bvh_builder.h"
 #include "harness/list_command.h"
+#include "harness/report.h"
+#include "harness/runner.h"
+#include "harness/trace_command.h"
 
 int main(int argc, char** argv) {
   using namespace sahbench;
+  // Builders backed by Embree live in the harness (builders/ must not know Embree); register them
+  // before anything looks a builder up.
+  register_embree_builders();
   CLI::App app{"sahbench: benchmark and research harness for SAH BVH builders"};
   app.require_subcommand(1);
 
@@ -27,6 +34,27 @@ int main(int argc, char** argv) {
   build_cmd->add_option("--reps", build.reps, "timed repetitions (median reported)")->capture_default_str();
   build_cmd->add_option("--warmup", build.warmup, "untimed builds first")->capture_default_str();
 
+  RunOptions run;
+  std::string run_output;
+  auto* run_cmd = app.add_subcommand("run", "Run an experiment config: cells of scene x builder x layout x threads x ray set");
+  run_cmd->add_option("config", run.config, "experiment config (TOML)")->required();
+  run_cmd->add_flag("--resume", run.resume, "skip cells whose rows are already in the output CSV");
+  run_cmd->add_option("--only", run.only, "run only cells whose key scene|builder|params|layout|threads|ray_set|frame contains this text");
+  run_cmd->add_option("--output", run_output, "CSV path instead of the config's");
+
+  ReportOptions report;
+  auto* report_cmd = app.add_subcommand("report", "Markdown tables from result CSVs, with ratios to Embree medium");
+  report_cmd->add_option("csv", report.inputs, "result CSV files")->required();
+  report_cmd->add_option("--run", report.run_id, "run_id to report (default: the latest)");
+
+  TraceCommandOptions trace;
+  auto* trace_cmd = app.add_subcommand("trace", "Trace rays from a file on one builder's tree; one output line per ray");
+  trace_cmd->add_option("--scene", trace.scene, "scene file, shared-scene name or procedural spec")->required();
+  trace_cmd->add_option("--builder", trace.builder, "NAME or NAME:key=value,...")->capture_default_str();
+  trace_cmd->add_option("--layout", trace.layout, "layout")->capture_default_str();
+  trace_cmd->add_option("--rays", trace.rays, "ray file: 'ox oy oz dx dy dz [tmin tmax]' per line")->required();
+  trace_cmd->add_option("--out", trace.out, "output CSV: ray,hit,prim,t,u,v")->required();
+
   auto* list_cmd = app.add_subcommand("list", "Builders and their parameters, procedural scene kinds, shared scenes found");
   auto* list_scenes_cmd = app.add_subcommand("list-scenes", "Names of the shared scenes found, one per line");
 
@@ -36,6 +64,12 @@ int main(int argc, char** argv) {
       for (const auto& p : params) build.params.push_back(parse_override(p));
       return run_build_command(build, std::cout, std::cerr);
     }
+    if (*run_cmd) {
+      if (!run_output.empty()) run.output = run_output;
+      return run_experiment(run, std::cerr);
+    }
+    if (*report_cmd) print_report(report, std::cout);
+    if (*trace_cmd) run_trace_command(trace, std::cerr);
     if (*list_cmd) print_catalogue(std::cout);
     if (*list_scenes_cmd) print_scene_names(std::cout);
   } catch (const Error& e) {

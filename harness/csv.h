@@ -1,0 +1,40 @@
+#pragma once
+// CSV results: one row per finished cell, appended and flushed at once so that a crash or Ctrl-C loses
+// no finished row. Quoting follows RFC 4180 (fields with a comma, quote or newline are quoted).
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace sahbench {
+
+/// The DESIGN.md columns, in order; more may follow, these are never renamed.
+const std::vector<std::string>& design_columns();
+
+using CsvRow = std::map<std::string, std::string>;
+
+/// Appends rows with a fixed header. Opening an existing file checks its header matches (an error
+/// naming the file and the first differing column otherwise); a new or empty file gets the header.
+class CsvWriter {
+ public:
+  CsvWriter(std::filesystem::path path, std::vector<std::string> columns);
+  /// Writes one row; columns missing from `row` are empty, keys not in the header are an error.
+  void append(const CsvRow& row);
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+  std::vector<std::string> columns_;
+  std::ofstream out_;
+};
+
+/// Reads a whole CSV file into rows keyed by header names. Malformed quoting or a row with the wrong
+/// number of fields is an error naming the file and line.
+std::vector<CsvRow> read_csv(const std::filesystem::path& path);
+
+/// One field, quoted when needed.
+std::string csv_escape(const std::string& field);
+
+}  // namespace sahbench

@@ -1,0 +1,157 @@
+// The layout registry and the binary layouts. Wide layouts (BVH4/BVH8) register here too.
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "harness/layout.h"
+#include "traversal/bvh2_traversal.h"
+
+namespace sahbench {
+namespace {
+
+// Rays handed to one task: enough to amortise scheduling, few enough to balance incoherent rays.
+constexpr std::size_t kRayChunk = 256;
+
+template <class Body>
+void for_each_ray_chunk(std::size_t count, Body body) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kRayChunk),
+                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+}
+
+template <class Trace>
+TraceCounts count_rays(std::size_t count, Trace trace) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, count, kRayChunk), TraceCounts{},
+      [&](const tbb::blocked_range<std::size_t>& r, TraceCounts acc) {
+        TraversalCounters counters;
+        for (std::size_t i = r.begin(); i != r.end(); ++i) trace(i, counters);
+        acc.rays += r.size();
+        acc.nodes_visited += counters.nodes_visited();
+        acc.prims_tested += counters.prim_tests;
+        return acc;
+      },
+      [](TraceCounts a, const TraceCounts& b) {
+        a.rays += b.rays;
+        a.nodes_visited += b.nodes_visited;
+        a.prims_tested += b.prims_tested;
+        return a;
+      });
+}
+
+/// The common format traversed as it is: nodes, then triangles through prim_refs.
+class Bvh2Layout final : public CompiledLayout {
+ public:
+  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles) : bvh_(bvh), triangles_(triangles) {}
+
+  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
+    for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) hits[i] = closest_hit(bvh_, triangles_, rays[i]);
+    });
+  }
+  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
+    for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit(bvh_, triangles_, rays[i]);
+    });
+  }
+  TraceCounts count_closest(std::span<const Ray> rays) const override {
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted(bvh_, triangles_, rays[i], c); });
+  }
+  TraceCounts count_any(std::span<const Ray> rays) const override {
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted(bvh_, triangles_, rays[i], c); });
+  }
+  std::size_t bytes() const override { return bvh_.bytes(); }
+
+ private:
+  const Bvh& bvh_;
+  std::span<const Triangle> triangles_;
+};
+
+/// The same nodes with the triangles copied into leaf order, so a leaf's triangles are contiguous in
+/// memory and no reference is chased per primitive (the layout tinybvh and Embree use for leaves).
+/// Hits are mapped back to scene primitive indices.
+class Bvh2PackedLayout final : public CompiledLayout {
+ public:
+  Bvh2PackedLayout(const Bvh& bvh, std::span<const Triangle> triangles) {
+    packed_bvh_.nodes = bvh.nodes;
+    packed_bvh_.arity = bvh.arity;
+    const std::size_t refs = bvh.prim_refs.size();
+    packed_bvh_.prim_refs.resize(refs);
+    packed_.resize(refs);
+    ids_ = bvh.prim_refs;
+    tbb::parallel_for(std::size_t{0}, refs, [&](std::size_t i) {
+      packed_bvh_.prim_refs[i] = static_cast<uint32_t>(i);
+      packed_[i] = triangles[bvh.prim_refs[i]];
+    });
+  }
+
+  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
+    for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        Hit hit = closest_hit(packed_bvh_, packed_, rays[i]);
+        if (hit.found()) hit.prim = ids_[hit.prim];
+        hits[i] = hit;
+      }
+    });
+  }
+  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
+    for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit(packed_bvh_, packed_, rays[i]);
+    });
+  }
+  TraceCounts count_closest(std::span<const Ray> rays) const override {
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted(packed_bvh_, packed_, rays[i], c); });
+  }
+  TraceCounts count_any(std::span<const Ray> rays) const override {
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted(packed_bvh_, packed_, rays[i], c); });
+  }
+  // Nodes, the packed triangles and the ids that map them back; the identity references are an
+  // artefact of reusing the common-format kernel and are not counted.
+  std::size_t bytes() const override {
+    return packed_bvh_.nodes.size() * sizeof(Node) + packed_.size() * sizeof(Triangle) + ids_.size() * sizeof(uint32_t);
+  }
+
+ private:
+  Bvh packed_bvh_;
+  std::vector<Triangle> packed_;
+  std::vector<uint32_t> ids_;
+};
+
+void require_binary(const Bvh& bvh, const char* layout) {
+  if (bvh.arity != 2)
+    throw Error(std::string("layout '") + layout + "' needs a binary tree, the builder gave arity " +
+                std::to_string(bvh.arity));
+}
+
+const std::vector<LayoutInfo>& registry() {
+  static const std::vector<LayoutInfo> all = {
+      {"bvh2", "the common format as built: 32-byte nodes, triangles through references",
+       [](const Bvh& bvh, std::span<const Triangle> tris) -> std::unique_ptr<CompiledLayout> {
+         require_binary(bvh, "bvh2");
+         return std::make_unique<Bvh2Layout>(bvh, tris);
+       }},
+      {"bvh2_packed", "common-format nodes, triangles copied into leaf order",
+       [](const Bvh& bvh, std::span<const Triangle> tris) -> std::unique_ptr<CompiledLayout> {
+         require_binary(bvh, "bvh2_packed");
+         return std::make_unique<Bvh2PackedLayout>(bvh, tris);
+       }},
+  };
+  return all;
+}
+
+}  // namespace
+
+std::span<const LayoutInfo> layouts() { return registry(); }
+
+const LayoutInfo& find_layout(std::string_view name) {
+  for (const auto& l : registry())
+    if (l.name == name) return l;
+  std::string known;
+  for (const auto& l : registry()) known += (known.empty() ? "" : ", ") + l.name;
+  throw Error("unknown layout '" + std::string(name) + "' (known: " + known + ")");
+}
+
+}  // namespace sahbench

@@ -1,0 +1,479 @@
+#include "harness/runner.h"
+
+#include <fmt/chrono.h>
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <memory>
+#include <ostream>
+#include <set>
+
+#include "builders/registry.h"
+#include "core/bvh_stats.h"
+#include "core/error.h"
+#include "core/validate.h"
+#include "harness/config.h"
+#include "harness/csv.h"
+#include "harness/embree_scene.h"
+#include "harness/embree_trace.h"
+#include "harness/environment.h"
+#include "harness/layout.h"
+#include "harness/memory_tracker.h"
+#include "harness/ray_sets.h"
+#include "harness/timing.h"
+#include "scenes/load.h"
+#include "traversal/brute_force.h"
+
+namespace sahbench {
+namespace {
+
+// Columns written after DESIGN.md's (never renamed; these may grow).
+const std::vector<std::string>& extra_columns() {
+  static const std::vector<std::string> columns = {"config", "seed", "scene_source", "scene_removed", "query",
+                                                   "embree_version", "notes"};
+  return columns;
+}
+
+std::vector<std::string> all_columns() {
+  std::vector<std::string> c = design_columns();
+  c.insert(c.end(), extra_columns().begin(), extra_columns().end());
+  return c;
+}
+
+// Embree's own BVH is traced through its own API, one ray at a time or in packets: each is a layout.
+struct EmbreeLayout {
+  const char* name;
+  int packet_width;  // 1: rtcIntersect1 / rtcOccluded1
+};
+constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 8}, {"embree_16", 16}};
+
+// Hit distances of a tie (two triangles through a shared edge) agree to a few ulps; a real difference
+// is far larger. Same tolerance as the tests (tests/support/hit_check.h).
+constexpr float kTieTolerance = 1e-5f;
+
+bool same_hit(const Hit& a, const Hit& b) {
+  if (a.found() != b.found()) return false;
+  if (!a.found()) return true;
+  return std::fabs(a.t - b.t) <= kTieTolerance * std::max(1.0f, std::fabs(b.t));
+}
+
+// The reference answers for one ray set: closest hits, or occlusion flags for any-hit sets.
+struct Reference {
+  std::string name = "none";
+  std::vector<Hit> hits;
+  std::vector<uint8_t> occluded;
+};
+
+std::string now_stamp() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
+  return buf;
+}
+
+std::string format_duration(double seconds) {
+  const auto s = static_cast<long>(std::lround(seconds));
+  return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
+}
+
+class Progress {
+ public:
+  Progress(std::size_t total, std::ostream& log) : total_(total), log_(log), start_(std::chrono::steady_clock::now()) {}
+  void cell_done(const std::string& what) {
+    ++done_;
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double left = done_ ? elapsed / static_cast<double>(done_) * static_cast<double>(total_ - done_) : 0.0;
+    log_ << fmt::format("[{}/{}] {} | elapsed {}, left ~{}\n", done_, total_, what, format_duration(elapsed),
+                        format_duration(left));
+  }
+  void skip(std::size_t cells) { total_ -= std::min(total_, cells); }
+  double elapsed_s() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+ private:
+  std::size_t total_, done_ = 0;
+  std::ostream& log_;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// One builder run of the config, resolved against the registry.
+struct ResolvedBuilder {
+  BuilderRun run;
+  const BuilderInfo* info = nullptr;  // null for Embree
+  ParamSet params;
+  EmbreeQuality quality = EmbreeQuality::kMedium;
+  std::string params_text;  // the CSV form
+  bool is_embree() const { return info == nullptr; }
+};
+
+std::vector<ResolvedBuilder> resolve_builders(const ExperimentConfig& cfg) {
+  std::vector<ResolvedBuilder> out;
+  for (const auto& run : cfg.builders) {
+    ResolvedBuilder b;
+    b.run = run;
+    if (run.name == "embree") {
+      std::string quality = "medium";
+      for (const auto& [k, v] : run.params)
+        if (k == "quality") quality = v;
+      b.quality = parse_embree_quality(quality);
+      b.params_text = "quality=" + quality;
+    } else {
+      b.info = &find_builder(run.name);
+      b.params = resolve_params(b.info->name, b.info->params, run.params);
+      b.params_text = b.params.to_string();
+    }
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
+class ExperimentRunner {
+ public:
+  ExperimentRunner(const ExperimentConfig& cfg, const RunOptions& options, std::ostream& log)
+      : cfg_(cfg), options_(options), log_(log), env_(current_environment()), builders_(resolve_builders(cfg)),
+        output_(options.output ? *options.output : cfg.output), run_id_(cfg.name + "-" + now_stamp()) {}
+
+  int run() {
+    std::set<std::string> finished;
+    if (options_.resume && std::filesystem::exists(output_)) {
+      for (const auto& row : read_csv(output_))
+        finished.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"), row.at("layout"),
+                                 std::stoi(row.at("threads")), row.at("ray_set"), std::stoi(row.at("frame"))));
+      log_ << fmt::format("resume: {} finished cells in {}\n", finished.size(), output_.string());
+    }
+    CsvWriter csv(output_, all_columns());
+
+    const std::vector<std::string> scenes = scenes_to_run();
+    // Plan: which cells of each scene are still to do.
+    std::size_t total = 0;
+    for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
+    log_ << fmt::format("run {}: {} cells to run over {} scenes; writing {}\n", run_id_, total, scenes.size(), output_.string());
+    Progress progress(total, log_);
+    for (const auto& scene : scenes) {
+      const auto pending = pending_cells(scene, finished);
+      if (!pending.empty()) run_scene(scene, pending, csv, progress);
+    }
+    log_ << fmt::format("done in {}; rows in {}\n", format_duration(progress.elapsed_s()), output_.string());
+    return exit_code_;
+  }
+
+ private:
+  std::vector<std::string> scenes_to_run() {
+    std::vector<std::string> out = cfg_.scenes;
+    for (const auto& name : cfg_.optional_scenes) {
+      if (find_scene_file(name)) {
+        out.push_back(name);
+      } else {
+        log_ << fmt::format("skipping optional scene '{}': not found on the scene search path\n", name);
+      }
+    }
+    return out;
+  }
+
+  std::vector<std::string> layouts_for(const ResolvedBuilder& b) const {
+    std::vector<std::string> out;
+    if (b.is_embree()) {
+      for (const auto& l : kEmbreeLayouts) out.push_back(l.name);
+    } else {
+      out = cfg_.layouts;
+    }
+    return out;
+  }
+
+  // Keys of the cells of `scene` that are neither finished (resume) nor filtered out (--only).
+  std::set<std::string> pending_cells(const std::string& scene, const std::set<std::string>& finished) const {
+    std::set<std::string> out;
+    for (const auto& b : builders_)
+      for (const auto& layout : layouts_for(b))
+        for (int threads : cfg_.threads)
+          for (const auto& rs : cfg_.ray_sets) {
+            const std::string key = cell_key(scene, b.run.name, b.params_text, layout, threads, rs.name, 0);
+            if (finished.count(key)) continue;
+            if (!options_.only.empty() && key.find(options_.only) == std::string::npos) continue;
+            out.insert(key);
+          }
+    return out;
+  }
+
+  void run_scene(const std::string& scene_name, const std::set<std::string>& pending, CsvWriter& csv,
+                 Progress& progress) {
+    Scene scene;
+    const double load_ms = time_ms([&] { scene = load_scene(scene_name); });
+    log_ << fmt::format("scene {}: {} triangles ({} removed) from {} in {:.0f} ms\n", scene_name,
+                        scene.triangles.size(), scene.removed.total(), scene.source, load_ms);
+    const GeneratedRaySets generated = generate_ray_sets(scene, cfg_.ray_sets, cfg_.seed);
+    for (const auto& [set, reason] : generated.skipped) {
+      std::size_t skipped = 0;
+      for (const auto& key : pending)
+        if (key.ends_with("|" + set + "|0")) ++skipped;
+      log_ << fmt::format("scene {}: skipping ray set '{}' ({} cells): {}\n", scene_name, set, skipped, reason);
+      progress.skip(skipped);
+    }
+    std::vector<Reference> references(generated.sets.size());
+    for (std::size_t i = 0; i < generated.sets.size(); ++i) references[i] = make_reference(scene, generated.sets[i]);
+
+    for (int threads : cfg_.threads) {
+      const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+      for (const auto& b : builders_) {
+        auto wanted = [&](const std::string& layout, const RaySet& rs) {
+          return pending.count(cell_key(scene_name, b.run.name, b.params_text, layout, threads, rs.name, 0)) > 0;
+        };
+        bool any = false;
+        for (const auto& layout : layouts_for(b))
+          for (const auto& rs : generated.sets) any |= wanted(layout, rs);
+        if (!any) continue;
+        if (b.is_embree()) {
+          run_embree(scene, b, threads, generated.sets, references, wanted, csv, progress);
+        } else {
+          run_ours(scene, b, threads, generated.sets, references, wanted, csv, progress);
+        }
+      }
+    }
+  }
+
+  Reference make_reference(const Scene& scene, const RaySet& rs) {
+    ReferencePolicy policy = cfg_.reference;
+    if (policy == ReferencePolicy::kAuto)
+      policy = scene.triangles.size() <= cfg_.brute_force_max_triangles ? ReferencePolicy::kBruteForce : ReferencePolicy::kEmbree;
+    Reference ref;
+    const std::size_t n = rs.rays.size();
+    if (policy == ReferencePolicy::kBruteForce) {
+      ref.name = "brute_force";
+      if (rs.occlusion) {
+        ref.occluded.resize(n);
+        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { ref.occluded[i] = brute_force_any(scene.triangles, rs.rays[i]); });
+      } else {
+        ref.hits.resize(n);
+        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { ref.hits[i] = brute_force_closest(scene.triangles, rs.rays[i]); });
+      }
+    } else if (policy == ReferencePolicy::kEmbree) {
+      // Embree in robust mode, so that its own edge cases do not count as our mismatches.
+      ref.name = "embree_robust";
+      // A device of its own, released before any timed cell: Embree turns a device's thread count into
+      // a process-wide TBB limit, and a live unlimited device would lift the limit of the timed cells.
+      EmbreeDevice device(0);
+      EmbreeSceneOptions options;
+      options.robust = true;
+      const EmbreeScene reference_scene(device, scene.triangles, EmbreeQuality::kMedium, options);
+      if (rs.occlusion) {
+        ref.occluded.resize(n);
+        embree_occluded1(reference_scene, rs.rays, ref.occluded);
+      } else {
+        ref.hits.resize(n);
+        embree_intersect1(reference_scene, rs.rays, ref.hits);
+      }
+    }
+    return ref;
+  }
+
+  static uint64_t count_mismatches(const Reference& ref, std::span<const Hit> hits, std::span<const uint8_t> occluded) {
+    uint64_t m = 0;
+    if (!ref.hits.empty())
+      for (std::size_t i = 0; i < hits.size(); ++i) m += !same_hit(hits[i], ref.hits[i]);
+    if (!ref.occluded.empty())
+      for (std::size_t i = 0; i < occluded.size(); ++i) m += (occluded[i] != 0) != (ref.occluded[i] != 0);
+    return m;
+  }
+
+  // Times `trace` (one pass over all rays) with warm-up and repetitions; returns Mrays/s samples.
+  template <class Trace>
+  TimingSummary time_trace(std::size_t rays, Trace trace) const {
+    for (int w = 0; w < cfg_.reps.trace_warmup; ++w) trace();
+    std::vector<double> mrays;
+    for (int r = 0; r < cfg_.reps.trace; ++r) {
+      const double ms = time_ms(trace);
+      mrays.push_back(static_cast<double>(rays) / (ms * 1e3));
+    }
+    return summarize(mrays);
+  }
+
+  CsvRow base_row(const Scene& scene, const ResolvedBuilder& b, int threads) const {
+    CsvRow row;
+    row["run_id"] = run_id_;
+    row["git_commit"] = env_.git_commit;
+    row["cpu"] = env_.cpu;
+    row["compiler"] = env_.compiler;
+    row["threads"] = std::to_string(threads);
+    row["scene"] = scene.name;
+    row["scene_triangles"] = std::to_string(scene.triangles.size());
+    row["frame"] = "0";
+    row["builder"] = b.run.name;
+    row["builder_params"] = b.params_text;
+    row["build_reps"] = std::to_string(cfg_.reps.build);
+    row["trace_reps"] = std::to_string(cfg_.reps.trace);
+    row["config"] = cfg_.path.string();
+    row["seed"] = std::to_string(cfg_.seed);
+    row["scene_source"] = scene.source;
+    row["scene_removed"] = std::to_string(scene.removed.total());
+    row["embree_version"] = env_.embree;
+    return row;
+  }
+
+  static void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) {
+    row[prefix + "_median"] = fmt::format("{:.4f}", t.median);
+    row[prefix + "_min"] = fmt::format("{:.4f}", t.min);
+    row[prefix + "_max"] = fmt::format("{:.4f}", t.max);
+  }
+
+  template <class Wanted>
+  void run_ours(const Scene& scene, const ResolvedBuilder& b, int threads, const std::vector<RaySet>& sets,
+                const std::vector<Reference>& refs, Wanted wanted, CsvWriter& csv, Progress& progress) {
+    // Build: warm-up, then timed repetitions. The peak heap is taken over the first timed build.
+    Bvh bvh;
+    auto build = [&] {
+      const BuildInput input = BuildInput::from_triangles(scene.triangles);
+      bvh = b.info->build(input, b.params);
+    };
+    for (int w = 0; w < cfg_.reps.build_warmup; ++w) build();
+    std::vector<double> build_ms;
+    int64_t peak = 0;
+    for (int r = 0; r < cfg_.reps.build; ++r) {
+      bvh = Bvh{};
+      const int64_t before = heap_bytes();
+      reset_heap_peak();
+      build_ms.push_back(time_ms(build));
+      if (r == 0) peak = heap_peak_bytes() - before;
+    }
+    const TimingSummary build_t = summarize(build_ms);
+    const SahCost cost = sah_cost_of(b.params);
+    const BvhStats stats = compute_stats(bvh, scene.triangles.size(), cost);
+    const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
+    if (!report.ok()) {
+      exit_code_ = 1;
+      log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.run.label(), scene.name, report.summary());
+    }
+
+    for (const auto& layout_name : cfg_.layouts) {
+      bool any = false;
+      for (const auto& rs : sets) any |= wanted(layout_name, rs);
+      if (!any) continue;
+      const LayoutInfo& layout = find_layout(layout_name);
+      std::unique_ptr<CompiledLayout> compiled;
+      std::vector<double> compile_ms;
+      for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
+        compiled.reset();
+        compile_ms.push_back(time_ms([&] { compiled = layout.compile(bvh, scene.triangles); }));
+      }
+      for (std::size_t s = 0; s < sets.size(); ++s) {
+        const RaySet& rs = sets[s];
+        if (!wanted(layout_name, rs)) continue;
+        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
+        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
+        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
+          if (rs.occlusion) compiled->trace_any(rs.rays, occluded);
+          else compiled->trace_closest(rs.rays, hits);
+        });
+        const TraceCounts counts = rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
+
+        CsvRow row = base_row(scene, b, threads);
+        row["isa"] = env_.isa;
+        row["layout"] = layout_name;
+        put_timing(row, "build_ms", build_t);
+        row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);
+        row["mem_bytes"] = std::to_string(compiled->bytes());
+        row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
+        row["nodes"] = std::to_string(stats.nodes);
+        row["leaves"] = std::to_string(stats.leaves);
+        row["arity"] = std::to_string(bvh.arity);
+        row["max_depth"] = std::to_string(stats.max_depth);
+        row["refs_per_prim"] = fmt::format("{:.4f}", stats.refs_per_prim);
+        row["sah_cost"] = fmt::format("{:.6f}", stats.sah_cost);
+        row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
+        row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
+        row["ray_set"] = rs.name;
+        row["ray_count"] = std::to_string(rs.rays.size());
+        put_timing(row, "trace_mrays", trace_t);
+        row["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
+        row["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
+        row["reference"] = refs[s].name;
+        row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], hits, occluded));
+        row["query"] = rs.occlusion ? "any" : "closest";
+        row["notes"] = report.ok() ? "" : "invalid tree: " + report.errors.front();
+        csv.append(row);
+        progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
+                                       b.run.label(), layout_name, threads, rs.name, build_t.median, trace_t.median,
+                                       row["mismatches"]));
+      }
+    }
+  }
+
+  template <class Wanted>
+  void run_embree(const Scene& scene, const ResolvedBuilder& b, int threads, const std::vector<RaySet>& sets,
+                  const std::vector<Reference>& refs, Wanted wanted, CsvWriter& csv, Progress& progress) {
+    EmbreeDevice device(threads);
+    std::unique_ptr<EmbreeScene> built;
+    for (int w = 0; w < cfg_.reps.build_warmup; ++w) built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
+    std::vector<double> build_ms;
+    int64_t peak = 0;
+    for (int r = 0; r < cfg_.reps.build; ++r) {
+      built.reset();
+      const int64_t before = device.bytes();
+      device.reset_peak();
+      built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
+      build_ms.push_back(built->commit_ms());
+      if (r == 0) peak = device.peak_bytes() - before;
+    }
+    const TimingSummary build_t = summarize(build_ms);
+    for (const auto& layout : kEmbreeLayouts) {
+      for (std::size_t s = 0; s < sets.size(); ++s) {
+        const RaySet& rs = sets[s];
+        if (!wanted(layout.name, rs)) continue;
+        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
+        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
+        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
+          if (layout.packet_width == 1) {
+            if (rs.occlusion) embree_occluded1(*built, rs.rays, occluded);
+            else embree_intersect1(*built, rs.rays, hits);
+          } else {
+            if (rs.occlusion) embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
+            else embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
+          }
+        });
+        CsvRow row = base_row(scene, b, threads);
+        row["isa"] = "embree:" + embree_isa(device);
+        row["layout"] = layout.name;
+        put_timing(row, "build_ms", build_t);
+        row["mem_bytes"] = std::to_string(built->bytes());
+        row["mem_peak_bytes"] = std::to_string(peak);
+        row["ray_set"] = rs.name;
+        row["ray_count"] = std::to_string(rs.rays.size());
+        put_timing(row, "trace_mrays", trace_t);
+        row["reference"] = refs[s].name;
+        row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], hits, occluded));
+        row["query"] = rs.occlusion ? "any" : "closest";
+        csv.append(row);
+        progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
+                                       b.run.label(), layout.name, threads, rs.name, build_t.median, trace_t.median,
+                                       row["mismatches"]));
+      }
+    }
+  }
+
+  const ExperimentConfig& cfg_;
+  const RunOptions& options_;
+  std::ostream& log_;
+  Environment env_;
+  std::vector<ResolvedBuilder> builders_;
+  std::filesystem::path output_;
+  std::string run_id_;
+  int exit_code_ = 0;
+};
+
+}  // namespace
+
+std::string cell_key(const std::string& scene, const std::string& builder, const std::string& params,
+                     const std::string& layout, int threads, const std::string& ray_set, int frame) {
+  return fmt::format("{}|{}|{}|{}|{}|{}|{}", scene, builder, params, layout, threads, ray_set, frame);
+}
+
+int run_experiment(const RunOptions& options, std::ostream& log) {
+  const ExperimentConfig cfg = load_experiment_config(options.config);
+  return ExperimentRunner(cfg, options, log).run();
+}
+
+}  // namespace sahbench

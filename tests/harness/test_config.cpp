@@ -1,0 +1,545 @@
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include "builders/registry.h"
+#include "core/error.h"
+#include "harness/config.h"
+
+namespace sahbench {
+namespace {
+
+// Parses `text` as "test.toml" and checks that the Error it throws starts with "test.toml:<line>:" and
+// contains every one of `parts`.
+void expect_error(std::string_view text, int line, std::initializer_list<std::string_view> parts) {
+  std::string message;
+  try {
+    parse_experiment_config(text, "test.toml");
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  ASSERT_FALSE(message.empty()) << "no error for:\n" << text;
+  const std::string prefix = "test.toml:" + std::to_string(line) + ":";
+  EXPECT_EQ(message.substr(0, prefix.size()), prefix) << message;
+  for (auto part : parts)
+    EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
+}
+
+// A minimal valid config (lines 1-9); tests append [[builder]] or [[ray_set]] tables from line 10 on.
+constexpr std::string_view kBase = R"([experiment]
+name = "t"
+scenes = ["proc:soup:tris=1k"]
+
+[[builder]]
+name = "binned_sah"
+
+[[ray_set]]
+kind = "primary"
+)";
+
+ExperimentConfig parse_with(std::string_view extra) {
+  return parse_experiment_config(std::string(kBase) + std::string(extra), "test.toml");
+}
+
+std::vector<std::string> labels(const ExperimentConfig& config) {
+  std::vector<std::string> out;
+  for (const auto& run : config.builders) out.push_back(run.label());
+  return out;
+}
+
+TEST(HarnessConfigParse, FullConfigRoundTrip) {
+  const auto config = parse_experiment_config(R"([experiment]
+name = "full-1"
+output = "out/full.csv"
+seed = 42
+threads = [1, 4]
+scenes = ["proc:soup:tris=100k", "scenes/a.obj"]
+optional_scenes = ["crytek_sponza"]
+layouts = ["bvh2"]
+reference = "auto"
+brute_force_max_triangles = 5000
+
+[repetitions]
+build = 7
+build_warmup = 0
+trace = 3
+trace_warmup = 2
+
+[[builder]]
+name = "binned_sah"
+bins = [8, 16]
+max_leaf = 4
+
+[[builder]]
+name = "sweep_sah"
+
+[[builder]]
+name = "embree"
+quality = "high"
+
+[[ray_set]]
+kind = "primary"
+width = 640
+height = 480
+
+[[ray_set]]
+name = "sun"
+kind = "shadow"
+lights = 2
+count = 1000
+
+[[ray_set]]
+kind = "shadow"
+light_source = "scene"
+
+[[ray_set]]
+kind = "diffuse"
+width = 64
+height = 32
+
+[[ray_set]]
+kind = "ao"
+ao_radius = 0.25
+
+[[ray_set]]
+kind = "random"
+count = 99
+)",
+                                              "full.toml");
+  ExperimentConfig expected;
+  expected.path = "full.toml";
+  expected.name = "full-1";
+  expected.output = "out/full.csv";
+  expected.seed = 42;
+  expected.threads = {1, 4};
+  expected.scenes = {"proc:soup:tris=100k", "scenes/a.obj"};
+  expected.optional_scenes = {"crytek_sponza"};
+  expected.layouts = {"bvh2"};
+  expected.reference = ReferencePolicy::kAuto;
+  expected.brute_force_max_triangles = 5000;
+  expected.reps = {7, 0, 3, 2};
+  expected.builders = {{"binned_sah", {{"bins", "8"}, {"max_leaf", "4"}}},
+                       {"binned_sah", {{"bins", "16"}, {"max_leaf", "4"}}},
+                       {"sweep_sah", {}},
+                       {"embree", {{"quality", "high"}}}};
+  RaySetConfig primary{.name = "primary", .kind = RayKind::kPrimary, .width = 640, .height = 480};
+  RaySetConfig sun{.name = "sun", .kind = RayKind::kShadow, .count = 1000, .lights = 2};
+  RaySetConfig scene_lights{.name = "shadow", .kind = RayKind::kShadow, .light_source = "scene"};
+  RaySetConfig diffuse{.name = "diffuse", .kind = RayKind::kDiffuse, .width = 64, .height = 32};
+  RaySetConfig ao{.name = "ao", .kind = RayKind::kAmbientOcclusion, .ao_radius = 0.25f};
+  RaySetConfig random{.name = "random", .kind = RayKind::kRandom, .count = 99};
+  expected.ray_sets = {primary, sun, scene_lights, diffuse, ao, random};
+  EXPECT_EQ(config, expected);
+  EXPECT_EQ(labels(config),
+            (std::vector<std::string>{"binned_sah[bins=8,max_leaf=4]", "binned_sah[bins=16,max_leaf=4]",
+                                      "sweep_sah", "embree[quality=high]"}));
+}
+
+TEST(HarnessConfigParse, ReferencePolicies) {
+  const std::pair<std::string, ReferencePolicy> cases[] = {{"auto", ReferencePolicy::kAuto},
+                                                           {"embree", ReferencePolicy::kEmbree},
+                                                           {"brute_force", ReferencePolicy::kBruteForce},
+                                                           {"none", ReferencePolicy::kNone}};
+  for (const auto& [text, policy] : cases) {
+    const std::string toml = "[experiment]\nname = \"r\"\nscenes = [\"s\"]\nreference = \"" + text +
+                             "\"\n[[builder]]\nname = \"sweep_sah\"\n[[ray_set]]\nkind = \"primary\"\n";
+    const auto config = parse_experiment_config(toml, "r.toml");
+    EXPECT_EQ(config.reference, policy) << text;
+    EXPECT_EQ(to_string(config.reference), text);
+  }
+}
+
+// The example at the top of config.h is the schema's documentation: it must stay a valid config.
+TEST(HarnessConfigParse, HeaderExampleIsValid) {
+  std::ifstream in(std::filesystem::path(SAHBENCH_SOURCE_DIR) / "harness" / "config.h");
+  ASSERT_TRUE(in) << "cannot read harness/config.h";
+  std::string line, toml;
+  bool inside = false;
+  while (std::getline(in, line)) {
+    if (line.find("A complete example") != std::string::npos) {
+      inside = true;
+      continue;
+    }
+    if (!inside) continue;
+    if (line.rfind("// Keys by ray-set kind", 0) == 0) break;
+    ASSERT_EQ(line.rfind("//", 0), 0u) << line;
+    toml += (line.size() > 5 ? line.substr(5) : "") + "\n";
+  }
+  const auto config = parse_experiment_config(toml, "config.h example");
+  EXPECT_EQ(config.name, "default");
+  EXPECT_EQ(labels(config),
+            (std::vector<std::string>{"binned_sah[bins=8,max_leaf=8]", "binned_sah[bins=16,max_leaf=8]",
+                                      "binned_sah[bins=32,max_leaf=8]", "embree[quality=medium]",
+                                      "embree[quality=high]"}));
+  EXPECT_EQ(config.ray_sets.size(), 4u);
+  EXPECT_EQ(config.threads, (std::vector<int>{1, 2}));
+}
+
+TEST(HarnessConfigDefaults, OptionalKeysMissing) {
+  const auto config = parse_experiment_config(kBase, "min.toml");
+  EXPECT_EQ(config.path, "min.toml");
+  EXPECT_EQ(config.name, "t");
+  EXPECT_EQ(config.output, "results/t.csv");
+  EXPECT_EQ(config.seed, 1u);
+  EXPECT_EQ(config.threads, std::vector<int>{1});
+  EXPECT_EQ(config.scenes, std::vector<std::string>{"proc:soup:tris=1k"});
+  EXPECT_TRUE(config.optional_scenes.empty());
+  EXPECT_EQ(config.layouts, std::vector<std::string>{"bvh2"});
+  EXPECT_EQ(config.reps, Repetitions{});
+  EXPECT_EQ(config.reps, (Repetitions{5, 1, 5, 1}));
+  EXPECT_EQ(config.reference, ReferencePolicy::kAuto);
+  EXPECT_EQ(config.brute_force_max_triangles, 20000u);
+  ASSERT_EQ(config.builders.size(), 1u);
+  EXPECT_EQ(config.builders[0], (BuilderRun{"binned_sah", {}}));
+  EXPECT_EQ(config.builders[0].label(), "binned_sah");
+  ASSERT_EQ(config.ray_sets.size(), 1u);
+  EXPECT_EQ(config.ray_sets[0], (RaySetConfig{.name = "primary", .kind = RayKind::kPrimary}));
+  EXPECT_EQ(config.ray_sets[0].width, 512u);
+  EXPECT_EQ(config.ray_sets[0].height, 512u);
+}
+
+TEST(HarnessConfigDefaults, RaySetsPerKind) {
+  const auto config = parse_with(R"(
+[[ray_set]]
+kind = "shadow"
+[[ray_set]]
+kind = "diffuse"
+[[ray_set]]
+kind = "ao"
+[[ray_set]]
+kind = "random"
+)");
+  ASSERT_EQ(config.ray_sets.size(), 5u);
+  const auto& shadow = config.ray_sets[1];
+  EXPECT_EQ(shadow.name, "shadow");
+  EXPECT_EQ(shadow.kind, RayKind::kShadow);
+  EXPECT_EQ(shadow.count, 0u);
+  EXPECT_EQ(shadow.lights, 4u);
+  EXPECT_EQ(shadow.light_source, "auto");
+  EXPECT_EQ(config.ray_sets[2].name, "diffuse");
+  EXPECT_EQ(config.ray_sets[3].name, "ao");
+  EXPECT_EQ(config.ray_sets[3].kind, RayKind::kAmbientOcclusion);
+  EXPECT_FLOAT_EQ(config.ray_sets[3].ao_radius, 0.05f);
+  EXPECT_EQ(config.ray_sets[4].name, "random");
+  EXPECT_EQ(config.ray_sets[4].count, kDefaultRandomRays);
+}
+
+TEST(HarnessConfigDefaults, OnlyOptionalScenesAndSingleThreadCount) {
+  const auto config = parse_experiment_config(R"([experiment]
+name = "o"
+threads = 8
+optional_scenes = ["crytek_sponza"]
+[[builder]]
+name = "sweep_sah"
+[[ray_set]]
+kind = "random"
+)",
+                                              "o.toml");
+  EXPECT_TRUE(config.scenes.empty());
+  EXPECT_EQ(config.optional_scenes, std::vector<std::string>{"crytek_sponza"});
+  EXPECT_EQ(config.threads, std::vector<int>{8});
+}
+
+TEST(HarnessConfigSweep, CartesianProductLastKeyFastest) {
+  const auto config = parse_with(R"(
+[[builder]]
+name = "binned_sah"
+bins = [8, 16]
+max_leaf = [4, 8]
+)");
+  ASSERT_EQ(config.builders.size(), 5u);  // the base's plain binned_sah first
+  EXPECT_EQ(labels(config),
+            (std::vector<std::string>{"binned_sah", "binned_sah[bins=8,max_leaf=4]",
+                                      "binned_sah[bins=8,max_leaf=8]", "binned_sah[bins=16,max_leaf=4]",
+                                      "binned_sah[bins=16,max_leaf=8]"}));
+  EXPECT_EQ(config.builders[3].params, (ParamOverrides{{"bins", "16"}, {"max_leaf", "4"}}));
+}
+
+// Keys vary in the order they are written, not alphabetically.
+TEST(HarnessConfigSweep, FileOrderOfKeysAndTables) {
+  const auto config = parse_with(R"(
+[[builder]]
+name = "sweep_sah"
+max_leaf = [2, 3]
+c_trav = 0.5
+min_leaf = [1, 2]
+
+[[builder]]
+name = "binned_sah"
+bins = 4
+)");
+  EXPECT_EQ(labels(config),
+            (std::vector<std::string>{"binned_sah", "sweep_sah[max_leaf=2,c_trav=0.5,min_leaf=1]",
+                                      "sweep_sah[max_leaf=2,c_trav=0.5,min_leaf=2]",
+                                      "sweep_sah[max_leaf=3,c_trav=0.5,min_leaf=1]",
+                                      "sweep_sah[max_leaf=3,c_trav=0.5,min_leaf=2]", "binned_sah[bins=4]"}));
+}
+
+TEST(HarnessConfigSweep, TooManyRunsIsAnError) {
+  // 11 x 11 x 11 x 11 = 14641 runs > kMaxSweepRuns.
+  expect_error(std::string(kBase) + R"(
+[[builder]]
+name = "binned_sah"
+bins = [4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14]
+max_leaf = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]
+min_leaf = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]
+c_trav = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]
+)",
+               11, {"binned_sah", "10000", "bins: 11"});
+}
+
+TEST(HarnessConfigSweep, DuplicateRunsAreAnError) {
+  // Setting a parameter to its default measures the same as the base's plain binned_sah.
+  const auto& bins = find_builder("binned_sah").params;
+  const auto spec =
+      std::find_if(bins.begin(), bins.end(), [](const ParamSpec& p) { return p.name == "bins"; });
+  ASSERT_NE(spec, bins.end());
+  const std::string default_bins = std::to_string(static_cast<int>(spec->default_value));
+  expect_error(
+      std::string(kBase) + "\n[[builder]]\nname = \"binned_sah\"\nbins = [8, " + default_bins + "]\n", 11,
+      {"binned_sah[bins=" + default_bins + "]", "'binned_sah' (line 5)"});
+  expect_error(std::string(kBase) + R"(
+[[builder]]
+name = "sweep_sah"
+max_leaf = [4, 4.0]
+)",
+               11, {"sweep_sah[max_leaf=4]", "line 11"});
+}
+
+TEST(HarnessConfigValues, BooleansFloatsAndStrings) {
+  const auto config = parse_with(R"(
+[[builder]]
+name = "binned_sah"
+adaptive_bins = [true, false]
+c_trav = 0.1
+c_isect = 2.0
+bins = "32"
+max_leaf = 1e1
+)");
+  ASSERT_EQ(config.builders.size(), 3u);
+  EXPECT_EQ(
+      config.builders[1].params,
+      (ParamOverrides{
+          {"adaptive_bins", "1"}, {"c_trav", "0.1"}, {"c_isect", "2"}, {"bins", "32"}, {"max_leaf", "10"}}));
+  EXPECT_EQ(config.builders[2].params[0], (std::pair<std::string, std::string>{"adaptive_bins", "0"}));
+  const auto tiny = parse_with("[[builder]]\nname = \"sweep_sah\"\nc_trav = 1.25e-7\n");
+  EXPECT_EQ(tiny.builders[1].label(), "sweep_sah[c_trav=1.25e-07]");
+}
+
+TEST(HarnessConfigValues, BadValuesNameKeyAndLine) {
+  expect_error(std::string(kBase) + R"(
+[[builder]]
+name = "binned_sah"
+bins = [8,
+        2]
+)",
+               14, {"bins", "'2'", "outside [4, 256]"});
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nmax_leaf = 2.5\n", 12,
+               {"max_leaf", "2.5", "not an integer"});
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nbins = \"many\"\n", 12,
+               {"bins", "many", "not a number"});
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nbins = []\n", 12,
+               {"bins", "empty list"});
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nbins = [[8]]\n", 12,
+               {"bins", "nest"});
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nbins = 1979-05-27\n", 12,
+               {"bins", "a date"});
+}
+
+TEST(HarnessConfigEmbree, QualitySweepAndDefault) {
+  const auto config = parse_with(R"(
+[[builder]]
+name = "embree"
+quality = ["low", "high"]
+
+[[builder]]
+name = "sweep_sah"
+
+[[builder]]
+name = "embree"
+)");
+  EXPECT_EQ(labels(config),
+            (std::vector<std::string>{"binned_sah", "embree[quality=low]", "embree[quality=high]",
+                                      "sweep_sah", "embree[quality=medium]"}))
+      << "a plain embree is its default quality, medium";
+}
+
+TEST(HarnessConfigEmbree, DefaultQualityDuplicatesExplicitMedium) {
+  expect_error(std::string(kBase) +
+                   "[[builder]]\nname = \"embree\"\nquality = \"medium\"\n\n[[builder]]\nname = \"embree\"\n",
+               14, {"embree[quality=medium]", "line 10"});
+}
+
+TEST(HarnessConfigEmbree, OnlyKnownQualities) {
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"embree\"\nquality = [\"high\", \"refit\"]\n", 12,
+               {"refit", "low, medium, high"});
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"embree\"\n\nbins = 8\n", 13,
+               {"embree", "unknown parameter 'bins'", "quality"});
+}
+
+TEST(HarnessConfigErrors, TomlSyntax) {
+  expect_error("[experiment]\nname = \"x\"\nthreads = [1,\n", 3, {"TOML syntax error"});
+  expect_error("[experiment]\nname = \"x\"\nname = \"y\"\n", 3, {"TOML syntax error", "name"});
+}
+
+TEST(HarnessConfigErrors, UnknownTablesAndKeys) {
+  expect_error(std::string(kBase) + "\n[repetition]\nbuild = 2\n", 11,
+               {"unknown table [repetition]", "experiment, repetitions, builder, ray_set"});
+  expect_error(std::string(kBase) + "[[rayset]]\nkind = \"primary\"\n", 10, {"unknown table [[rayset]]"});
+  expect_error(std::string(kBase) + "[repetitions]\nbuild = 2\nwarmup = 1\n", 12,
+               {"unknown key 'warmup' in [repetitions]", "build, build_warmup, trace, trace_warmup"});
+  expect_error(R"([experiment]
+name = "t"
+thread = 2
+scenes = ["s"]
+)",
+               3, {"unknown key 'thread' in [experiment]", "threads", "brute_force_max_triangles"});
+  expect_error("top = 1\n" + std::string(kBase), 1, {"unknown key 'top'"});
+  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"primary\"\nname = \"p2\"\nlights = 3\n", 13,
+               {"unknown key 'lights' in [[ray_set]] of kind primary", "name, kind, width, height"});
+  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"random\"\nwidth = 3\n", 12,
+               {"unknown key 'width' in [[ray_set]] of kind random"});
+  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"shadow\"\nlight_source = \"scene\"\nlights = 2\n",
+               13, {"lights", "light_source = \"auto\""});
+  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"beam\"\n", 11,
+               {"ray_set.kind", "beam", "primary | shadow"});
+}
+
+TEST(HarnessConfigErrors, WrongTypes) {
+  const auto experiment = [](const std::string& line) {
+    return "[experiment]\nname = \"t\"\nscenes = [\"s\"]\n" + line +
+           "\n[[builder]]\nname = \"binned_sah\"\n"
+           "[[ray_set]]\nkind = \"primary\"\n";
+  };
+  expect_error(experiment("threads = \"2\""), 4,
+               {"threads must be an integer or a list of integers", "a string"});
+  expect_error(experiment("threads = [1, 2.5]"), 4,
+               {"threads must be an integer or a list of integers", "a float"});
+  expect_error(experiment("seed = 1.5"), 4, {"experiment.seed must be an integer", "a float"});
+  expect_error(experiment("seed = -1"), 4, {"experiment.seed = -1"});
+  expect_error(experiment("output = 3"), 4, {"experiment.output must be a string"});
+  expect_error(experiment("layouts = \"bvh2\""), 4,
+               {"experiment.layouts must be a list of strings", "a string"});
+  expect_error(experiment("optional_scenes = [\"a\", 2]"), 4, {"optional_scenes", "an integer"});
+  expect_error(experiment("reference = \"reference\""), 4,
+               {"experiment.reference", "auto | embree | brute_force | none"});
+  expect_error(experiment("reference = \"none\"\nbrute_force_max_triangles = 10"), 5,
+               {"brute_force_max_triangles", "reference = \"auto\""});
+  expect_error("experiment = 1\n", 1, {"[experiment] must be a table", "an integer"});
+  expect_error("builder = 3\n[experiment]\nname = \"t\"\nscenes = [\"s\"]\n", 1,
+               {"[[builder]]", "an integer"});
+  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"ao\"\nao_radius = \"far\"\n", 12,
+               {"ao_radius must be a number", "a string"});
+  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"ao\"\nao_radius = 0\n", 12,
+               {"ao_radius = 0", "positive"});
+  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"random\"\ncount = 0\n", 12, {"ray_set.count = 0"});
+  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"diffuse\"\nwidth = 100000\n", 12,
+               {"ray_set.width = 100000", "16384"});
+}
+
+TEST(HarnessConfigErrors, EmptyListsAndDuplicates) {
+  const auto experiment = [](const std::string& lines) {
+    return "[experiment]\nname = \"t\"\n" + lines +
+           "\n[[builder]]\nname = \"binned_sah\"\n[[ray_set]]\nkind = \"primary\"\n";
+  };
+  expect_error(experiment("scenes = []"), 3, {"experiment.scenes must not be an empty list"});
+  expect_error(experiment("scenes = [\"s\"]\nthreads = []"), 4,
+               {"experiment.threads must not be an empty list"});
+  expect_error(experiment("scenes = [\"s\"]\nlayouts = []"), 4,
+               {"experiment.layouts must not be an empty list"});
+  expect_error(experiment("scenes = [\"s\",\n  \"s\"]"), 4, {"experiment.scenes lists \"s\" twice"});
+  expect_error(experiment("scenes = [\"s\"]\noptional_scenes = [\"s\"]"), 4,
+               {"\"s\"", "both scenes and optional_scenes"});
+  expect_error(experiment("scenes = [\"s\"]\nthreads = [2, 2]"), 4, {"threads lists 2 twice"});
+  expect_error(experiment("scenes = [\"\"]"), 3, {"must not be empty"});
+}
+
+TEST(HarnessConfigErrors, DuplicateRaySetNames) {
+  expect_error(std::string(kBase) + "\n[[ray_set]]\nkind = \"primary\"\nwidth = 64\n", 11,
+               {"ray set name 'primary' is used twice"});
+  expect_error(std::string(kBase) +
+                   "[[ray_set]]\nname = \"a\"\nkind = \"ao\"\n[[ray_set]]\nkind = \"shadow\"\nname = \"a\"\n",
+               15, {"ray set name 'a' is used twice"});
+}
+
+TEST(HarnessConfigErrors, CountsBelowMinimum) {
+  const auto experiment = [](const std::string& line) {
+    return "[experiment]\nname = \"t\"\nscenes = [\"s\"]\n" + line +
+           "\n[[builder]]\nname = \"binned_sah\"\n"
+           "[[ray_set]]\nkind = \"primary\"\n";
+  };
+  expect_error(experiment("threads = 0"), 4, {"experiment.threads = 0 must be at least 1"});
+  expect_error(experiment("threads = [1, -2]"), 4, {"experiment.threads = -2"});
+  expect_error(std::string(kBase) + "[repetitions]\nbuild = 0\n", 11,
+               {"repetitions.build = 0 must be at least 1"});
+  expect_error(std::string(kBase) + "[repetitions]\ntrace = 0\n", 11, {"repetitions.trace = 0"});
+  expect_error(std::string(kBase) + "[repetitions]\ntrace_warmup = -1\n", 11,
+               {"repetitions.trace_warmup = -1"});
+  const auto ok = parse_with("[repetitions]\nbuild_warmup = 0\ntrace_warmup = 0\n");
+  EXPECT_EQ(ok.reps, (Repetitions{5, 0, 5, 0}));
+}
+
+TEST(HarnessConfigErrors, ExperimentNameAndRequiredTables) {
+  expect_error("[experiment]\nscenes = [\"s\"]\n", 1, {"[experiment] has no name"});
+  expect_error("[experiment]\nname = \"my run\"\nscenes = [\"s\"]\n", 2,
+               {"experiment.name = \"my run\"", "letters, digits, '-' and '_'"});
+  expect_error("[[builder]]\nname = \"binned_sah\"\n", 1, {"missing [experiment] table"});
+  expect_error("[experiment]\nname = \"t\"\n\n[[builder]]\nname = \"binned_sah\"\n", 1, {"names no scene"});
+  expect_error("[experiment]\nname = \"t\"\nscenes = [\"s\"]\n[[ray_set]]\nkind = \"primary\"\n", 1,
+               {"no [[builder]]", "at least one builder"});
+  expect_error("[experiment]\nname = \"t\"\nscenes = [\"s\"]\n[[builder]]\nname = \"binned_sah\"\n", 1,
+               {"no [[ray_set]]", "at least one ray set"});
+  expect_error(std::string(kBase) + "[[ray_set]]\nname = \"a b\"\nkind = \"ao\"\n", 11,
+               {"ray_set.name", "a b"});
+}
+
+TEST(HarnessConfigErrors, UnknownBuilderParameterAndLayout) {
+  expect_error(std::string(kBase) + "[[builder]]\n\nname = \"binned_sha\"\n", 12,
+               {"unknown builder 'binned_sha'", "binned_sah", "sweep_sah"});
+  expect_error(std::string(kBase) + "[[builder]]\nbins = 8\n", 10, {"[[builder]] has no name"});
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"sweep_sah\"\nbins = 8\n", 12,
+               {"sweep_sah", "unknown parameter 'bins'", "min_leaf, max_leaf, c_trav, c_isect"});
+  expect_error(R"([experiment]
+name = "t"
+scenes = ["s"]
+layouts = ["bvh2",
+           "bvh9"]
+)",
+               5, {"experiment.layouts", "unknown layout 'bvh9'", "bvh2"});
+}
+
+TEST(HarnessConfigLoad, ReadsFileAndNamesItInErrors) {
+  const auto dir = std::filesystem::temp_directory_path() / ("sahbench_config_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto good = dir / "good.toml";
+  std::ofstream(good) << kBase;
+  const auto config = load_experiment_config(good);
+  EXPECT_EQ(config.path, good);
+  EXPECT_EQ(config.name, "t");
+
+  const auto bad = dir / "bad.toml";
+  std::ofstream(bad) << kBase << "[repetitions]\nbuild = 0\n";
+  try {
+    load_experiment_config(bad);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(bad.string() + ":11:", 0), 0u) << e.what();
+  }
+  try {
+    load_experiment_config(dir / "missing.toml");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.toml"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -1,0 +1,84 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "harness/csv.h"
+
+namespace sahbench {
+namespace {
+
+std::filesystem::path temp_file(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_csv";
+  std::filesystem::create_directories(dir);
+  const auto path = dir / name;
+  std::filesystem::remove(path);
+  return path;
+}
+
+TEST(HarnessCsv, RoundTripWithQuotingAndAppendAcrossWriters) {
+  const auto path = temp_file("round_trip.csv");
+  {
+    CsvWriter w(path, {"a", "b", "c"});
+    w.append({{"a", "1"}, {"b", "x,y"}, {"c", "say \"hi\""}});
+  }
+  {
+    CsvWriter w(path, {"a", "b", "c"});  // reopening appends under the same header
+    w.append({{"a", "2"}, {"c", "line\nbreak"}});
+  }
+  const auto rows = read_csv(path);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0].at("b"), "x,y");
+  EXPECT_EQ(rows[0].at("c"), "say \"hi\"");
+  EXPECT_EQ(rows[1].at("b"), "");
+  EXPECT_EQ(rows[1].at("c"), "line\nbreak");
+}
+
+TEST(HarnessCsv, RowsAreOnDiskAsSoonAsAppended) {
+  const auto path = temp_file("flushed.csv");
+  CsvWriter w(path, {"a"});
+  w.append({{"a", "1"}});
+  EXPECT_EQ(read_csv(path).size(), 1u);  // while the writer is still open
+}
+
+TEST(HarnessCsv, DifferentHeaderIsAnErrorNamingTheColumn) {
+  const auto path = temp_file("header.csv");
+  { CsvWriter w(path, {"a", "b"}); }
+  try {
+    CsvWriter w(path, {"a", "c"});
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("column 2"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'b'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(HarnessCsv, UnknownColumnInARowIsAnError) {
+  const auto path = temp_file("unknown.csv");
+  CsvWriter w(path, {"a"});
+  EXPECT_THROW(w.append({{"z", "1"}}), Error);
+}
+
+TEST(HarnessCsv, MalformedFilesAreErrorsWithTheLine) {
+  const auto path = temp_file("bad.csv");
+  std::ofstream(path) << "a,b\n1,2\n3\n";
+  try {
+    read_csv(path);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(":3:"), std::string::npos) << e.what();
+  }
+  std::ofstream(path) << "a\n\"open\n";
+  EXPECT_THROW(read_csv(path), Error);
+}
+
+TEST(HarnessCsv, DesignColumnsComeFirstAndInOrder) {
+  const auto& c = design_columns();
+  ASSERT_EQ(c.size(), 37u);
+  EXPECT_EQ(c.front(), "run_id");
+  EXPECT_EQ(c.back(), "mismatches");
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -1,0 +1,98 @@
+#include <gtest/gtest.h>
+
+#include <tbb/task_arena.h>
+
+#include <cmath>
+
+#include "harness/ray_sets.h"
+#include "scenes/load.h"
+#include "traversal/brute_force.h"
+
+namespace sahbench {
+namespace {
+
+std::vector<RaySetConfig> all_kinds() {
+  std::vector<RaySetConfig> c(5);
+  const RayKind kinds[] = {RayKind::kPrimary, RayKind::kShadow, RayKind::kDiffuse, RayKind::kAmbientOcclusion, RayKind::kRandom};
+  for (int i = 0; i < 5; ++i) {
+    c[i].kind = kinds[i];
+    c[i].name = to_string(kinds[i]);
+    c[i].width = c[i].height = 48;
+    c[i].count = kinds[i] == RayKind::kRandom ? 3000 : 0;
+  }
+  return c;
+}
+
+bool same_rays(const std::vector<Ray>& a, const std::vector<Ray>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (!(a[i].org == b[i].org && a[i].dir == b[i].dir && a[i].tmin == b[i].tmin && a[i].tmax == b[i].tmax)) return false;
+  return true;
+}
+
+TEST(HarnessRaySets, SameSeedSameRaysForAnyThreadCount) {
+  const Scene scene = load_scene("proc:sphere:tris=5000");
+  const auto configs = all_kinds();
+  auto generate = [&](int threads, uint64_t seed) {
+    tbb::task_arena arena(threads);
+    return arena.execute([&] { return generate_ray_sets(scene, configs, seed); });
+  };
+  const auto one = generate(1, 3), two = generate(2, 3), other = generate(2, 4);
+  ASSERT_EQ(one.sets.size(), 5u);
+  for (std::size_t s = 0; s < one.sets.size(); ++s) {
+    EXPECT_TRUE(same_rays(one.sets[s].rays, two.sets[s].rays)) << one.sets[s].name;
+    EXPECT_FALSE(one.sets[s].rays.empty());
+  }
+  // Primary rays do not depend on the seed; the random sets do.
+  EXPECT_TRUE(same_rays(one.sets[0].rays, other.sets[0].rays));
+  EXPECT_FALSE(same_rays(one.sets[2].rays, other.sets[2].rays));
+  EXPECT_FALSE(same_rays(one.sets[4].rays, other.sets[4].rays));
+}
+
+TEST(HarnessRaySets, KindsHaveTheirQueriesAndExtents) {
+  const Scene scene = load_scene("proc:sphere:tris=5000");
+  const auto out = generate_ray_sets(scene, all_kinds(), 1);
+  ASSERT_EQ(out.sets.size(), 5u);
+  EXPECT_FALSE(out.sets[0].occlusion);
+  EXPECT_TRUE(out.sets[1].occlusion);   // shadow
+  EXPECT_FALSE(out.sets[2].occlusion);  // diffuse
+  EXPECT_TRUE(out.sets[3].occlusion);   // ao
+  // The automatic camera frames the whole sphere: a good share of primary rays hit it.
+  std::size_t hits = 0;
+  for (const Ray& r : out.sets[0].rays) hits += brute_force_closest(scene.triangles, r).found();
+  EXPECT_GT(hits, out.sets[0].rays.size() / 5);
+  // Secondary sets have one ray per primary hit; shadow rays end just before their light (t < 1).
+  EXPECT_EQ(out.sets[1].rays.size(), hits);
+  for (const Ray& r : out.sets[1].rays) EXPECT_LT(r.tmax, 1.0f);
+  for (const Ray& r : out.sets[3].rays) EXPECT_TRUE(std::isfinite(r.tmax));
+}
+
+TEST(HarnessRaySets, DiffuseRaysLeaveTheSurfaceWithoutHittingItAgain) {
+  // From the outside of a closed sphere, a ray leaving the surface outward must not hit the triangle it
+  // starts on: the origin offset (Waechter and Binder 2019) keeps it off the surface.
+  const Scene scene = load_scene("proc:sphere:tris=5000");
+  auto configs = all_kinds();
+  const auto out = generate_ray_sets(scene, configs, 1);
+  std::size_t self_hits = 0;
+  for (const Ray& r : out.sets[2].rays) {
+    const Hit h = brute_force_closest(scene.triangles, r);
+    self_hits += h.found() && h.t < 1e-3f;
+  }
+  EXPECT_EQ(self_hits, 0u);
+}
+
+TEST(HarnessRaySets, SceneLightsMissingSkipsTheSetWithAReason) {
+  const Scene scene = load_scene("proc:sphere:tris=2000");
+  RaySetConfig shadow;
+  shadow.name = "shadow_scene";
+  shadow.kind = RayKind::kShadow;
+  shadow.light_source = "scene";
+  const auto out = generate_ray_sets(scene, std::vector<RaySetConfig>{shadow}, 1);
+  EXPECT_TRUE(out.sets.empty());
+  ASSERT_EQ(out.skipped.size(), 1u);
+  EXPECT_EQ(out.skipped[0].first, "shadow_scene");
+  EXPECT_NE(out.skipped[0].second.find("no lights"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -1,0 +1,171 @@
+// The harness end to end: a small config runs, writes one row per cell with the reference check, resumes
+// without redoing cells, filters with --only, and the report and trace commands read and write what
+// they say.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+#include "harness/csv.h"
+#include "harness/report.h"
+#include "harness/runner.h"
+#include "harness/trace_command.h"
+#include "scenes/load.h"
+#include "traversal/brute_force.h"
+
+namespace sahbench {
+namespace {
+
+std::filesystem::path temp_dir() {
+  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_run";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::filesystem::path write_config(const std::string& name, const std::string& extra_builders) {
+  const auto dir = temp_dir();
+  const auto csv = dir / (name + ".csv");
+  std::filesystem::remove(csv);
+  const auto path = dir / (name + ".toml");
+  std::ofstream(path) << "[experiment]\nname = \"" << name << "\"\noutput = \"" << csv.string() << "\"\n"
+                      << "threads = [1, 2]\nscenes = [\"proc:sphere:tris=3000\", \"proc:soup:tris=2000\"]\n"
+                      << "layouts = [\"bvh2\", \"bvh2_packed\"]\nreference = \"brute_force\"\n"
+                      << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 2\ntrace_warmup = 0\n"
+                      << "[[builder]]\nname = \"binned_sah\"\nbins = [8, 16]\n" << extra_builders
+                      << "[[ray_set]]\nkind = \"primary\"\nwidth = 24\nheight = 24\n"
+                      << "[[ray_set]]\nkind = \"shadow\"\nwidth = 24\nheight = 24\n";
+  return path;
+}
+
+TEST(HarnessRun, EveryCellWritesARowWithNoMismatchesAndResumeSkipsThem) {
+  const auto config = write_config("run_small", "");
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+  const auto csv = temp_dir() / "run_small.csv";
+  const auto rows = read_csv(csv);
+  // 2 scenes x 2 builder runs x 2 layouts x 2 thread counts x 2 ray sets.
+  ASSERT_EQ(rows.size(), 32u) << log.str();
+  for (const auto& row : rows) {
+    EXPECT_EQ(row.at("mismatches"), "0") << row.at("scene") << " " << row.at("layout") << " " << row.at("ray_set");
+    EXPECT_EQ(row.at("reference"), "brute_force");
+    EXPECT_GT(std::stod(row.at("trace_mrays_median")), 0.0);
+    EXPECT_GT(std::stod(row.at("nodes_per_ray")), 0.0);
+    EXPECT_FALSE(row.at("git_commit").empty());
+    EXPECT_FALSE(row.at("isa").empty());
+    EXPECT_EQ(row.at("sah_c_trav"), "1");
+  }
+  EXPECT_NE(log.str().find("[32/32]"), std::string::npos) << log.str();
+
+  // Resume: nothing left to do, nothing appended.
+  std::ostringstream again;
+  ASSERT_EQ(run_experiment({config, true, "", std::nullopt}, again), 0);
+  EXPECT_EQ(read_csv(csv).size(), 32u);
+  EXPECT_NE(again.str().find("0 cells to run"), std::string::npos) << again.str();
+}
+
+TEST(HarnessRun, ResumeAfterAnInterruptedRunCompletesOnlyTheMissingCells) {
+  const auto config = write_config("run_resume", "");
+  const auto csv = temp_dir() / "run_resume.csv";
+  std::ostringstream log;
+  // A run limited to one scene stands in for one interrupted after that scene's cells.
+  ASSERT_EQ(run_experiment({config, false, "proc:soup", std::nullopt}, log), 0);
+  ASSERT_EQ(read_csv(csv).size(), 16u);
+  ASSERT_EQ(run_experiment({config, true, "", std::nullopt}, log), 0);
+  const auto rows = read_csv(csv);
+  EXPECT_EQ(rows.size(), 32u);
+  std::set<std::string> keys;
+  for (const auto& r : rows)
+    keys.insert(cell_key(r.at("scene"), r.at("builder"), r.at("builder_params"), r.at("layout"), std::stoi(r.at("threads")),
+                         r.at("ray_set"), std::stoi(r.at("frame"))));
+  EXPECT_EQ(keys.size(), 32u) << "a cell was run twice";
+}
+
+TEST(HarnessRun, OnlyFiltersCells) {
+  const auto config = write_config("run_only", "");
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "bvh2_packed|2|shadow", std::nullopt}, log), 0);
+  const auto rows = read_csv(temp_dir() / "run_only.csv");
+  ASSERT_EQ(rows.size(), 4u);  // 2 scenes x 2 builder runs
+  for (const auto& r : rows) {
+    EXPECT_EQ(r.at("layout"), "bvh2_packed");
+    EXPECT_EQ(r.at("ray_set"), "shadow");
+  }
+}
+
+TEST(HarnessRun, ReportPrintsATablePerSceneAndThreadCount) {
+  const auto config = write_config("run_report", "[[builder]]\nname = \"embree\"\nquality = \"medium\"\n");
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+  const auto csv = temp_dir() / "run_report.csv";
+  for (const auto& row : read_csv(csv))
+    if (row.at("builder") == "embree") EXPECT_EQ(row.at("mismatches"), "0") << row.at("layout") << " " << row.at("ray_set");
+  std::ostringstream out;
+  print_report({{csv}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("## proc:sphere:tris=3000 (3"), std::string::npos) << md;
+  EXPECT_NE(md.find("2 threads"), std::string::npos);
+  EXPECT_NE(md.find("| binned_sah [bins=8;"), std::string::npos) << md;
+  EXPECT_NE(md.find("| embree [quality=medium] | embree_1 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("(1.00x)"), std::string::npos) << md;  // the anchor against itself
+}
+
+TEST(HarnessTrace, OutputMatchesBruteForceLineByLine) {
+  const auto dir = temp_dir();
+  const auto rays_path = dir / "rays.txt", out_path = dir / "hits.csv";
+  std::ofstream(rays_path) << "# origin direction [tmin tmax]\n"
+                           << "0 0 5 0 0 -1\n"
+                           << "0 0 5, 0 0 1\n"          // away from the sphere
+                           << "0.3 0.2 5 -0 0 -1 0 inf\n"  // -0 component
+                           << "0 0 0 1 0 0 0 0.5\n"      // from the centre, stops short of the surface
+                           << "\n";
+  std::ostringstream log;
+  run_trace_command({"proc:sphere:tris=2000", "binned_sah", "bvh2", rays_path, out_path}, log);
+  const auto rays = read_rays(rays_path);
+  const Scene scene = load_scene("proc:sphere:tris=2000");
+  const auto rows = read_csv(out_path);
+  ASSERT_EQ(rows.size(), 4u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Hit ref = brute_force_closest(scene.triangles, rays[i]);
+    EXPECT_EQ(rows[i].at("hit"), ref.found() ? "1" : "0") << i;
+    if (ref.found()) EXPECT_NEAR(std::stof(rows[i].at("t")), ref.t, 1e-5f * ref.t) << i;
+  }
+  EXPECT_EQ(rows[0].at("hit"), "1");
+  EXPECT_EQ(rows[1].at("hit"), "0");
+  EXPECT_EQ(rows[3].at("hit"), "0");
+}
+
+TEST(HarnessTrace, MalformedRayFilesNameTheLine) {
+  const auto path = temp_dir() / "bad_rays.txt";
+  std::ofstream(path) << "0 0 0 1 0 0\n0 0 zero 1 0 0\n";
+  try {
+    read_rays(path);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad_rays.txt:2: 'zero'"), std::string::npos) << e.what();
+  }
+  std::ofstream(path) << "0 0 0 1 0\n";
+  EXPECT_THROW(read_rays(path), Error);
+  std::ofstream(path) << "0 0 0 0 0 0\n";
+  EXPECT_THROW(read_rays(path), Error);
+  EXPECT_THROW(read_rays(temp_dir() / "missing.txt"), Error);
+}
+
+TEST(HarnessRun, BadConfigIsAnErrorNamingTheFile) {
+  const auto path = temp_dir() / "broken.toml";
+  std::ofstream(path) << "[experiment]\nname = \"x\"\nthreads = [1]\nscenes = [\"proc:soup\"]\n[[builder]]\nname = \"binned\"\n"
+                      << "[[ray_set]]\nkind = \"primary\"\n";
+  try {
+    std::ostringstream log;
+    run_experiment({path, false, "", std::nullopt}, log);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("broken.toml:6"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("unknown builder 'binned'"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -47,9 +47,9 @@ BuilderInfo sweep_sah_info() {
           [](const BuildInput& input, const ParamSet& p) { return build_sweep_sah(input, {top_down_config(p)}); }};
 }
 
-const std::vector<BuilderInfo>& registry() {
+std::vector<BuilderInfo>& registry() {
   // One line per builder.
-  static const std::vector<BuilderInfo> all = {
+  static std::vector<BuilderInfo> all = {
       binned_sah_info(),
       sweep_sah_info(),
   };
@@ -59,6 +59,13 @@ const std::vector<BuilderInfo>& registry() {
 }  // namespace
 
 std::span<const BuilderInfo> builders() { return registry(); }
+
+void register_builder(BuilderInfo info) {
+  auto& all = registry();
+  for (const auto& b : all)
+    if (b.name == info.name) throw Error("builder '" + info.name + "' is registered twice");
+  all.push_back(std::move(info));
+}
 
 const BuilderInfo& find_builder(std::string_view name) {
   const auto& all = registry();

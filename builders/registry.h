@@ -25,6 +25,10 @@ struct BuilderInfo {
 /// Every registered builder, in registration order.
 std::span<const BuilderInfo> builders();
 
+/// Adds a builder defined outside this layer (e.g. the harness's Embree-backed builders, which this
+/// layer must not know about). A name already registered is an error. Not thread-safe: call at startup.
+void register_builder(BuilderInfo info);
+
 /// The builder called `name`; an unknown name is an error listing the known ones.
 const BuilderInfo& find_builder(std::string_view name);
 

@@ -6,6 +6,7 @@
 #include <ostream>
 
 #include "builders/registry.h"
+#include "harness/layout.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_path.h"
 
@@ -22,6 +23,17 @@ void print_catalogue(std::ostream& out) {
   fmt::print(out, "  {:<14} {}\n", "embree_low", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_LOW");
   fmt::print(out, "  {:<14} {}\n", "embree_medium", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_MEDIUM");
   fmt::print(out, "  {:<14} {}\n", "embree_high", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_HIGH (spatial splits)");
+
+  fmt::print(out, "\nlayouts (config: layouts = [...]):\n");
+  for (const auto& l : layouts()) fmt::print(out, "  {:<14} {}\n", l.name, l.summary);
+  fmt::print(out, "  {:<14} {}\n", "embree_1/8/16", "Embree's own BVH, rtcIntersect1/Occluded1 and 8/16-wide packets (builder embree)");
+
+  fmt::print(out, "\nray sets (config: [[ray_set]] kind = ...):\n");
+  fmt::print(out, "  {:<14} {}\n", "primary", "pinhole camera: the file's camera, else automatic framing; width x height rays");
+  fmt::print(out, "  {:<14} {}\n", "shadow", "any-hit, from primary hits to point lights (light_source auto|scene, lights)");
+  fmt::print(out, "  {:<14} {}\n", "diffuse", "closest-hit, cosine-weighted bounces from primary hits");
+  fmt::print(out, "  {:<14} {}\n", "ao", "any-hit, cosine-weighted, length ao_radius x scene diagonal");
+  fmt::print(out, "  {:<14} {}\n", "random", "closest-hit, uniform origins in the scene box and directions (count)");
 
   fmt::print(out, "\nprocedural scenes (--scene proc:KIND[:key=value,...]):\n");
   for (const auto& kind : procedural_kinds()) {

@@ -158,7 +158,13 @@ class ExperimentRunner {
       const auto pending = pending_cells(scene, finished);
       if (!pending.empty()) run_scene(scene, pending, csv, progress);
     }
-    log_ << fmt::format("done in {}; rows in {}\n", format_duration(progress.elapsed_s()), output_.string());
+    const double total_s = progress.elapsed_s();
+    const double overhead_s = (load_ms_ + rays_ms_ + csv_ms_) / 1e3;
+    log_ << fmt::format("done in {}; rows in {}\n", format_duration(total_s), output_.string());
+    log_ << fmt::format("harness overhead: loading {:.1f} s, ray generation {:.1f} s, CSV {:.2f} s = {:.1f}% of the run; "
+                        "reference hits {:.1f} s ({:.1f}%)\n", load_ms_ / 1e3, rays_ms_ / 1e3, csv_ms_ / 1e3,
+                        100.0 * overhead_s / std::max(total_s, 1e-9), reference_ms_ / 1e3,
+                        100.0 * reference_ms_ / 1e3 / std::max(total_s, 1e-9));
     return exit_code_;
   }
 
@@ -204,9 +210,11 @@ class ExperimentRunner {
                  Progress& progress) {
     Scene scene;
     const double load_ms = time_ms([&] { scene = load_scene(scene_name); });
+    load_ms_ += load_ms;
     log_ << fmt::format("scene {}: {} triangles ({} removed) from {} in {:.0f} ms\n", scene_name,
                         scene.triangles.size(), scene.removed.total(), scene.source, load_ms);
-    const GeneratedRaySets generated = generate_ray_sets(scene, cfg_.ray_sets, cfg_.seed);
+    GeneratedRaySets generated;
+    rays_ms_ += time_ms([&] { generated = generate_ray_sets(scene, cfg_.ray_sets, cfg_.seed); });
     for (const auto& [set, reason] : generated.skipped) {
       std::size_t skipped = 0;
       for (const auto& key : pending)
@@ -215,7 +223,9 @@ class ExperimentRunner {
       progress.skip(skipped);
     }
     std::vector<Reference> references(generated.sets.size());
-    for (std::size_t i = 0; i < generated.sets.size(); ++i) references[i] = make_reference(scene, generated.sets[i]);
+    reference_ms_ += time_ms([&] {
+      for (std::size_t i = 0; i < generated.sets.size(); ++i) references[i] = make_reference(scene, generated.sets[i]);
+    });
 
     for (int threads : cfg_.threads) {
       const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
@@ -394,7 +404,7 @@ class ExperimentRunner {
         row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], hits, occluded));
         row["query"] = rs.occlusion ? "any" : "closest";
         row["notes"] = report.ok() ? "" : "invalid tree: " + report.errors.front();
-        csv.append(row);
+        csv_ms_ += time_ms([&] { csv.append(row); });
         progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
                                        b.run.label(), layout_name, threads, rs.name, build_t.median, trace_t.median,
                                        row["mismatches"]));
@@ -446,7 +456,7 @@ class ExperimentRunner {
         row["reference"] = refs[s].name;
         row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], hits, occluded));
         row["query"] = rs.occlusion ? "any" : "closest";
-        csv.append(row);
+        csv_ms_ += time_ms([&] { csv.append(row); });
         progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
                                        b.run.label(), layout.name, threads, rs.name, build_t.median, trace_t.median,
                                        row["mismatches"]));
@@ -462,6 +472,8 @@ class ExperimentRunner {
   std::filesystem::path output_;
   std::string run_id_;
   int exit_code_ = 0;
+  // Where the run's time goes besides measuring: the harness's own overhead, and the reference checks.
+  double load_ms_ = 0.0, rays_ms_ = 0.0, csv_ms_ = 0.0, reference_ms_ = 0.0;
 };
 
 }  // namespace

@@ -101,7 +101,9 @@ TEST(HarnessRun, ReportPrintsATablePerSceneAndThreadCount) {
   ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
   const auto csv = temp_dir() / "run_report.csv";
   for (const auto& row : read_csv(csv))
-    if (row.at("builder") == "embree") EXPECT_EQ(row.at("mismatches"), "0") << row.at("layout") << " " << row.at("ray_set");
+    if (row.at("builder") == "embree") {
+      EXPECT_EQ(row.at("mismatches"), "0") << row.at("layout") << " " << row.at("ray_set");
+    }
   std::ostringstream out;
   print_report({{csv}, ""}, out);
   const std::string md = out.str();
@@ -130,7 +132,9 @@ TEST(HarnessTrace, OutputMatchesBruteForceLineByLine) {
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const Hit ref = brute_force_closest(scene.triangles, rays[i]);
     EXPECT_EQ(rows[i].at("hit"), ref.found() ? "1" : "0") << i;
-    if (ref.found()) EXPECT_NEAR(std::stof(rows[i].at("t")), ref.t, 1e-5f * ref.t) << i;
+    if (ref.found()) {
+      EXPECT_NEAR(std::stof(rows[i].at("t")), ref.t, 1e-5f * ref.t) << i;
+    }
   }
   EXPECT_EQ(rows[0].at("hit"), "1");
   EXPECT_EQ(rows[1].at("hit"), "0");

@@ -42,82 +42,69 @@ TraceCounts count_rays(std::size_t count, Trace trace) {
       });
 }
 
-/// The common format traversed as it is: nodes, then triangles through prim_refs.
+/// A binary tree in the common format, traversed by the traversal/ kernels. `bvh2` traverses the tree
+/// as built, its triangles reached through the references. `bvh2_packed` copies the triangles into
+/// leaf order, so a leaf's triangles are contiguous and no reference is chased per primitive (as
+/// tinybvh and Embree store leaves); its references become the identity and hits are mapped back to
+/// scene indices through `ids_`.
 class Bvh2Layout final : public CompiledLayout {
  public:
-  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles) : bvh_(bvh), triangles_(triangles) {}
+  /// The tree as built; `bvh` and `triangles` must outlive the layout.
+  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles) : bvh_(&bvh), triangles_(triangles) {}
 
-  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
-    for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) hits[i] = closest_hit(bvh_, triangles_, rays[i]);
-    });
-  }
-  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
-    for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit(bvh_, triangles_, rays[i]);
-    });
-  }
-  TraceCounts count_closest(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted(bvh_, triangles_, rays[i], c); });
-  }
-  TraceCounts count_any(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted(bvh_, triangles_, rays[i], c); });
-  }
-  std::size_t bytes() const override { return bvh_.bytes(); }
-
- private:
-  const Bvh& bvh_;
-  std::span<const Triangle> triangles_;
-};
-
-/// The same nodes with the triangles copied into leaf order, so a leaf's triangles are contiguous in
-/// memory and no reference is chased per primitive (the layout tinybvh and Embree use for leaves).
-/// Hits are mapped back to scene primitive indices.
-class Bvh2PackedLayout final : public CompiledLayout {
- public:
-  Bvh2PackedLayout(const Bvh& bvh, std::span<const Triangle> triangles) {
-    packed_bvh_.nodes = bvh.nodes;
-    packed_bvh_.arity = bvh.arity;
+  /// Packed: owns a copy of the nodes and the triangles in leaf order.
+  static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles) {
+    auto layout = std::unique_ptr<Bvh2Layout>(new Bvh2Layout());
+    layout->owned_.nodes = bvh.nodes;
+    layout->owned_.arity = bvh.arity;
     const std::size_t refs = bvh.prim_refs.size();
-    packed_bvh_.prim_refs.resize(refs);
-    packed_.resize(refs);
-    ids_ = bvh.prim_refs;
+    layout->owned_.prim_refs.resize(refs);
+    layout->packed_.resize(refs);
+    layout->ids_ = bvh.prim_refs;
     tbb::parallel_for(std::size_t{0}, refs, [&](std::size_t i) {
-      packed_bvh_.prim_refs[i] = static_cast<uint32_t>(i);
-      packed_[i] = triangles[bvh.prim_refs[i]];
+      layout->owned_.prim_refs[i] = static_cast<uint32_t>(i);
+      layout->packed_[i] = triangles[bvh.prim_refs[i]];
     });
+    layout->bvh_ = &layout->owned_;
+    layout->triangles_ = layout->packed_;
+    return layout;
   }
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
-        Hit hit = closest_hit(packed_bvh_, packed_, rays[i]);
-        if (hit.found()) hit.prim = ids_[hit.prim];
+        Hit hit = closest_hit(*bvh_, triangles_, rays[i]);
+        if (hit.found() && !ids_.empty()) hit.prim = ids_[hit.prim];
         hits[i] = hit;
       }
     });
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit(packed_bvh_, packed_, rays[i]);
+      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit(*bvh_, triangles_, rays[i]);
     });
   }
   TraceCounts count_closest(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted(packed_bvh_, packed_, rays[i], c); });
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted(*bvh_, triangles_, rays[i], c); });
   }
   TraceCounts count_any(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted(packed_bvh_, packed_, rays[i], c); });
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted(*bvh_, triangles_, rays[i], c); });
   }
-  // Nodes, the packed triangles and the ids that map them back; the identity references are an
-  // artefact of reusing the common-format kernel and are not counted.
+  // As built: nodes and references. Packed: nodes, the packed triangles and the ids that map them back
+  // (the identity references are an artefact of reusing the common-format kernel and are not counted).
   std::size_t bytes() const override {
-    return packed_bvh_.nodes.size() * sizeof(Node) + packed_.size() * sizeof(Triangle) + ids_.size() * sizeof(uint32_t);
+    if (ids_.empty()) return bvh_->bytes();
+    return bvh_->nodes.size() * sizeof(Node) + packed_.size() * sizeof(Triangle) + ids_.size() * sizeof(uint32_t);
   }
 
  private:
-  Bvh packed_bvh_;
-  std::vector<Triangle> packed_;
-  std::vector<uint32_t> ids_;
+  Bvh2Layout() = default;
+
+  const Bvh* bvh_ = nullptr;
+  std::span<const Triangle> triangles_;
+  Bvh owned_;                      // packed only
+  std::vector<Triangle> packed_;   // packed only
+  std::vector<uint32_t> ids_;      // packed only: scene index of each packed triangle
 };
 
 void require_binary(const Bvh& bvh, const char* layout) {
@@ -136,7 +123,7 @@ const std::vector<LayoutInfo>& registry() {
       {"bvh2_packed", "common-format nodes, triangles copied into leaf order",
        [](const Bvh& bvh, std::span<const Triangle> tris) -> std::unique_ptr<CompiledLayout> {
          require_binary(bvh, "bvh2_packed");
-         return std::make_unique<Bvh2PackedLayout>(bvh, tris);
+         return Bvh2Layout::packed(bvh, tris);
        }},
   };
   return all;

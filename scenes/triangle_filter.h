@@ -39,17 +39,7 @@ class TriangleFilter {
 
   /// Keeps `t` if it is finite and has non-zero area; otherwise counts it.
   void add(const Triangle& t) {
-    switch (classify(t)) {
-      case Verdict::kValid:
-        scene_.triangles.push_back(t);
-        break;
-      case Verdict::kNonFinite:
-        ++scene_.removed.non_finite;
-        break;
-      case Verdict::kZeroArea:
-        ++scene_.removed.zero_area;
-        break;
-    }
+    if (accept(t)) scene_.triangles.push_back(t);
   }
 
   /// The triangle (vertices[a], vertices[b], vertices[c]). Indices are signed and 64-bit so that any
@@ -79,19 +69,8 @@ class TriangleFilter {
     }
     // Compact in place, counting the removed ones with the same classification as add().
     std::size_t kept = 0;
-    for (const Triangle& t : triangles) {
-      switch (classify(t)) {
-        case Verdict::kValid:
-          triangles[kept++] = t;
-          break;
-        case Verdict::kNonFinite:
-          ++scene_.removed.non_finite;
-          break;
-        case Verdict::kZeroArea:
-          ++scene_.removed.zero_area;
-          break;
-      }
-    }
+    for (const Triangle& t : triangles)
+      if (accept(t)) triangles[kept++] = t;
     triangles.resize(kept);
     scene_.triangles = std::move(triangles);
   }
@@ -105,6 +84,21 @@ class TriangleFilter {
     // short that the cross product underflows. Any other sliver is kept; builders must cope with it.
     if (t.normal() == Vec3{0.0f}) return Verdict::kZeroArea;
     return Verdict::kValid;
+  }
+
+  // True for a valid triangle; an invalid one is counted under its reason.
+  bool accept(const Triangle& t) {
+    switch (classify(t)) {
+      case Verdict::kValid:
+        return true;
+      case Verdict::kNonFinite:
+        ++scene_.removed.non_finite;
+        return false;
+      case Verdict::kZeroArea:
+        ++scene_.removed.zero_area;
+        return false;
+    }
+    return false;
   }
 
   Scene& scene_;

@@ -39,12 +39,14 @@ BuilderInfo binned_sah_info() {
   return {"binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", std::move(params),
           [](const BuildInput& input, const ParamSet& p) {
             return build_binned_sah(input, {p.get_uint("bins"), p.get_uint("adaptive_bins") != 0, top_down_config(p)});
-          }};
+          },
+          [](const ParamSet& p) { check_config(top_down_config(p), "binned_sah"); }};
 }
 
 BuilderInfo sweep_sah_info() {
   return {"sweep_sah", "full-sweep SAH over presorted centroids (MacDonald and Booth 1990)", top_down_params(),
-          [](const BuildInput& input, const ParamSet& p) { return build_sweep_sah(input, {top_down_config(p)}); }};
+          [](const BuildInput& input, const ParamSet& p) { return build_sweep_sah(input, {top_down_config(p)}); },
+          [](const ParamSet& p) { check_config(top_down_config(p), "sweep_sah"); }};
 }
 
 std::vector<BuilderInfo>& registry() {

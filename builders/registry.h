@@ -20,6 +20,9 @@ struct BuilderInfo {
   std::string summary;  ///< one line, with the paper it implements
   std::vector<ParamSpec> params;
   std::function<Bvh(const BuildInput&, const ParamSet&)> build;
+  /// Checks a combination of parameters that each lie in range but may not fit together (min_leaf above
+  /// max_leaf, say), so configs fail when loaded rather than when the builder's turn comes. Optional.
+  std::function<void(const ParamSet&)> check;
 };
 
 /// Every registered builder, in registration order.

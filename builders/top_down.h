@@ -13,6 +13,7 @@
 #include <tbb/task_group.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -83,9 +84,11 @@ struct SlotNode {
 // task overhead (the value only affects speed, not the tree).
 inline constexpr uint32_t kSpawnThreshold = 1024;
 
-// Depth after which splits are forced to be median splits: a median split halves the count, so at most
-// 32 further levels reach single primitives for any uint32 count, and kMaxDepth is never exceeded.
-inline constexpr uint32_t kMedianOnlyDepth = kMaxDepth - 33;
+// True when only median splits can still keep every node shallower than kMaxDepth. Halving n primitives
+// down to single ones takes ceil(log2 n) = bit_width(n - 1) more levels, and each median split lowers
+// that by one; an SAH split may be arbitrarily unbalanced, so it is allowed only while one more level
+// would still leave room to halve. Only pathological inputs get here (trees are ~30 deep at 1M).
+inline bool must_halve(uint32_t depth, uint32_t n) { return depth + std::bit_width(n - 1) >= kMaxDepth - 1; }
 
 template <class Splitter>
 class TopDownBuilder {
@@ -109,7 +112,8 @@ class TopDownBuilder {
     if (n <= config_.min_leaf) return make_leaf(range, slot);
 
     Partition halves;
-    if (depth >= kMedianOnlyDepth) {
+    if (must_halve(depth, n)) {
+      if (n <= config_.max_leaf) return make_leaf(range, slot);
       halves = splitter_.partition_median(range);
     } else {
       const Split split = splitter_.find_split(range);

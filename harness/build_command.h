@@ -23,7 +23,8 @@ struct BuildCommandOptions {
 struct BuilderSpec {
   std::string name;
   ParamOverrides params;
-  bool is_embree() const { return name.rfind("embree_", 0) == 0; }
+  /// Embree's own BVH (rtcCommitScene); embree_bvh is a registry builder like ours.
+  bool is_embree() const { return name == "embree_low" || name == "embree_medium" || name == "embree_high"; }
 };
 
 /// Parses "name" or "name:key=value,key=value"; malformed text is an error naming it.

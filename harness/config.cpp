@@ -392,7 +392,9 @@ void read_builders(const Source& src, const toml::table& root, ExperimentConfig&
       } else {
         const BuilderInfo& info = find_builder(run.name);
         try {
-          resolved += resolve_params(info.name, info.params, run.params).to_string();
+          const ParamSet params = resolve_params(info.name, info.params, run.params);
+          if (info.check) info.check(params);
+          resolved += params.to_string();
         } catch (const Error& e) {
           src.fail(*table, "builder run '" + run.label() + "': " + e.what());
         }

@@ -70,10 +70,19 @@ std::string csv_escape(const std::string& field) {
 
 CsvWriter::CsvWriter(std::filesystem::path path, std::vector<std::string> columns)
     : path_(std::move(path)), columns_(std::move(columns)) {
-  const bool has_content = std::filesystem::exists(path_) && std::filesystem::file_size(path_) > 0;
-  if (has_content) {
+  std::string text;
+  if (std::filesystem::exists(path_)) {
     std::ifstream in(path_);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  // A run killed mid-write leaves a partial last line: cut the file at its last complete line.
+  if (!text.empty() && text.back() != '\n') {
+    const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+    text.resize(keep);
+    std::filesystem::resize_file(path_, keep);
+    dropped_partial_row_ = true;
+  }
+  if (!text.empty()) {
     std::size_t pos = 0, line = 1;
     std::vector<std::string> header;
     next_record(text, pos, header, line, path_);
@@ -84,16 +93,11 @@ CsvWriter::CsvWriter(std::filesystem::path path, std::vector<std::string> column
         throw Error(path_.string() + ": existing header differs at column " + std::to_string(i + 1) + ": '" + have +
                     "', this version writes '" + want + "'; write to a new file");
     }
-    // A run killed mid-write may leave a partial last line; start ours on a fresh one.
-    if (!text.empty() && text.back() != '\n') {
-      std::ofstream fix(path_, std::ios::app);
-      fix << '\n';
-    }
   }
   if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path());
   out_.open(path_, std::ios::app);
   if (!out_) throw Error(path_.string() + ": cannot open for writing");
-  if (!has_content) {
+  if (text.empty()) {
     for (std::size_t i = 0; i < columns_.size(); ++i) out_ << (i ? "," : "") << csv_escape(columns_[i]);
     out_ << '\n' << std::flush;
   }
@@ -119,6 +123,8 @@ std::vector<CsvRow> read_csv(const std::filesystem::path& path) {
   std::size_t pos = 0, line = 1;
   std::vector<std::string> header, fields;
   std::vector<CsvRow> rows;
+  // Only complete lines: a trailing partial row is one being written or cut off by a crash.
+  text.resize(text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1);
   if (!next_record(text, pos, header, line, path)) return rows;
   while (true) {
     const std::size_t row_line = line;

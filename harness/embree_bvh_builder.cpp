@@ -167,7 +167,8 @@ int caller_threads() {
   return static_cast<int>(std::max<std::size_t>(1, std::min(global, arena)));
 }
 
-void check_params(const BuildInput& input, const EmbreeBvhParams& p) {
+// Checks that need no input; run when a config is loaded, before any cell.
+void check_param_values(const EmbreeBvhParams& p) {
   auto fail = [](const std::string& what) { throw Error(std::string("builder '") + kBuilderName + "': " + what); };
   if (p.min_leaf < 1 || p.max_leaf < 1 || p.max_leaf > kEmbreeMaxLeafPrims)
     fail("leaf sizes must lie in 1.." + std::to_string(kEmbreeMaxLeafPrims) + " (min_leaf=" +
@@ -179,6 +180,11 @@ void check_params(const BuildInput& input, const EmbreeBvhParams& p) {
   if (!std::has_single_bit(p.sah_block)) fail("sah_block=" + std::to_string(p.sah_block) + " is not a power of two");
   if (!(p.split_factor >= 1.0f && p.split_factor <= kEmbreeMaxSplitFactor))
     fail("split_factor=" + std::to_string(p.split_factor) + " is outside 1.." + std::to_string(kEmbreeMaxSplitFactor));
+}
+
+void check_params(const BuildInput& input, const EmbreeBvhParams& p) {
+  auto fail = [](const std::string& what) { throw Error(std::string("builder '") + kBuilderName + "': " + what); };
+  check_param_values(p);
   if (p.quality == EmbreeQuality::kHigh && input.triangles.size() != input.size())
     fail("quality high (spatial splits) needs the triangles in the BuildInput (" +
          std::to_string(input.triangles.size()) + " triangles for " + std::to_string(input.size()) + " bounds)");
@@ -323,19 +329,21 @@ void register_embree_builders() {
       {"split_factor", ParamType::kFloat, kEmbreeDefaultSplitFactor, 1, kEmbreeMaxSplitFactor,
        "quality 2: reference capacity per primitive for spatial splits (1: none)"},
   };
-  register_builder({kBuilderName,
-                    "Embree 3 rtcBuildBVH, binary (Morton / binned SAH / spatial splits by quality)",
-                    std::move(params), [](const BuildInput& input, const ParamSet& p) {
-                      EmbreeBvhParams e;
-                      e.quality = static_cast<EmbreeQuality>(p.get_uint("quality"));
-                      e.min_leaf = p.get_uint("min_leaf");
-                      e.max_leaf = p.get_uint("max_leaf");
-                      e.cost = sah_cost_of(p);
-                      e.max_depth = p.get_uint("max_depth");
-                      e.sah_block = p.get_uint("sah_block");
-                      e.split_factor = p.get_float("split_factor");
-                      return build_embree_bvh(input, e);
-                    }});
+  auto from = [](const ParamSet& p) {
+    EmbreeBvhParams e;
+    e.quality = static_cast<EmbreeQuality>(p.get_uint("quality"));
+    e.min_leaf = p.get_uint("min_leaf");
+    e.max_leaf = p.get_uint("max_leaf");
+    e.cost = sah_cost_of(p);
+    e.max_depth = p.get_uint("max_depth");
+    e.sah_block = p.get_uint("sah_block");
+    e.split_factor = p.get_float("split_factor");
+    return e;
+  };
+  register_builder({kBuilderName, "Embree 3 rtcBuildBVH, binary (Morton / binned SAH / spatial splits by quality)",
+                    std::move(params),
+                    [from](const BuildInput& input, const ParamSet& p) { return build_embree_bvh(input, from(p)); },
+                    [from](const ParamSet& p) { check_param_values(from(p)); }});
 }
 
 }  // namespace sahbench

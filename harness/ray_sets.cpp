@@ -191,7 +191,7 @@ GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetCon
       continue;
     }
     if (cfg.kind == RayKind::kRandom) {
-      const std::size_t count = cfg.count ? cfg.count : 262144;
+      const std::size_t count = cfg.count ? cfg.count : kDefaultRandomRays;
       set.rays.resize(count);
       tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
         RayRng rng(seed, set_index, i);

@@ -51,9 +51,8 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   }
   if (rows.empty()) throw Error("no rows in the given CSV files");
   std::string run = options.run_id;
-  if (run.empty()) run = std::max_element(rows.begin(), rows.end(), [](const CsvRow& a, const CsvRow& b) {
-                           return a.at("run_id").substr(a.at("run_id").size() - 15) < b.at("run_id").substr(b.at("run_id").size() - 15);
-                         })->at("run_id");
+  // Rows are appended as cells finish, so the last row belongs to the latest run.
+  if (run.empty()) run = rows.back().at("run_id");
   std::erase_if(rows, [&](const CsvRow& r) { return r.at("run_id") != run; });
   if (rows.empty()) throw Error("no rows with run_id '" + run + "'");
 

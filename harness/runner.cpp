@@ -26,7 +26,10 @@
 #include "harness/ray_sets.h"
 #include "harness/timing.h"
 #include "scenes/load.h"
+#include "scenes/proc_spec.h"
+#include "scenes/procedural.h"
 #include "traversal/brute_force.h"
+#include "traversal/hit_compare.h"
 
 namespace sahbench {
 namespace {
@@ -50,16 +53,6 @@ struct EmbreeLayout {
   int packet_width;  // 1: rtcIntersect1 / rtcOccluded1
 };
 constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 8}, {"embree_16", 16}};
-
-// Hit distances of a tie (two triangles through a shared edge) agree to a few ulps; a real difference
-// is far larger. Same tolerance as the tests (tests/support/hit_check.h).
-constexpr float kTieTolerance = 1e-5f;
-
-bool same_hit(const Hit& a, const Hit& b) {
-  if (a.found() != b.found()) return false;
-  if (!a.found()) return true;
-  return std::fabs(a.t - b.t) <= kTieTolerance * std::max(1.0f, std::fabs(b.t));
-}
 
 // The reference answers for one ray set: closest hits, or occlusion flags for any-hit sets.
 struct Reference {
@@ -139,15 +132,21 @@ class ExperimentRunner {
         output_(options.output ? *options.output : cfg.output), run_id_(cfg.name + "-" + now_stamp()) {}
 
   int run() {
+    // The writer first: it checks the header and removes a row cut off by a crash before anything reads.
+    CsvWriter csv(output_, all_columns());
+    if (csv.dropped_partial_row()) log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
     std::set<std::string> finished;
-    if (options_.resume && std::filesystem::exists(output_)) {
-      for (const auto& row : read_csv(output_))
+    if (options_.resume) {
+      for (const auto& row : read_csv(output_)) {
         finished.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"), row.at("layout"),
                                  std::stoi(row.at("threads")), row.at("ray_set"), std::stoi(row.at("frame"))));
+        // A resumed run continues the same run: its rows share the run id, so a report shows them together.
+        if (row.at("config") == cfg_.path.string()) run_id_ = row.at("run_id");
+      }
       log_ << fmt::format("resume: {} finished cells in {}\n", finished.size(), output_.string());
     }
-    CsvWriter csv(output_, all_columns());
 
+    check_packet_support();
     const std::vector<std::string> scenes = scenes_to_run();
     // Plan: which cells of each scene are still to do.
     std::size_t total = 0;
@@ -169,7 +168,28 @@ class ExperimentRunner {
   }
 
  private:
+  // Embree's packet kernels exist only where the CPU has the vector width (16 lanes: AVX-512); the
+  // cells of a missing width do not apply on this machine and are left out with a reason.
+  void check_packet_support() {
+    EmbreeDevice probe(1);
+    for (const auto& l : kEmbreeLayouts) {
+      if (l.packet_width == 1 || embree_packets_supported(probe, l.packet_width)) {
+        supported_embree_layouts_.push_back(l);
+      } else {
+        log_ << fmt::format("skipping layout {}: Embree has no native {}-wide packets on this CPU\n", l.name, l.packet_width);
+      }
+    }
+  }
+
+  // Required scenes must exist before the first cell runs, not fail hours in; optional ones are skipped.
   std::vector<std::string> scenes_to_run() {
+    for (const auto& name : cfg_.scenes) {
+      if (is_procedural_spec(name)) {
+        parse_proc_spec(name, procedural_kinds());
+      } else if (!std::filesystem::is_regular_file(name) && !find_scene_file(name)) {
+        load_scene(name);  // throws the loader's error, which names the scene and the search path
+      }
+    }
     std::vector<std::string> out = cfg_.scenes;
     for (const auto& name : cfg_.optional_scenes) {
       if (find_scene_file(name)) {
@@ -184,7 +204,7 @@ class ExperimentRunner {
   std::vector<std::string> layouts_for(const ResolvedBuilder& b) const {
     std::vector<std::string> out;
     if (b.is_embree()) {
-      for (const auto& l : kEmbreeLayouts) out.push_back(l.name);
+      for (const auto& l : supported_embree_layouts_) out.push_back(l.name);
     } else {
       out = cfg_.layouts;
     }
@@ -211,8 +231,9 @@ class ExperimentRunner {
     Scene scene;
     const double load_ms = time_ms([&] { scene = load_scene(scene_name); });
     load_ms_ += load_ms;
-    log_ << fmt::format("scene {}: {} triangles ({} removed) from {} in {:.0f} ms\n", scene_name,
-                        scene.triangles.size(), scene.removed.total(), scene.source, load_ms);
+    log_ << fmt::format("scene {}: {} triangles ({} removed), {}, from {} in {:.0f} ms\n", scene_name,
+                        scene.triangles.size(), scene.removed.total(), scene.animated ? "animated" : "static",
+                        scene.source, load_ms);
     GeneratedRaySets generated;
     rays_ms_ += time_ms([&] { generated = generate_ray_sets(scene, cfg_.ray_sets, cfg_.seed); });
     for (const auto& [set, reason] : generated.skipped) {
@@ -354,8 +375,27 @@ class ExperimentRunner {
     const BvhStats stats = compute_stats(bvh, scene.triangles.size(), cost);
     const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
     if (!report.ok()) {
+      // Tracing a broken tree can read out of bounds: its cells get rows that say why, and no timings.
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.run.label(), scene.name, report.summary());
+      for (const auto& layout_name : cfg_.layouts)
+        for (const auto& rs : sets) {
+          if (!wanted(layout_name, rs)) continue;
+          CsvRow row = base_row(scene, b, threads);
+          row["isa"] = env_.isa;
+          row["layout"] = layout_name;
+          put_timing(row, "build_ms", build_t);
+          row["nodes"] = std::to_string(stats.nodes);
+          row["arity"] = std::to_string(bvh.arity);
+          row["ray_set"] = rs.name;
+          row["ray_count"] = std::to_string(rs.rays.size());
+          row["query"] = rs.occlusion ? "any" : "closest";
+          row["notes"] = "invalid tree, not traced: " + report.errors.front();
+          csv_ms_ += time_ms([&] { csv.append(row); });
+          progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name, b.run.label(),
+                                         layout_name, threads, rs.name));
+        }
+      return;
     }
 
     for (const auto& layout_name : cfg_.layouts) {
@@ -403,7 +443,6 @@ class ExperimentRunner {
         row["reference"] = refs[s].name;
         row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], hits, occluded));
         row["query"] = rs.occlusion ? "any" : "closest";
-        row["notes"] = report.ok() ? "" : "invalid tree: " + report.errors.front();
         csv_ms_ += time_ms([&] { csv.append(row); });
         progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
                                        b.run.label(), layout_name, threads, rs.name, build_t.median, trace_t.median,
@@ -429,7 +468,7 @@ class ExperimentRunner {
       if (r == 0) peak = device.peak_bytes() - before;
     }
     const TimingSummary build_t = summarize(build_ms);
-    for (const auto& layout : kEmbreeLayouts) {
+    for (const auto& layout : supported_embree_layouts_) {
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
         if (!wanted(layout.name, rs)) continue;
@@ -469,6 +508,7 @@ class ExperimentRunner {
   std::ostream& log_;
   Environment env_;
   std::vector<ResolvedBuilder> builders_;
+  std::vector<EmbreeLayout> supported_embree_layouts_;
   std::filesystem::path output_;
   std::string run_id_;
   int exit_code_ = 0;

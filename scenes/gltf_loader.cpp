@@ -417,6 +417,7 @@ Scene load_gltf(const std::filesystem::path& path, bool binary) {
   scene.source = file;
   TriangleFilter filter(scene);
   GltfReader(model, file, filter, scene).read_scene();
+  scene.animated = !model.animations.empty();
   return scene;
 }
 

@@ -35,6 +35,10 @@ struct Scene {
   RemovedTriangles removed;
   std::optional<Camera> camera;    ///< the file's first perspective camera, if any
   std::vector<Vec3> lights;        ///< positions of the file's point and spot lights (KHR_lights_punctual)
+  /// What the scene declares: animated when the file has animations (glTF), static otherwise. The
+  /// triangles are the static pose (node transforms, no skinning); per-frame positions come with
+  /// animation evaluation, and the harness runs frame-dependent cells (refit) only on animated scenes.
+  bool animated = false;
 };
 
 }  // namespace sahbench

@@ -353,6 +353,12 @@ bins = [8,
                {"bins", "a date"});
 }
 
+TEST(HarnessConfigValues, ParameterCombinationsAreCheckedWhenLoading) {
+  // Each value is in range, but together they cannot build: caught at load, not when the cell runs.
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nmin_leaf = 8\nmax_leaf = 4\n", 10,
+               {"max_leaf = 4", "below min_leaf = 8"});
+}
+
 TEST(HarnessConfigEmbree, QualitySweepAndDefault) {
   const auto config = parse_with(R"(
 [[builder]]

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "builders/registry.h"
 #include "harness/csv.h"
 #include "harness/report.h"
 #include "harness/runner.h"
@@ -70,17 +71,75 @@ TEST(HarnessRun, ResumeAfterAnInterruptedRunCompletesOnlyTheMissingCells) {
   const auto config = write_config("run_resume", "");
   const auto csv = temp_dir() / "run_resume.csv";
   std::ostringstream log;
-  // A run limited to one scene stands in for one interrupted after that scene's cells.
+  // A run limited to one scene stands in for one interrupted after that scene's cells; a crash in the
+  // middle of writing the next row leaves a partial last line.
   ASSERT_EQ(run_experiment({config, false, "proc:soup", std::nullopt}, log), 0);
   ASSERT_EQ(read_csv(csv).size(), 16u);
-  ASSERT_EQ(run_experiment({config, true, "", std::nullopt}, log), 0);
+  std::ofstream(csv, std::ios::app) << "run_small-cut,abc123,AMD";
+  EXPECT_EQ(read_csv(csv).size(), 16u) << "a partial last line is not a row";
+  ASSERT_EQ(run_experiment({config, true, "", std::nullopt}, log), 0) << log.str();
+  EXPECT_NE(log.str().find("removed a partial last row"), std::string::npos) << log.str();
   const auto rows = read_csv(csv);
   EXPECT_EQ(rows.size(), 32u);
+  // The resumed run continues the first one: one run id, so the report shows every cell.
+  for (const auto& r : rows) EXPECT_EQ(r.at("run_id"), rows.front().at("run_id"));
+  std::ostringstream report;
+  print_report({{csv}, ""}, report);
+  EXPECT_NE(report.str().find("## proc:soup:tris=2000"), std::string::npos) << report.str();
+  EXPECT_NE(report.str().find("## proc:sphere:tris=3000"), std::string::npos) << report.str();
   std::set<std::string> keys;
   for (const auto& r : rows)
     keys.insert(cell_key(r.at("scene"), r.at("builder"), r.at("builder_params"), r.at("layout"), std::stoi(r.at("threads")),
                          r.at("ray_set"), std::stoi(r.at("frame"))));
   EXPECT_EQ(keys.size(), 32u) << "a cell was run twice";
+}
+
+TEST(HarnessRun, InvalidTreesAreReportedNotTraced) {
+  // A builder that drops a primitive: its cells get rows saying why, with no trace figures, and the run
+  // exits 1 rather than tracing a broken tree.
+  static const bool registered = [] {
+    BuilderInfo broken = find_builder("binned_sah");
+    broken.name = "broken_for_test";
+    auto build = broken.build;
+    broken.build = [build](const BuildInput& input, const ParamSet& p) {
+      Bvh bvh = build(input, p);
+      for (Node& n : bvh.nodes)
+        if (n.is_leaf() && n.prim_count > 1) {
+          --n.prim_count;
+          break;
+        }
+      return bvh;
+    };
+    register_builder(broken);
+    return true;
+  }();
+  ASSERT_TRUE(registered);
+  const auto config = write_config("run_invalid", "[[builder]]\nname = \"broken_for_test\"\n");
+  std::ostringstream log;
+  EXPECT_EQ(run_experiment({config, false, "broken_for_test", std::nullopt}, log), 1);
+  const auto rows = read_csv(temp_dir() / "run_invalid.csv");
+  ASSERT_EQ(rows.size(), 16u);
+  for (const auto& r : rows) {
+    EXPECT_NE(r.at("notes").find("invalid tree, not traced"), std::string::npos) << r.at("notes");
+    EXPECT_EQ(r.at("trace_mrays_median"), "");
+  }
+}
+
+TEST(HarnessRun, MissingRequiredSceneFailsBeforeAnyCell) {
+  const auto dir = temp_dir();
+  const auto path = dir / "missing_scene.toml", csv = dir / "missing_scene.csv";
+  std::filesystem::remove(csv);
+  std::ofstream(path) << "[experiment]\nname = \"m\"\noutput = \"" << csv.string() << "\"\n"
+                      << "scenes = [\"proc:soup:tris=500\", \"no_such_scene_anywhere\"]\n"
+                      << "[[builder]]\nname = \"binned_sah\"\n[[ray_set]]\nkind = \"primary\"\nwidth = 8\nheight = 8\n";
+  std::ostringstream log;
+  try {
+    run_experiment({path, false, "", std::nullopt}, log);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no_such_scene_anywhere"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(read_csv(csv).empty()) << "no cell may run before the scenes are known to exist";
 }
 
 TEST(HarnessRun, OnlyFiltersCells) {

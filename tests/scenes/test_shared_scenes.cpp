@@ -27,6 +27,7 @@ std::string describe_search_path() {
 struct SharedScene {
   const char* name;
   std::size_t triangles;
+  bool animated = false;  ///< SOURCES.md: the skinned-animation scenes
 };
 
 // Names the scene in test output instead of dumping its bytes.
@@ -43,6 +44,7 @@ TEST_P(SceneShared, LoadsWithTheDocumentedCount) {
     GTEST_SKIP() << "shared scene '" << expected.name << "' not found; looked in:" << describe_search_path();
   const Scene scene = load_scene(expected.name);
   EXPECT_EQ(scene.name, expected.name);
+  EXPECT_EQ(scene.animated, expected.animated) << "the scene's static/animated declaration";
   EXPECT_EQ(scene.source, file->string());
   EXPECT_EQ(scene.triangles.size() + scene.removed.total(), expected.triangles)
       << "valid " << scene.triangles.size() << ", removed: non_finite " << scene.removed.non_finite
@@ -52,8 +54,8 @@ TEST_P(SceneShared, LoadsWithTheDocumentedCount) {
 INSTANTIATE_TEST_SUITE_P(
     Documented, SceneShared,
     ::testing::Values(SharedScene{"cornell_box", 36}, SharedScene{"smallpine", 1650},
-                      SharedScene{"RiggedFigure", 256}, SharedScene{"CesiumMan", 4672},
-                      SharedScene{"BrainStem", 61666}, SharedScene{"stanford_bunny", 69451},
+                      SharedScene{"RiggedFigure", 256, true}, SharedScene{"CesiumMan", 4672, true},
+                      SharedScene{"BrainStem", 61666, true}, SharedScene{"stanford_bunny", 69451},
                       SharedScene{"FlightHelmet", 94722}, SharedScene{"2CylinderEngine", 121496},
                       SharedScene{"ReciprocatingSaw", 198470}, SharedScene{"stanford_dragon_res2", 202520},
                       SharedScene{"crytek_sponza", 262205}),

@@ -10,15 +10,12 @@
 
 #include "core/ray.h"
 #include "core/triangle.h"
+#include "traversal/hit_compare.h"
 #include "traversal/triangle_tests.h"
 
 namespace sahbench::test {
 
-/// Hit distances of two different triangles on a shared edge or vertex agree to within rounding of the
-/// watertight test: a few ulps of t. 1e-5 relative is far above that and far below any real gap.
-inline constexpr float kTieTolerance = 1e-5f;
-
-inline bool same_t(float a, float b) { return std::fabs(a - b) <= kTieTolerance * std::max(1.0f, std::fabs(b)); }
+inline bool same_t(float a, float b) { return same_hit_distance(a, b); }
 
 /// Equal when both miss; or the same primitive at the same t; or a tie: another primitive that the
 /// watertight test also hits, at a t within kTieTolerance of the reference's.

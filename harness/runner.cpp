@@ -231,6 +231,7 @@ class ExperimentRunner {
     Scene scene;
     const double load_ms = time_ms([&] { scene = load_scene(scene_name); });
     load_ms_ += load_ms;
+    diagonal_ = scene_diagonal(scene);
     log_ << fmt::format("scene {}: {} triangles ({} removed), {}, from {} in {:.0f} ms\n", scene_name,
                         scene.triangles.size(), scene.removed.total(), scene.animated ? "animated" : "static",
                         scene.source, load_ms);
@@ -302,10 +303,12 @@ class ExperimentRunner {
     return ref;
   }
 
-  static uint64_t count_mismatches(const Reference& ref, std::span<const Hit> hits, std::span<const uint8_t> occluded) {
+  static uint64_t count_mismatches(const Reference& ref, const RaySet& rs, float scene_diagonal,
+                                   std::span<const Hit> hits, std::span<const uint8_t> occluded) {
     uint64_t m = 0;
     if (!ref.hits.empty())
-      for (std::size_t i = 0; i < hits.size(); ++i) m += !same_hit(hits[i], ref.hits[i]);
+      for (std::size_t i = 0; i < hits.size(); ++i)
+        m += !same_hit(hits[i], ref.hits[i], scene_diagonal / length(rs.rays[i].dir));
     if (!ref.occluded.empty())
       for (std::size_t i = 0; i < occluded.size(); ++i) m += (occluded[i] != 0) != (ref.occluded[i] != 0);
     return m;
@@ -343,6 +346,12 @@ class ExperimentRunner {
     row["scene_removed"] = std::to_string(scene.removed.total());
     row["embree_version"] = env_.embree;
     return row;
+  }
+
+  static float scene_diagonal(const Scene& scene) {
+    Aabb box;
+    for (const auto& t : scene.triangles) box.extend(t.bounds());
+    return box.is_empty() ? 1.0f : length(box.extent());
   }
 
   static void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) {
@@ -441,7 +450,7 @@ class ExperimentRunner {
         row["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
         row["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
         row["reference"] = refs[s].name;
-        row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], hits, occluded));
+        row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], rs, diagonal_, hits, occluded));
         row["query"] = rs.occlusion ? "any" : "closest";
         csv_ms_ += time_ms([&] { csv.append(row); });
         progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
@@ -493,7 +502,7 @@ class ExperimentRunner {
         row["ray_count"] = std::to_string(rs.rays.size());
         put_timing(row, "trace_mrays", trace_t);
         row["reference"] = refs[s].name;
-        row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], hits, occluded));
+        row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], rs, diagonal_, hits, occluded));
         row["query"] = rs.occlusion ? "any" : "closest";
         csv_ms_ += time_ms([&] { csv.append(row); });
         progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
@@ -513,6 +522,7 @@ class ExperimentRunner {
   std::string run_id_;
   int exit_code_ = 0;
   // Where the run's time goes besides measuring: the harness's own overhead, and the reference checks.
+  float diagonal_ = 1.0f;  // of the current scene's box, for the tie tolerance
   double load_ms_ = 0.0, rays_ms_ = 0.0, csv_ms_ = 0.0, reference_ms_ = 0.0;
 };
 

@@ -8,6 +8,7 @@
 #include "builders/params.h"
 #include "core/error.h"
 #include "harness/build_command.h"
+#include "harness/compare.h"
 #include "harness/embree_bvh_builder.h"
 #include "harness/list_command.h"
 #include "harness/report.h"
@@ -55,6 +56,15 @@ int main(int argc, char** argv) {
   trace_cmd->add_option("--rays", trace.rays, "ray file: 'ox oy oz dx dy dz [tmin tmax]' per line")->required();
   trace_cmd->add_option("--out", trace.out, "output CSV: ray,hit,prim,t,u,v")->required();
 
+  CompareOptions compare;
+  std::string compare_json;
+  auto* compare_cmd = app.add_subcommand("compare", "Regression check of a result CSV against a baseline (exit 1 on a regression)");
+  compare_cmd->add_option("baseline", compare.baseline, "baseline CSV")->required();
+  compare_cmd->add_option("current", compare.current, "new CSV")->required();
+  compare_cmd->add_flag("--deterministic-only", compare.deterministic_only, "compare SAH, counts, bytes, mismatches; ignore timings");
+  compare_cmd->add_option("--margin", compare.min_timing_margin, "smallest noise margin for timing ratios")->capture_default_str();
+  compare_cmd->add_option("--json", compare_json, "write smaller-is-better metrics here and bigger-is-better ones to NAME-bigger.json");
+
   auto* list_cmd = app.add_subcommand("list", "Builders and their parameters, procedural scene kinds, shared scenes found");
   auto* list_scenes_cmd = app.add_subcommand("list-scenes", "Names of the shared scenes found, one per line");
 
@@ -69,6 +79,10 @@ int main(int argc, char** argv) {
       return run_experiment(run, std::cerr);
     }
     if (*report_cmd) print_report(report, std::cout);
+    if (*compare_cmd) {
+      if (!compare_json.empty()) compare.json = compare_json;
+      return compare_results(compare, std::cout).regressions > 0 ? 1 : 0;
+    }
     if (*trace_cmd) run_trace_command(trace, std::cerr);
     if (*list_cmd) print_catalogue(std::cout);
     if (*list_scenes_cmd) print_scene_names(std::cout);

@@ -29,16 +29,6 @@ std::map<std::string, CsvRow> latest_run(const std::filesystem::path& path) {
   return cells;
 }
 
-std::optional<double> value(const CsvRow& row, const char* column) {
-  const auto it = row.find(column);
-  if (it == row.end() || it->second.empty()) return std::nullopt;
-  try {
-    return std::stod(it->second);
-  } catch (const std::exception&) {
-    return std::nullopt;
-  }
-}
-
 bool is_embree(const CsvRow& r) { return r.at("builder") == "embree"; }
 
 // The anchor of a cell: Embree medium, one ray at a time, same scene, threads and ray set, same run.
@@ -50,8 +40,8 @@ const CsvRow* anchor_of(const CsvRow& r, const std::map<std::string, CsvRow>& ru
 
 // Relative spread (max - min) / median of a timing column, the noise a comparison must allow for.
 double spread(const CsvRow& r, const std::string& prefix) {
-  const auto med = value(r, (prefix + "_median").c_str()), lo = value(r, (prefix + "_min").c_str()),
-             hi = value(r, (prefix + "_max").c_str());
+  const auto med = csv_number(r, (prefix + "_median").c_str()), lo = csv_number(r, (prefix + "_min").c_str()),
+             hi = csv_number(r, (prefix + "_max").c_str());
   if (!med || !lo || !hi || *med <= 0) return 0.0;
   return (*hi - *lo) / *med;
 }
@@ -109,7 +99,7 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
     const CsvRow& c = it->second;
     ++result.compared_cells;
     for (const MetricRule& rule : deterministic_metrics()) {
-      const auto vb = value(b, rule.column), vc = value(c, rule.column);
+      const auto vb = csv_number(b, rule.column), vc = csv_number(c, rule.column);
       if (!vb || !vc) continue;
       smaller.push_back({key + " " + rule.column, rule.column, *vc});
       const double rel = (*vc - *vb) / std::max(std::fabs(*vb), 1e-12);
@@ -123,8 +113,8 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
     const CsvRow* ac = anchor_of(c, cur);
     if (!ab || !ac) continue;
     for (const auto& [prefix, bigger_is_better] : {std::pair<std::string, bool>{"trace_mrays", true}, {"build_ms", false}}) {
-      const auto ob = value(b, (prefix + "_median").c_str()), oc = value(c, (prefix + "_median").c_str());
-      const auto eb = value(*ab, (prefix + "_median").c_str()), ec = value(*ac, (prefix + "_median").c_str());
+      const auto ob = csv_number(b, (prefix + "_median").c_str()), oc = csv_number(c, (prefix + "_median").c_str());
+      const auto eb = csv_number(*ab, (prefix + "_median").c_str()), ec = csv_number(*ac, (prefix + "_median").c_str());
       if (!ob || !oc || !eb || !ec || *eb <= 0 || *ec <= 0) continue;
       const double rb = *ob / *eb, rc = *oc / *ec;
       const double margin = std::max({options.min_timing_margin, spread(b, prefix), spread(c, prefix), spread(*ab, prefix),

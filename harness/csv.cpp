@@ -61,6 +61,16 @@ const std::vector<std::string>& design_columns() {
   return columns;
 }
 
+std::optional<double> csv_number(const CsvRow& row, const std::string& column) {
+  const auto it = row.find(column);
+  if (it == row.end() || it->second.empty()) return std::nullopt;
+  try {
+    return std::stod(it->second);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
 std::string csv_escape(const std::string& field) {
   if (field.find_first_of(",\"\n\r") == std::string::npos) return field;
   std::string out = "\"";

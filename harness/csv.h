@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,9 @@ class CsvWriter {
 /// number of fields is an error naming the file and line. A last line without its newline is a row
 /// being written (or cut off) and is left out.
 std::vector<CsvRow> read_csv(const std::filesystem::path& path);
+
+/// A numeric field of `row`; empty, absent or not a number gives nullopt.
+std::optional<double> csv_number(const CsvRow& row, const std::string& column);
 
 /// One field, quoted when needed.
 std::string csv_escape(const std::string& field);

@@ -14,16 +14,6 @@
 namespace sahbench {
 namespace {
 
-std::optional<double> number(const CsvRow& row, const std::string& column) {
-  const auto it = row.find(column);
-  if (it == row.end() || it->second.empty()) return std::nullopt;
-  try {
-    return std::stod(it->second);
-  } catch (const std::exception&) {
-    return std::nullopt;
-  }
-}
-
 bool is_anchor(const CsvRow& row) {
   return row.at("builder") == "embree" && row.at("builder_params") == "quality=medium" && row.at("layout") == "embree_1";
 }
@@ -97,23 +87,23 @@ void print_report(const ReportOptions& options, std::ostream& out) {
     }
     auto anchor_value = [&](const std::string& column, const std::string& ray_set = "") -> std::optional<double> {
       const CsvRow* a = ray_set.empty() ? any_anchor : (anchor.count(ray_set) ? anchor[ray_set] : nullptr);
-      return a ? number(*a, column) : std::nullopt;
+      return a ? csv_number(*a, column) : std::nullopt;
     };
     for (const auto& [label, layout] : keys) {
       std::map<std::string, const CsvRow*> by_set;
       for (const CsvRow* r : group)
         if (row_label(*r) == label && r->at("layout") == layout) by_set[r->at("ray_set")] = r;
       const CsvRow& any = *by_set.begin()->second;
-      const auto mem = number(any, "mem_bytes");
+      const auto mem = csv_number(any, "mem_bytes");
       const auto anchor_mem = anchor_value("mem_bytes");
       fmt::print(out, "| {} | {} | {} | {} | {} |", label, layout,
-                 with_ratio(number(any, "build_ms_median"), anchor_value("build_ms_median"), "{:.1f}"),
+                 with_ratio(csv_number(any, "build_ms_median"), anchor_value("build_ms_median"), "{:.1f}"),
                  with_ratio(mem ? std::optional<double>(*mem / (1 << 20)) : std::nullopt,
                             anchor_mem ? std::optional<double>(*anchor_mem / (1 << 20)) : std::nullopt, "{:.1f}"),
-                 number(any, "sah_cost") ? fmt::format("{:.2f}", *number(any, "sah_cost")) : "-");
+                 csv_number(any, "sah_cost") ? fmt::format("{:.2f}", *csv_number(any, "sah_cost")) : "-");
       for (const auto& rs : ray_sets) {
         const auto it = by_set.find(rs);
-        fmt::print(out, " {} |", it == by_set.end() ? "-" : with_ratio(number(*it->second, "trace_mrays_median"), anchor_value("trace_mrays_median", rs), "{:.2f}"));
+        fmt::print(out, " {} |", it == by_set.end() ? "-" : with_ratio(csv_number(*it->second, "trace_mrays_median"), anchor_value("trace_mrays_median", rs), "{:.2f}"));
       }
       fmt::print(out, "\n");
     }

@@ -44,9 +44,12 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--output", run_output, "CSV path instead of the config's");
 
   ReportOptions report;
-  auto* report_cmd = app.add_subcommand("report", "Markdown tables from result CSVs, with ratios to Embree medium");
+  std::string report_format = "markdown";
+  auto* report_cmd = app.add_subcommand("report", "Markdown or LaTeX tables from result CSVs, with ratios to Embree medium");
   report_cmd->add_option("csv", report.inputs, "result CSV files")->required();
   report_cmd->add_option("--run", report.run_id, "run_id to report (default: the latest)");
+  report_cmd->add_option("--format", report_format, "markdown | latex (booktabs)")->capture_default_str();
+  report_cmd->add_option("--output", report.output, "write the report to this file instead of stdout");
 
   TraceCommandOptions trace;
   auto* trace_cmd = app.add_subcommand("trace", "Trace rays from a file on one builder's tree; one output line per ray");
@@ -78,7 +81,10 @@ int main(int argc, char** argv) {
       if (!run_output.empty()) run.output = run_output;
       return run_experiment(run, std::cerr);
     }
-    if (*report_cmd) print_report(report, std::cout);
+    if (*report_cmd) {
+      report.format = parse_report_format(report_format);
+      run_report_command(report, std::cout);
+    }
     if (*compare_cmd) {
       if (!compare_json.empty()) compare.json = compare_json;
       return compare_results(compare, std::cout).regressions > 0 ? 1 : 0;

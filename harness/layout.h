@@ -34,6 +34,9 @@ class CompiledLayout {
   /// The same traversals with counters; not timed.
   virtual TraceCounts count_closest(std::span<const Ray> rays) const = 0;
   virtual TraceCounts count_any(std::span<const Ray> rays) const = 0;
+  /// The closest-hit counters of each ray on its own, into `counts` (same size), for per-pixel maps.
+  /// The default calls count_closest on each single-ray span, in parallel with TBB; not timed.
+  virtual void count_closest_per_ray(std::span<const Ray> rays, std::span<TraceCounts> counts) const;
   /// Exact bytes of the compiled structure (nodes, references, packed leaves).
   virtual std::size_t bytes() const = 0;
   /// The instruction set its kernels run with ("scalar", "sse", "avx2", "avx512"), for the CSV.

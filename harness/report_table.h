@@ -14,7 +14,7 @@ namespace sahbench {
 struct ReportColumn {
   std::string header;             ///< as the Markdown report has always printed it, e.g. "build ms"
   std::string latex_header;       ///< already LaTeX, e.g. "Build (ms)"
-  int decimals = 2;               ///< digits printed after the point
+  int decimals = 2;               ///< digits printed after the point (more for values below 1: 3 significant)
   bool larger_is_better = false;  ///< rays/s: largest is best; time, memory, SAH: smallest
 };
 

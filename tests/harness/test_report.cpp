@@ -106,14 +106,26 @@ TEST(Report, LatexEscapesEverySpecialCharacter) {
 TEST(Report, BestIsJudgedOnPrintedValuesAndNeedsTwoValues) {
   ReportTable t;
   t.columns = {{"ms", "ms", 1, false}, {"rays", "rays", 2, true}};
-  t.rows = {{"a", "a", "l", {{1.04, {}, false}, {2.0, {}, false}}},
-            {"b", "b", "l", {{0.96, {}, false}, {std::nullopt, {}, false}}},
-            {"c", "c", "l", {{1.5, {}, false}, {std::nullopt, {}, false}}}};
+  t.rows = {{"a", "a", "l", {{2.04, {}, false}, {2.0, {}, false}}},
+            {"b", "b", "l", {{1.96, {}, false}, {std::nullopt, {}, false}}},
+            {"c", "c", "l", {{2.5, {}, false}, {std::nullopt, {}, false}}}};
   mark_best(t);
-  EXPECT_TRUE(t.rows[0].cells[0].best);  // 1.04 and 0.96 both print as 1.0
+  EXPECT_TRUE(t.rows[0].cells[0].best);  // 2.04 and 1.96 both print as 2.0
   EXPECT_TRUE(t.rows[1].cells[0].best);
   EXPECT_FALSE(t.rows[2].cells[0].best);
   EXPECT_FALSE(t.rows[0].cells[1].best);  // a lone value is not a win
+
+  // Values below 1 keep three significant digits, so that small ones neither print as 0.0 nor tie.
+  ReportTable small;
+  small.columns = {{"build ms", "ms", 1, false}};
+  small.rows = {{"a", "a", "l", {{0.0123, {}, false}}}, {"b", "b", "l", {{0.0456, {}, false}}}};
+  mark_best(small);
+  EXPECT_TRUE(small.rows[0].cells[0].best);
+  EXPECT_FALSE(small.rows[1].cells[0].best);
+  std::ostringstream md;
+  render_markdown(small, md);
+  EXPECT_NE(md.str().find("| a | l | **0.0123** |"), std::string::npos) << md.str();
+  EXPECT_NE(md.str().find("| b | l | 0.0456 |"), std::string::npos) << md.str();
 }
 
 TEST(Report, FramesGetTablesOfTheirOwnAndMissingColumnsAreTolerated) {

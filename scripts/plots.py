@@ -81,8 +81,11 @@ def slug(text):
     return re.sub(r"[^A-Za-z0-9.-]+", "_", str(text)).strip("_") or "scene"
 
 
-def plain_log_ticks(axis):
-    """Log-scaled axis labelled 8, 16, 300 rather than 2^3, 3x10^2."""
+def plain_log_ticks(axis, locator=True):
+    """Log-scaled axis labelled 1, 2, 5, 10, 20 rather than 10^0, 2x10^1; enough labels for a range of
+    less than a decade. locator=False keeps ticks set elsewhere (bin counts)."""
+    if locator:
+        axis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
     axis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
     axis.set_minor_formatter(ticker.NullFormatter())
 
@@ -174,6 +177,7 @@ def plot_build_vs_trace(data, out_dir, stem):
             ax.set_xscale("log")
             ax.set_yscale("log")
             plain_log_ticks(ax.xaxis)
+            plain_log_ticks(ax.yaxis)
             ax.set_xlabel("build time (ms, median)")
             ax.set_ylabel(f"trace time of the {ray_set} set (ms)")
             ax.set_title(f"{ray_set} ({int(subset['ray_count'].iloc[0])} rays)")
@@ -263,7 +267,7 @@ def plot_sah_vs_bins(data, out_dir, stem):
             ax.axhline(sweep.iloc[0], color="gray", linestyle="--", label="sweep_sah (every split)")
         ax.set_xscale("log", base=2)
         ax.set_xticks(sorted(subset["_bins"].unique()))
-        plain_log_ticks(ax.xaxis)
+        plain_log_ticks(ax.xaxis, locator=False)
         ax.set_xlabel("bins")
         ax.set_ylabel("SAH cost")
         ax.set_title(str(scene), fontsize=9)

@@ -316,8 +316,8 @@ inline uint32_t occupied_lanes(const TriangleBlock& b) {
 
 // ---------------------------------------------------------------------------------------------------
 // The traversal: depth first with an explicit stack of child slots (inner nodes and leaves alike), the
-// children a ray enters pushed so that the nearest is popped first (closest hit) or in storage order
-// (any hit), and entries entered beyond the closest hit so far skipped when popped. The same loop as
+// children a ray enters pushed so that the nearest is popped first, and (closest hit) entries entered
+// beyond the closest hit so far skipped when popped. The same loop as
 // bvh2_traversal.h, with a node's N box tests done at once.
 
 struct WideStackEntry {
@@ -393,8 +393,9 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
       const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
       const WideStackEntry child{node.child[i], node.count[i], t_entry[i]};
       uint32_t slot = size++;
-      if constexpr (!kAnyHit) {
-        // Insertion sort into this node's part of the stack, nearest on top.
+      {
+        // Insertion sort into this node's part of the stack, nearest on top; for any hit too, since an
+        // occluder tends to be near (bvh2_traversal.h).
         while (slot > base && stack[slot - 1].t_entry < child.t_entry) {
           stack[slot] = stack[slot - 1];
           --slot;

@@ -439,3 +439,43 @@ WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, 
   if (width == 8) return by_tri.template operator()<8>();
   return nullptr;
 }
+
+// ---------------------------------------------------------------------------------------------------
+// Loops for the micro-benchmarks (bench/): every ray against every node, or every block, in turn. The
+// sum of the hit masks and distances is returned so the work cannot be optimised away.
+
+template <uint32_t N, bool kRobust>
+double node_test_loop(const void* nodes, std::size_t node_count, const WideRay* rays, std::size_t ray_count) {
+  const auto* typed = static_cast<const WideNode<N>*>(nodes);
+  double sum = 0.0;
+  alignas(32) float t_entry[N];
+  for (std::size_t r = 0; r < ray_count; ++r)
+    for (std::size_t n = 0; n < node_count; ++n)
+      sum += intersect_children<N, kRobust>(typed[n], rays[r], rays[r].tmin, rays[r].tmax, t_entry) + t_entry[0];
+  return sum;
+}
+
+template <TriangleTestKind kTri>
+double block_test_loop(const TriangleBlock* blocks, std::size_t block_count, const WideRay* rays, std::size_t ray_count) {
+  double sum = 0.0;
+  alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
+  for (std::size_t r = 0; r < ray_count; ++r)
+    for (std::size_t b = 0; b < block_count; ++b)
+      sum += intersect_block<kTri>(blocks[b], rays[r], rays[r].tmin, rays[r].tmax, t, u, v) + t[0];
+  return sum;
+}
+
+inline WideBenchLoops select_bench_loops(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
+  WideBenchLoops loops{};
+  const bool robust = box == BoxTestKind::kRobust;
+  if (width == 4) loops.nodes = robust ? &node_test_loop<4, true> : &node_test_loop<4, false>;
+  if (width == 8) loops.nodes = robust ? &node_test_loop<8, true> : &node_test_loop<8, false>;
+  switch (tri) {
+    case TriangleTestKind::kWatertight: loops.blocks = &block_test_loop<TriangleTestKind::kWatertight>; break;
+    case TriangleTestKind::kMollerTrumbore: loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumbore>; break;
+    case TriangleTestKind::kMollerTrumboreNoEpsilon:
+      loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumboreNoEpsilon>;
+      break;
+  }
+  return loops;
+}

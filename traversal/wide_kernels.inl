@@ -352,15 +352,12 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
   Hit best;
   float t_root;
   if (!intersect_root<kRobust>(root_planes, r, t_root)) return best;
+  static_assert(kWideStackCapacity >= (N - 1) * kMaxDepth + 1, "wide traversal stack too small");
   WideStackEntry stack[kWideStackCapacity];
   uint32_t size = 0;
-  stack[size++] = {0, 0, t_root};
   float best_t = r.tmax;
-  while (size > 0) {
-    const WideStackEntry entry = stack[--size];
-    if constexpr (!kAnyHit) {
-      if (entry.t_entry > best_t) continue;
-    }
+  WideStackEntry entry{0, 0, t_root};
+  while (true) {
     if (entry.count != 0) {
       if constexpr (kCount) ++counts->leaf_visits;
       for (uint32_t b = entry.child; b < entry.child + entry.count; ++b) {
@@ -381,30 +378,38 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
           }
         }
       }
-      continue;
-    }
-
-    const WideNode<N>& node = nodes[entry.child];
-    if constexpr (kCount) ++counts->inner_visits;
-    alignas(32) float t_entry[N];
-    uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
-    const uint32_t base = size;
-    for (; mask; mask &= mask - 1) {
-      const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
-      const WideStackEntry child{node.child[i], node.count[i], t_entry[i]};
-      uint32_t slot = size++;
-      {
+    } else {
+      const WideNode<N>& node = nodes[entry.child];
+      if constexpr (kCount) ++counts->inner_visits;
+      alignas(32) float t_entry[N];
+      uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
+      if (mask != 0 && (mask & (mask - 1)) == 0) {
+        // One child entered, the most common case below the top levels: go straight to it.
+        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
+        entry = {node.child[i], node.count[i], t_entry[i]};
+        continue;
+      }
+      const uint32_t base = size;
+      for (; mask; mask &= mask - 1) {
+        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
+        const WideStackEntry child{node.child[i], node.count[i], t_entry[i]};
         // Insertion sort into this node's part of the stack, nearest on top; for any hit too, since an
         // occluder tends to be near (bvh2_traversal.h).
+        uint32_t slot = size++;
         while (slot > base && stack[slot - 1].t_entry < child.t_entry) {
           stack[slot] = stack[slot - 1];
           --slot;
         }
+        stack[slot] = child;
       }
-      stack[slot] = child;
     }
+    // The next entry, skipping those entered beyond the closest hit so far (nothing inside can be closer;
+    // equal is kept for the tie rule).
+    do {
+      if (size == 0) return best;
+      entry = stack[--size];
+    } while (!kAnyHit && entry.t_entry > best_t);
   }
-  return best;
 }
 
 template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>

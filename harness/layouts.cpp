@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "harness/layout.h"
+#include "harness/wide_layout.h"
 #include "traversal/bvh2_traversal.h"
 #include "traversal/variant_dispatch.h"
 
@@ -134,6 +135,15 @@ const std::vector<LayoutInfo>& registry() {
   static const std::vector<LayoutInfo> all = {
       {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false, compile_bvh2},
       {"bvh2_packed", "common-format nodes, triangles copied into leaf order", 2, false, compile_bvh2_packed},
+      {"bvh4", "4-wide SoA nodes (128 B), triangles packed 4 per block, SIMD kernels (sse/avx2/avx512)", 4, true,
+       [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
+         return compile_wide_layout(4, bvh, tris, spec);
+       }},
+      {"bvh8", "8-wide SoA nodes (256 B), triangles packed 4 per block, SIMD kernels (avx2/avx512, sse in halves)",
+       8, true,
+       [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
+         return compile_wide_layout(8, bvh, tris, spec);
+       }},
   };
   return all;
 }
@@ -148,6 +158,10 @@ const LayoutInfo& find_layout(std::string_view name) {
   std::string known;
   for (const auto& l : registry()) known += (known.empty() ? "" : ", ") + l.name;
   throw Error("unknown layout '" + std::string(name) + "' (known: " + known + ")");
+}
+
+void CompiledLayout::refit(std::span<const Triangle>) {
+  throw Error("this layout borrows its tree and does not refit: refit the Bvh and compile it again");
 }
 
 std::string LayoutSpec::text() const {

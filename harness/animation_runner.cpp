@@ -384,13 +384,15 @@ class AnimationRunner {
     return summarize(mrays);
   }
 
-  // Warm-up, then timed repetitions of `step`; the heap peak of the first timed one.
-  template <class Step>
-  std::pair<TimingSummary, int64_t> time_steps(Step step) const {
+  // Warm-up, then timed repetitions of `step`, each after an untimed `reset`; the heap peak of the first
+  // timed one.
+  template <class Step, class Reset>
+  std::pair<TimingSummary, int64_t> time_steps(Step step, Reset reset) const {
     for (int w = 0; w < cfg_.reps.build_warmup; ++w) step();
     std::vector<double> ms;
     int64_t peak = 0;
     for (int r = 0; r < cfg_.reps.build; ++r) {
+      reset();
       const int64_t before = heap_bytes();
       reset_heap_peak();
       ms.push_back(time_ms(step));
@@ -442,16 +444,16 @@ class AnimationRunner {
 
   void run_rebuild(const FrameData& frame, const AnimatedBuilder& b, int threads, CsvWriter& csv) {
     Bvh bvh;
-    const auto [build_t, peak] = time_steps([&] {
-      bvh = Bvh{};
-      bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params);
-    });
+    // The previous repetition's tree is freed before the clock starts, as in a static run.
+    const auto [build_t, peak] =
+        time_steps([&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
+                   [&] { bvh = Bvh{}; });
     trace_ours(frame, b, threads, bvh, build_t, peak, "", csv);
   }
 
   void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, Bvh& tree, CsvWriter& csv) {
     // Every refit recomputes every box, so repeating it on the same frame times the same work.
-    const auto [refit_t, peak] = time_steps([&] { refit(tree, frame.scene.triangles); });
+    const auto [refit_t, peak] = time_steps([&] { refit(tree, frame.scene.triangles); }, [] {});
     trace_ours(frame, b, threads, tree, refit_t, peak, "tree of frame 0 refitted", csv);
   }
 

@@ -58,6 +58,7 @@ struct AnimatedBuilder {
   std::string label;                  // for the log: the config's label, "refit(...)" around it for refits
   const BuilderInfo* info = nullptr;  // ours
   ParamSet params;                    // ours
+  uint32_t arity = 2;                 // ours: of its trees; traced only with layouts of that arity
   EmbreeQuality quality = EmbreeQuality::kMedium;
   std::string params_text;  // the CSV builder_params column
 
@@ -84,6 +85,13 @@ std::vector<AnimatedBuilder> expand_builders(const ExperimentConfig& cfg) {
     b.info = &find_builder(run.name);
     b.params = resolve_params(b.info->name, b.info->params, run.params);
     b.params_text = b.params.to_string();
+    b.arity = b.info->arity ? b.info->arity(b.params) : 2;
+    const bool traceable = std::any_of(cfg.layouts.begin(), cfg.layouts.end(), [&](const std::string& l) {
+      return find_layout(parse_layout_spec(l).name).arity == b.arity;
+    });
+    if (!traceable)
+      throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
+                  "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
     b.variant = Variant::kRebuild;
     b.name = run.name;
     b.label = run.label();
@@ -126,6 +134,12 @@ std::string now_stamp() {
 std::string format_duration(double seconds) {
   const auto s = static_cast<long>(std::lround(seconds));
   return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
+}
+
+// mem_bytes per scene triangle (as runner.cpp writes it).
+std::string bytes_per_triangle(std::size_t bytes, const Scene& scene) {
+  if (scene.triangles.empty()) return "";
+  return fmt::format("{:.2f}", static_cast<double>(bytes) / static_cast<double>(scene.triangles.size()));
 }
 
 Aabb bounds_of(std::span<const Triangle> triangles) {
@@ -212,7 +226,8 @@ class AnimationRunner {
     if (b.is_embree()) {
       for (const auto& l : embree_layouts_) out.push_back(l.name);
     } else {
-      out = cfg_.layouts;
+      for (const auto& l : cfg_.layouts)
+        if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
     }
     return out;
   }
@@ -470,18 +485,18 @@ class AnimationRunner {
     }
     // Statistics need a valid tree; an invalid one is reported and not traced (it could read out of bounds).
     const BvhStats stats = valid ? compute_stats(bvh, scene.triangles.size(), cost) : BvhStats{};
-    for (const auto& layout_name : cfg_.layouts) {
+    for (const auto& layout_name : layouts_for(b)) {
       bool any = false;
       for (const auto& rs : frame.sets)
         any |= wanted(scene.name, b, layout_name, threads, rs.name, frame.index);
       if (!any) continue;
-      const LayoutInfo& layout = find_layout(layout_name);
+      const LayoutSpec layout = parse_layout_spec(layout_name);
       std::unique_ptr<CompiledLayout> compiled;
       std::vector<double> compile_ms;
       if (valid)
         for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
           compiled.reset();
-          compile_ms.push_back(time_ms([&] { compiled = layout.compile(bvh, scene.triangles); }));
+          compile_ms.push_back(time_ms([&] { compiled = compile_layout(layout, bvh, scene.triangles); }));
         }
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
@@ -515,7 +530,9 @@ class AnimationRunner {
             rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
         const Reference& ref = frame.references[s];
         row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);
+        row["isa"] = compiled->isa();
         row["mem_bytes"] = std::to_string(compiled->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene);
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
         row["leaves"] = std::to_string(stats.leaves);
         row["max_depth"] = std::to_string(stats.max_depth);
@@ -598,6 +615,7 @@ class AnimationRunner {
         row["layout"] = layout.name;
         put_timing(row, "build_ms", build_t);
         row["mem_bytes"] = std::to_string(built->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene);
         row["mem_peak_bytes"] = std::to_string(peak);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());

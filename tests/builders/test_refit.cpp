@@ -1,14 +1,14 @@
 // Refit (builders/refit.h): after the triangles move, every box contains its children and its
 // triangles, boxes are tight (exactly the union of what they hold), traversal of the refitted tree
-// finds the brute-force hits on the moved geometry, for arities 2, 4 and 8, and the result does not
-// depend on the thread count.
+// finds the brute-force hits on the moved geometry, for arities 2, 4 and 8 (collapsed and built wide),
+// and the result does not depend on the thread count.
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
-#include <deque>
 
+#include "builders/collapse.h"
 #include "builders/refit.h"
 #include "builders/registry.h"
 #include "core/build_input.h"
@@ -25,45 +25,6 @@ namespace {
 Bvh build_binned(std::span<const Triangle> triangles) {
   const BuilderInfo& b = find_builder("binned_sah");
   return b.build(BuildInput::from_triangles(triangles), resolve_params(b.name, b.params, {}));
-}
-
-// A wide tree from a binary one, for the test only: each node takes its children's children in place
-// of the inner child with the largest box until it has `arity` children or only leaves (the usual
-// collapse, e.g. Wald et al. 2008, "Getting Rid of Packets"). Leaves are copied as they are.
-Bvh collapse(const Bvh& binary, uint32_t arity) {
-  Bvh wide;
-  wide.arity = arity;
-  wide.prim_refs = binary.prim_refs;
-  wide.nodes.push_back(binary.nodes[0]);
-  std::deque<std::pair<uint32_t, uint32_t>> todo{{0, 0}};  // (wide index, binary index)
-  while (!todo.empty()) {
-    const auto [w, b] = todo.front();
-    todo.pop_front();
-    const Node& source = binary.nodes[b];
-    if (source.is_leaf()) continue;
-    std::vector<uint32_t> children{source.first, source.first + 1};
-    for (;;) {
-      if (children.size() >= arity) break;
-      auto widest = children.end();
-      for (auto it = children.begin(); it != children.end(); ++it)
-        if (!binary.nodes[*it].is_leaf() &&
-            (widest == children.end() ||
-             binary.nodes[*it].bounds.half_area() > binary.nodes[*widest].bounds.half_area()))
-          widest = it;
-      if (widest == children.end() || children.size() + binary.nodes[*widest].child_count - 1 > arity) break;
-      const Node inner = binary.nodes[*widest];
-      children.erase(widest);
-      for (uint32_t c = 0; c < inner.child_count; ++c) children.push_back(inner.first + c);
-    }
-    const auto first = static_cast<uint32_t>(wide.nodes.size());
-    wide.nodes[w].first = first;
-    wide.nodes[w].child_count = static_cast<uint16_t>(children.size());
-    for (uint32_t c : children) {
-      todo.emplace_back(static_cast<uint32_t>(wide.nodes.size()), c);
-      wide.nodes.push_back(binary.nodes[c]);
-    }
-  }
-  return wide;
 }
 
 // Boxes after a refit are exactly the union of what they hold (validate checks only containment).
@@ -95,7 +56,7 @@ TEST(Refit, DeformingWaveOverSeveralFramesForArities2To8) {
   const std::vector<Triangle> first = generate_wave(wave, 0.0);
   const Bvh binary = build_binned(first);
   for (uint32_t arity : {2u, 4u, 8u}) {
-    Bvh bvh = arity == 2 ? binary : collapse(binary, arity);
+    Bvh bvh = arity == 2 ? binary : collapse_greedy(binary, arity);
     ASSERT_TRUE(validate(bvh, std::span<const Triangle>(first)).ok()) << "collapse to " << arity;
     uint32_t widest = 0;
     for (const Node& n : bvh.nodes) widest = std::max<uint32_t>(widest, n.child_count);
@@ -115,6 +76,21 @@ TEST(Refit, DeformingWaveOverSeveralFramesForArities2To8) {
       expect_hits_match(bvh, moved, 17 + arity);
     }
   }
+}
+
+TEST(Refit, WideBuiltTreeOnTheWave) {
+  const WaveParams wave{3000, 8, 0.15, 4};
+  const std::vector<Triangle> first = generate_wave(wave, 0.0);
+  const BuilderInfo& b = find_builder("wide_binned_sah");
+  const ParamSet params = resolve_params(b.name, b.params, {{"arity", "8"}});
+  Bvh bvh = b.build(BuildInput::from_triangles(first), params);
+  ASSERT_EQ(bvh.arity, 8u);
+  const std::vector<Triangle> moved = generate_wave(wave, 0.6);
+  refit(bvh, moved);
+  const ValidationReport report = validate(bvh, std::span<const Triangle>(moved));
+  ASSERT_TRUE(report.ok()) << report.summary();
+  expect_tight(bvh, moved);
+  expect_hits_match(bvh, moved, 23);
 }
 
 TEST(Refit, OnTheBuildPositionsReproducesTheBuiltBoxes) {

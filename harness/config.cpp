@@ -288,6 +288,35 @@ void read_repetitions(const Source& src, const toml::node& node, Repetitions& re
   read("trace_warmup", 0, reps.trace_warmup);
 }
 
+// [animation]: the frames of an animation experiment, as a count or as explicit times.
+void read_animation(const Source& src, const toml::node& node, ExperimentConfig& config) {
+  const auto& table = as_table(src, node, "[animation]");
+  check_keys(src, table, "[animation]", {"frames", "times"});
+  AnimationConfig animation;
+  const auto* frames = table.get("frames");
+  const auto* times = table.get("times");
+  if (frames && times) src.fail(*times, "animation.times and animation.frames exclude each other: give one");
+  if (frames) animation.frames = static_cast<uint32_t>(read_int(src, *frames, "animation.frames", 1, kMaxFrames));
+  if (times) {
+    const std::string must = "animation.times must be a list of numbers (seconds)";
+    const toml::node* previous = nullptr;
+    for (const auto& item : read_list(src, *times, "animation.times", "numbers")) {
+      if (!item.is_number()) src.fail(item, must + ", not contain " + type_name(item));
+      const double t = item.is_integer() ? double(item.as_integer()->get()) : item.as_floating_point()->get();
+      if (!std::isfinite(t)) src.fail(item, "animation.times: " + param_text(src, item, "times") + " is not finite");
+      if (previous && t <= animation.times.back())
+        src.fail(item, "animation.times must increase: " + param_text(src, item, "times") + " follows " +
+                           param_text(src, *previous, "times"));
+      animation.times.push_back(t);
+      previous = &item;
+    }
+    if (animation.times.size() > kMaxFrames)
+      src.fail(*times, "animation.times lists more than " + std::to_string(kMaxFrames) + " times");
+    animation.frames = static_cast<uint32_t>(animation.times.size());
+  }
+  config.animation = std::move(animation);
+}
+
 // The tables of an array of tables ([[key]]); `key = {...}` or anything else is an error.
 std::vector<const toml::table*> read_table_array(const Source& src, const toml::node& node,
                                                  const std::string& key) {
@@ -306,7 +335,7 @@ struct SweepKey {
 };
 
 // Expands one [[builder]] table into its runs, checking every value against the builder's declaration.
-std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table) {
+std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table, bool animation) {
   const auto* name_node = table.get("name");
   if (!name_node) src.fail(table, "[[builder]] has no name (name = \"...\")");
   const std::string name = read_string(src, *name_node, "builder.name");
@@ -339,6 +368,9 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
     }
     for (const auto& [text, at] : sweep.values) {
       try {
+        if (embree && text == "refit" && !animation)
+          throw Error("Embree quality 'refit' applies only to animation experiments (an [animation] table); "
+                      "a static experiment takes low, medium, high");
         if (embree)
           parse_embree_quality(text);
         else
@@ -380,12 +412,13 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
 }
 
 void read_builders(const Source& src, const toml::table& root, ExperimentConfig& config) {
+  const bool animation = config.animation.has_value();
   const auto* node = root.get("builder");
   if (!node) src.fail(1, "no [[builder]] table: at least one builder is needed");
   // Runs that would measure the same thing twice, keyed by builder and resolved values, with their line.
   std::map<std::string, std::pair<std::string, uint32_t>> seen;
   for (const toml::table* table : read_table_array(src, *node, "builder")) {
-    for (auto& run : read_builder(src, *table)) {
+    for (auto& run : read_builder(src, *table, animation)) {
       std::string resolved = run.name + ":";
       if (run.is_embree()) {
         resolved += run.params.front().second;
@@ -494,12 +527,14 @@ ExperimentConfig parse_experiment_config(std::string_view toml_text, const std::
     throw Error(source_name + ":" + std::to_string(std::max<uint32_t>(at.line, 1)) + ":" +
                 std::to_string(at.column) + ": TOML syntax error: " + std::string(e.description()));
   }
-  check_keys(src, root, "the top level", {"experiment", "repetitions", "builder", "ray_set"});
+  check_keys(src, root, "the top level", {"experiment", "repetitions", "builder", "ray_set", "animation"});
 
   ExperimentConfig config;
   config.path = source_name;
   read_experiment(src, root, config);
   if (const auto* node = root.get("repetitions")) read_repetitions(src, *node, config.reps);
+  // Before the builders: Embree's "refit" quality is valid only in an animation experiment.
+  if (const auto* node = root.get("animation")) read_animation(src, *node, config);
   read_builders(src, root, config);
   read_ray_sets(src, root, config);
   return config;

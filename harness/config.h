@@ -23,6 +23,10 @@
 //   trace = 5
 //   trace_warmup = 1
 //
+//   [animation]                       # optional: makes this an animation experiment (see below)
+//   frames = 10                       # frames evenly spaced over each scene's animation (default 10)
+//   # times = [0.0, 0.5, 1.0]         # instead of frames: these times in seconds, increasing
+//
 //   [[builder]]                       # one table per builder; at least one
 //   name = "binned_sah"               # a registered builder, or "embree" (rtcCommitScene's own BVH)
 //   bins = [8, 16, 32]                # any parameter given as a list expands into a sweep
@@ -30,7 +34,8 @@
 //
 //   [[builder]]
 //   name = "embree"
-//   quality = ["medium", "high"]      # embree takes only quality: low | medium (default) | high
+//   quality = ["medium", "high"]      # embree takes only quality: low | medium (default) | high, and
+//                                     # refit in animation experiments
 //
 //   [[ray_set]]                       # one table per ray set; at least one
 //   kind = "primary"                  # primary | shadow | diffuse | ao | random
@@ -60,11 +65,18 @@
 // resolve to the same builder and parameter values (e.g. `bins = 16` next to the default) are an error,
 // as are sweeps of more than kMaxSweepRuns runs.
 //
+// Animation experiments (an [animation] table; harness/animation_runner.h): every scene that is animated
+// (a glTF file with an animation, proc:wave) is measured frame by frame; static scenes are skipped with
+// a message. Each of our builders gives two rows per frame and cell: the tree built on the first frame
+// and refitted to this one (builder "refit(NAME)"), and a fresh build (builder NAME); `embree` with
+// quality refit is Embree's own refit (a dynamic scene recommitted per frame), other qualities rebuild.
+//
 // Every error is a sahbench::Error whose message starts with "<file>:<line>:" (for a key, the line of
 // its value; for a missing key, the line of its table; for a missing table, line 1).
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -117,6 +129,18 @@ struct RaySetConfig {
   bool operator==(const RaySetConfig&) const = default;
 };
 
+/// Most frames an animation experiment may sample: a guard against a typo, as every frame is a full set
+/// of builds and traces per builder (10,000 frames are close to three minutes of animation at 60 Hz).
+inline constexpr uint32_t kMaxFrames = 10000;
+
+/// The frames of an animation experiment: `frames` times evenly spaced over each scene's animation
+/// (AnimatedScene::frame_times), or the explicit `times` (seconds, increasing; then frames is their count).
+struct AnimationConfig {
+  uint32_t frames = 10;
+  std::vector<double> times;
+  bool operator==(const AnimationConfig&) const = default;
+};
+
 /// Timed repetitions (at least 1) and untimed warm-up runs before them (at least 0).
 struct Repetitions {
   int build = 5, build_warmup = 1, trace = 5, trace_warmup = 1;
@@ -146,6 +170,8 @@ struct ExperimentConfig {
   Repetitions reps;
   ReferencePolicy reference = ReferencePolicy::kAuto;
   uint64_t brute_force_max_triangles = 20000;
+  /// Present for an animation experiment ([animation] table).
+  std::optional<AnimationConfig> animation;
 
   bool operator==(const ExperimentConfig&) const = default;
 };

@@ -1,6 +1,7 @@
 #include "harness/embree_scene.h"
 
 #include <chrono>
+#include <cstring>
 #include <string>
 
 #include "core/error.h"
@@ -27,7 +28,8 @@ EmbreeQuality parse_embree_quality(std::string_view text) {
   if (text == "low") return EmbreeQuality::kLow;
   if (text == "medium") return EmbreeQuality::kMedium;
   if (text == "high") return EmbreeQuality::kHigh;
-  throw Error("Embree quality '" + std::string(text) + "' is not one of low, medium, high");
+  if (text == "refit") return EmbreeQuality::kRefit;
+  throw Error("Embree quality '" + std::string(text) + "' is not one of low, medium, high, refit");
 }
 
 RTCBuildQuality to_rtc(EmbreeQuality quality) {
@@ -35,6 +37,7 @@ RTCBuildQuality to_rtc(EmbreeQuality quality) {
     case EmbreeQuality::kLow: return RTC_BUILD_QUALITY_LOW;
     case EmbreeQuality::kMedium: return RTC_BUILD_QUALITY_MEDIUM;
     case EmbreeQuality::kHigh: return RTC_BUILD_QUALITY_HIGH;
+    case EmbreeQuality::kRefit: return RTC_BUILD_QUALITY_REFIT;
   }
   return RTC_BUILD_QUALITY_MEDIUM;
 }
@@ -44,6 +47,7 @@ std::string to_string(EmbreeQuality quality) {
     case EmbreeQuality::kLow: return "low";
     case EmbreeQuality::kMedium: return "medium";
     case EmbreeQuality::kHigh: return "high";
+    case EmbreeQuality::kRefit: return "refit";
   }
   return "?";
 }
@@ -101,12 +105,15 @@ EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangl
     }
   } guard{scene_};
 
+  // Refit needs the two-level mode: a dynamic scene of low scene quality (see the class comment).
+  const bool refit = quality == EmbreeQuality::kRefit;
+  if (refit) options_.dynamic = true;
   int flags = RTC_SCENE_FLAG_NONE;
-  if (options.robust) flags |= RTC_SCENE_FLAG_ROBUST;
-  if (options.dynamic) flags |= RTC_SCENE_FLAG_DYNAMIC;
+  if (options_.robust) flags |= RTC_SCENE_FLAG_ROBUST;
+  if (options_.dynamic) flags |= RTC_SCENE_FLAG_DYNAMIC;
   rtcSetSceneFlags(scene_, static_cast<RTCSceneFlags>(flags));
   const RTCBuildQuality q = to_rtc(quality);
-  rtcSetSceneBuildQuality(scene_, q);
+  rtcSetSceneBuildQuality(scene_, refit ? RTC_BUILD_QUALITY_LOW : q);
   RTCGeometry geometry = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetGeometryBuildQuality(geometry, q);
   const std::size_t n = triangles.size();
@@ -133,8 +140,10 @@ EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangl
   }
   rtcCommitGeometry(geometry);
   rtcAttachGeometry(scene_, geometry);
-  rtcReleaseGeometry(geometry);
+  rtcReleaseGeometry(geometry);  // the scene keeps it alive
   device.check("geometry set-up");
+  geometry_ = geometry;
+  vertices_ = vertices;
 
   const int64_t before = device.bytes();
   const auto start = std::chrono::steady_clock::now();
@@ -146,5 +155,21 @@ EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangl
 }
 
 EmbreeScene::~EmbreeScene() { rtcReleaseScene(scene_); }
+
+double EmbreeScene::update_vertices(std::span<const Triangle> triangles) {
+  if (triangles.size() != triangle_count_)
+    throw Error("Embree: update_vertices got " + std::to_string(triangles.size()) + " triangles for a scene of " +
+                std::to_string(triangle_count_));
+  // Triangle is three packed Vec3, the layout of the RTC_FORMAT_FLOAT3 buffer of 3n vertices.
+  static_assert(sizeof(Triangle) == 9 * sizeof(float));
+  if (!triangles.empty()) std::memcpy(vertices_, triangles.data(), triangles.size() * sizeof(Triangle));
+  const auto start = std::chrono::steady_clock::now();
+  rtcUpdateGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0);
+  rtcCommitGeometry(geometry_);
+  rtcCommitScene(scene_);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  device_->check("rtcCommitScene after a vertex update");
+  return ms;
+}
 
 }  // namespace sahbench

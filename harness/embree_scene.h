@@ -16,9 +16,11 @@
 
 namespace sahbench {
 
-enum class EmbreeQuality { kLow, kMedium, kHigh };
+/// kRefit: a scene made to be refitted when its vertices move (EmbreeScene::update_vertices); its first
+/// commit builds as usual.
+enum class EmbreeQuality { kLow, kMedium, kHigh, kRefit };
 
-/// "low", "medium" or "high"; anything else is an error naming the value.
+/// "low", "medium", "high" or "refit"; anything else is an error naming the value.
 EmbreeQuality parse_embree_quality(std::string_view text);
 std::string to_string(EmbreeQuality quality);
 
@@ -80,6 +82,14 @@ struct EmbreeSceneOptions {
 /// A committed Embree scene of one triangle geometry. The vertex data is copied (Embree reads 16 bytes
 /// past the last vertex, so the buffer is padded) and indices are 0..3n-1, so Embree's primID is the
 /// scene triangle index.
+///
+/// EmbreeQuality::kRefit makes a scene that Embree refits: Embree 3 honours a geometry's build quality
+/// (RTC_BUILD_QUALITY_REFIT here) only in its two-level mode, which it uses for a scene with
+/// RTC_SCENE_FLAG_DYNAMIC and scene build quality RTC_BUILD_QUALITY_LOW (rtcSetGeometryBuildQuality(3):
+/// "Embree currently uses the per-geometry build quality when the scene build quality is set to
+/// RTC_BUILD_QUALITY_LOW"). With any other scene quality it silently rebuilds on every commit (measured:
+/// the "refit" then takes as long as a rebuild). The constructor sets all three; options.dynamic is
+/// implied.
 class EmbreeScene {
  public:
   EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangles, EmbreeQuality quality,
@@ -95,11 +105,20 @@ class EmbreeScene {
   double commit_ms() const { return commit_ms_; }   ///< time of rtcCommitScene alone
   int64_t bytes() const { return bytes_; }          ///< Embree's bytes after the commit, buffers excluded
 
+  /// Moves the vertices to `triangles` (same count and order as at construction) and recommits: copies
+  /// them into Embree's vertex buffer, then rtcUpdateGeometryBuffer, rtcCommitGeometry and
+  /// rtcCommitScene. Returns the milliseconds of those three calls (the copy is not timed: it stands
+  /// for the application's own vertex update). A kRefit scene refits; any other rebuilds. Throws Error
+  /// for a different triangle count or an Embree error.
+  double update_vertices(std::span<const Triangle> triangles);
+
  private:
   EmbreeDevice* device_;
   EmbreeSceneOptions options_;
   std::size_t triangle_count_ = 0;
   RTCScene scene_ = nullptr;
+  RTCGeometry geometry_ = nullptr;  // owned by scene_
+  float* vertices_ = nullptr;       // Embree's vertex buffer
   double commit_ms_ = 0.0;
   int64_t bytes_ = 0;
 };

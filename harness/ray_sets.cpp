@@ -91,21 +91,13 @@ struct Hitpoint {
 };
 
 std::vector<Ray> primary_rays(const Scene& scene, const RaySetConfig& cfg, const Aabb& box) {
-  constexpr float kAutoFovY = 45.0f * std::numbers::pi_v<float> / 180.0f;
-  const Vec3 kAutoDirection = normalize(Vec3{1.0f, 0.6f, 1.4f});
-  Vec3 eye, forward, up{0, 1, 0};
-  float fov_y = kAutoFovY;
-  if (scene.camera) {
-    eye = scene.camera->position;
-    forward = normalize(scene.camera->forward);
-    up = normalize(scene.camera->up);
-    fov_y = scene.camera->yfov;
-  } else {
-    const float radius = 0.5f * length(box.extent());
-    const float distance = radius / std::sin(0.5f * fov_y);
-    eye = box.center() + kAutoDirection * distance;
-    forward = -kAutoDirection;
-  }
+  // A file's camera is normalised here; the automatic one is unit already (and normalising it again
+  // could change its last bits, and with them every ray).
+  const Camera camera = scene.camera ? *scene.camera : automatic_camera(box);
+  const Vec3 eye = camera.position;
+  const Vec3 forward = scene.camera ? normalize(camera.forward) : camera.forward;
+  const Vec3 up = scene.camera ? normalize(camera.up) : camera.up;
+  const float fov_y = camera.yfov;
   const Vec3 right = normalize(cross(forward, up));
   const Vec3 true_up = cross(right, forward);
   const float aspect = static_cast<float>(cfg.width) / static_cast<float>(cfg.height);
@@ -141,6 +133,14 @@ std::vector<Hitpoint> primary_hits(const Scene& scene, std::span<const Ray> rays
 }
 
 }  // namespace
+
+Camera automatic_camera(const Aabb& box) {
+  constexpr float kAutoFovY = 45.0f * std::numbers::pi_v<float> / 180.0f;
+  const Vec3 kAutoDirection = normalize(Vec3{1.0f, 0.6f, 1.4f});
+  const float radius = 0.5f * length(box.extent());
+  const float distance = radius / std::sin(0.5f * kAutoFovY);
+  return Camera{box.center() + kAutoDirection * distance, -kAutoDirection, Vec3{0, 1, 0}, kAutoFovY};
+}
 
 std::string to_string(RayKind kind) {
   switch (kind) {

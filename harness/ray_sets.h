@@ -39,6 +39,11 @@ struct GeneratedRaySets {
 /// reason rather than generated empty.
 GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetConfig> configs, uint64_t seed);
 
+/// The automatic framing of `box` described above (45-degree vertical field of view, from the direction
+/// (1, 0.6, 1.4), y up, the box's bounding sphere filling the view); primary rays use it for a scene
+/// without a camera. Its `up` is (0, 1, 0), not yet orthogonalised against the view direction.
+Camera automatic_camera(const Aabb& box);
+
 /// The automatic point lights: `count` points in the top tenth of the scene box, spread over its middle
 /// 80% horizontally (y up), deterministic from the seed.
 std::vector<Vec3> automatic_lights(const Scene& scene, uint32_t count, uint64_t seed);

@@ -16,6 +16,7 @@
 #include "core/bvh_stats.h"
 #include "core/error.h"
 #include "core/validate.h"
+#include "harness/animation_runner.h"
 #include "harness/config.h"
 #include "harness/csv.h"
 #include "harness/embree_scene.h"
@@ -550,8 +551,13 @@ std::string cell_key(const std::string& scene, const std::string& builder, const
   return fmt::format("{}|{}|{}|{}|{}|{}|{}", scene, builder, params, layout, threads, ray_set, frame);
 }
 
+std::vector<std::string> result_columns() {
+  return all_columns();
+}
+
 int run_experiment(const RunOptions& options, std::ostream& log) {
   const ExperimentConfig cfg = load_experiment_config(options.config);
+  if (cfg.animation) return run_animation_experiment(cfg, options, log);
   return ExperimentRunner(cfg, options, log).run();
 }
 

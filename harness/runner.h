@@ -6,6 +6,7 @@
 #include <iosfwd>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace sahbench {
 
@@ -16,9 +17,14 @@ struct RunOptions {
   std::optional<std::filesystem::path> output;  ///< overrides the config's output path
 };
 
-/// Runs the experiment. Returns 0, or 1 when a tree failed validation (its cells are still written, with
+/// Runs the experiment (an animation experiment, with an [animation] table, through
+/// run_animation_experiment). Returns 0, or 1 when a tree failed validation (its cells are still written, with
 /// the failure in `notes`). Bad input throws sahbench::Error.
 int run_experiment(const RunOptions& options, std::ostream& log);
+
+/// The CSV columns of a run: DESIGN.md's, then config, seed, scene_source, scene_removed, query,
+/// embree_version, notes.
+std::vector<std::string> result_columns();
 
 /// The key that identifies a cell, in the form `scene|builder|builder_params|layout|threads|ray_set|frame`,
 /// the same from a planned cell and from a CSV row; --only matches against it.

@@ -5,6 +5,7 @@
 
 #include "scenes/generators.h"
 #include "scenes/triangle_filter.h"
+#include "scenes/wave.h"
 
 namespace sahbench {
 
@@ -31,6 +32,11 @@ const std::vector<ProcKindInfo>& kinds() {
       {"multiscale",
        "tiny spheres (edges ~1e-3) in [-1,1]^3 inside a huge enclosing cube",
        {kTris, kSeed, {"outer", ProcParamType::kReal, 1000, 2, 1e30, "half-size of the enclosing cube"}}},
+      {"wave",
+       "animated: Gerstner-wave sheet over [-1,1]^2, looping over t in [0, 1] s (the static scene is t = 0)",
+       {kTris, kSeed,
+        {"amplitude", ProcParamType::kReal, 0.1, 0, 10, "height of a wave of wavelength 1"},
+        {"waves", ProcParamType::kInteger, 4, 1, 64, "Gerstner waves summed"}}},
   };
   return table;
 }
@@ -43,6 +49,7 @@ std::vector<Triangle> generate(const ProcSpec& spec) {
   if (kind == "terrain") return generate_terrain(tris, seed, static_cast<int>(spec.integer("octaves")));
   if (kind == "soup") return generate_soup(tris, seed);
   if (kind == "needles") return generate_needles(tris, seed, spec.real("aspect"));
+  if (kind == "wave") return generate_wave(wave_params(spec), 0.0);
   return generate_multiscale(tris, seed, spec.real("outer"));  // the parser admits only table kinds
 }
 
@@ -56,12 +63,21 @@ std::span<const ProcKindInfo> procedural_kinds() {
   return kinds();
 }
 
+bool is_animated_kind(std::string_view kind) {
+  return kind == "wave";
+}
+
+WaveParams wave_params(const ProcSpec& spec) {
+  return {spec.integer("tris"), spec.integer("seed"), spec.real("amplitude"), static_cast<int>(spec.integer("waves"))};
+}
+
 Scene generate_procedural(std::string_view spec) {
   const ProcSpec parsed = parse_proc_spec(spec, kinds());
   Scene scene;
   scene.name = std::string(spec);
   scene.source = parsed.normalised();
   TriangleFilter(scene).add_all(generate(parsed));
+  scene.animated = is_animated_kind(parsed.kind());
   return scene;
 }
 

@@ -35,9 +35,11 @@ struct Scene {
   RemovedTriangles removed;
   std::optional<Camera> camera;    ///< the file's first perspective camera, if any
   std::vector<Vec3> lights;        ///< positions of the file's point and spot lights (KHR_lights_punctual)
-  /// What the scene declares: animated when the file has animations (glTF), static otherwise. The
-  /// triangles are the static pose (node transforms, no skinning); per-frame positions come with
-  /// animation evaluation, and the harness runs frame-dependent cells (refit) only on animated scenes.
+  /// What the scene declares: animated when the file has animations (glTF) or the procedural kind moves
+  /// (proc:wave), static otherwise. The triangles are the static pose (node transforms, no skinning or
+  /// morphing; proc:wave at t = 0); per-frame positions come from load_animated (scenes/animation.h), with
+  /// the same triangles in the same order, and the harness runs frame-dependent cells (refit) only on
+  /// animated scenes.
   bool animated = false;
 };
 

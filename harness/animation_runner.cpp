@@ -1,0 +1,715 @@
+#include "harness/animation_runner.h"
+
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <map>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <set>
+
+#include "builders/refit.h"
+#include "builders/registry.h"
+#include "core/bvh_stats.h"
+#include "core/error.h"
+#include "core/validate.h"
+#include "harness/csv.h"
+#include "harness/embree_scene.h"
+#include "harness/embree_trace.h"
+#include "harness/environment.h"
+#include "harness/layout.h"
+#include "harness/memory_tracker.h"
+#include "harness/ray_sets.h"
+#include "harness/timing.h"
+#include "scenes/animation.h"
+#include "scenes/load.h"
+#include "scenes/proc_spec.h"
+#include "scenes/procedural.h"
+#include "scenes/scene_path.h"
+#include "traversal/brute_force.h"
+#include "traversal/hit_compare.h"
+
+namespace sahbench {
+namespace {
+
+// Embree's own BVH traced through its own API, one ray at a time or in packets (as in runner.cpp).
+struct EmbreeLayout {
+  const char* name;
+  int packet_width;  // 1: rtcIntersect1 / rtcOccluded1
+};
+constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 8}, {"embree_16", 16}};
+
+// What a cell's tree is.
+enum class Variant {
+  kRebuild,        // one of our builders, built on this frame
+  kRefit,          // one of our builders, built on the first frame and refitted to this one
+  kEmbreeRebuild,  // rtcCommitScene on this frame
+  kEmbreeRefit,    // Embree's refit of its first-frame build
+};
+
+struct AnimatedBuilder {
+  Variant variant = Variant::kRebuild;
+  std::string name;                   // the CSV builder column: "binned_sah", "refit(binned_sah)", "embree"
+  std::string label;                  // for the log: the config's label, "refit(...)" around it for refits
+  const BuilderInfo* info = nullptr;  // ours
+  ParamSet params;                    // ours
+  uint32_t arity = 2;                 // ours: of its trees; traced only with layouts of that arity
+  EmbreeQuality quality = EmbreeQuality::kMedium;
+  std::string params_text;  // the CSV builder_params column
+
+  bool is_embree() const { return variant == Variant::kEmbreeRebuild || variant == Variant::kEmbreeRefit; }
+};
+
+// Each of our builder runs becomes a rebuild and a refit; Embree runs stay one (refit by quality).
+std::vector<AnimatedBuilder> expand_builders(const ExperimentConfig& cfg) {
+  std::vector<AnimatedBuilder> out;
+  for (const auto& run : cfg.builders) {
+    AnimatedBuilder b;
+    if (run.is_embree()) {
+      std::string quality = "medium";
+      for (const auto& [k, v] : run.params)
+        if (k == "quality") quality = v;
+      b.quality = parse_embree_quality(quality);
+      b.variant = b.quality == EmbreeQuality::kRefit ? Variant::kEmbreeRefit : Variant::kEmbreeRebuild;
+      b.name = "embree";
+      b.label = run.label();
+      b.params_text = "quality=" + quality;
+      out.push_back(std::move(b));
+      continue;
+    }
+    b.info = &find_builder(run.name);
+    b.params = resolve_params(b.info->name, b.info->params, run.params);
+    b.params_text = b.params.to_string();
+    b.arity = b.info->arity ? b.info->arity(b.params) : 2;
+    const bool traceable = std::any_of(cfg.layouts.begin(), cfg.layouts.end(), [&](const std::string& l) {
+      return find_layout(parse_layout_spec(l).name).arity == b.arity;
+    });
+    if (!traceable)
+      throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
+                  "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
+    b.variant = Variant::kRebuild;
+    b.name = run.name;
+    b.label = run.label();
+    out.push_back(b);
+    b.variant = Variant::kRefit;
+    b.name = "refit(" + run.name + ")";
+    b.label = "refit(" + run.label() + ")";
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
+// The reference answers for one ray set: closest hits, or occlusion flags for any-hit sets.
+struct Reference {
+  std::string name = "none";
+  std::vector<Hit> hits;
+  std::vector<uint8_t> occluded;
+};
+
+// One frame's triangles, rays and reference answers, shared by every cell of the frame.
+struct FrameData {
+  uint32_t index = 0;
+  double time = 0.0;
+  Scene scene;  // the frame's triangles, with the camera fixed for the whole animation
+  float diagonal = 1.0f;
+  std::vector<RaySet> sets;
+  std::vector<std::pair<std::string, std::string>> skipped;  // ray sets that do not apply, with why
+  std::vector<Reference> references;
+};
+
+std::string now_stamp() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
+  return buf;
+}
+
+std::string format_duration(double seconds) {
+  const auto s = static_cast<long>(std::lround(seconds));
+  return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
+}
+
+// mem_bytes per scene triangle (as runner.cpp writes it).
+std::string bytes_per_triangle(std::size_t bytes, const Scene& scene) {
+  if (scene.triangles.empty()) return "";
+  return fmt::format("{:.2f}", static_cast<double>(bytes) / static_cast<double>(scene.triangles.size()));
+}
+
+Aabb bounds_of(std::span<const Triangle> triangles) {
+  Aabb box;
+  for (const auto& t : triangles) box.extend(t.bounds());
+  return box;
+}
+
+class AnimationRunner {
+ public:
+  AnimationRunner(const ExperimentConfig& cfg, const RunOptions& options, std::ostream& log)
+      : cfg_(cfg),
+        options_(options),
+        log_(log),
+        env_(current_environment()),
+        builders_(expand_builders(cfg)),
+        output_(options.output ? *options.output : cfg.output),
+        run_id_(cfg.name + "-" + now_stamp()) {}
+
+  int run() {
+    CsvWriter csv(output_, animation_columns());
+    if (csv.dropped_partial_row())
+      log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
+    if (options_.resume) {
+      for (const auto& row : read_csv(output_)) {
+        finished_.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"),
+                                  row.at("layout"), std::stoi(row.at("threads")), row.at("ray_set"),
+                                  std::stoi(row.at("frame"))));
+        if (row.at("config") == cfg_.path.string()) run_id_ = row.at("run_id");
+      }
+      log_ << fmt::format("resume: {} finished cells in {}\n", finished_.size(), output_.string());
+    }
+    check_packet_support();
+
+    // Scenes are loaded one at a time; the plan counts cells as each scene's frames become known.
+    log_ << fmt::format("run {}: animation experiment, {} frames per scene; writing {}\n", run_id_,
+                        cfg_.animation->frames, output_.string());
+    start_ = std::chrono::steady_clock::now();
+    for (const auto& name : scenes_to_run()) run_scene(name, csv);
+    log_ << fmt::format("done in {}; rows in {}\n", format_duration(elapsed_s()), output_.string());
+    print_summary();
+    return exit_code_;
+  }
+
+ private:
+  double elapsed_s() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+  void check_packet_support() {
+    EmbreeDevice probe(1);
+    for (const auto& l : kEmbreeLayouts) {
+      if (l.packet_width == 1 || embree_packets_supported(probe, l.packet_width)) {
+        embree_layouts_.push_back(l);
+      } else {
+        log_ << fmt::format("skipping layout {}: Embree has no native {}-wide packets on this CPU\n", l.name,
+                            l.packet_width);
+      }
+    }
+  }
+
+  // Required scenes must exist before the first cell runs; optional ones are skipped when absent.
+  std::vector<std::string> scenes_to_run() {
+    for (const auto& name : cfg_.scenes) {
+      if (is_procedural_spec(name)) {
+        parse_proc_spec(name, procedural_kinds());
+      } else if (!std::filesystem::is_regular_file(name) && !find_scene_file(name)) {
+        load_scene(name);  // throws the loader's error, which names the scene and the search path
+      }
+    }
+    std::vector<std::string> out = cfg_.scenes;
+    for (const auto& name : cfg_.optional_scenes) {
+      if (find_scene_file(name)) {
+        out.push_back(name);
+      } else {
+        log_ << fmt::format("skipping optional scene '{}': not found on the scene search path\n", name);
+      }
+    }
+    return out;
+  }
+
+  std::vector<std::string> layouts_for(const AnimatedBuilder& b) const {
+    std::vector<std::string> out;
+    if (b.is_embree()) {
+      for (const auto& l : embree_layouts_) out.push_back(l.name);
+    } else {
+      for (const auto& l : cfg_.layouts)
+        if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
+    }
+    return out;
+  }
+
+  bool wanted(const std::string& scene, const AnimatedBuilder& b, const std::string& layout, int threads,
+              const std::string& ray_set, uint32_t frame) const {
+    const std::string key =
+        cell_key(scene, b.name, b.params_text, layout, threads, ray_set, static_cast<int>(frame));
+    if (finished_.count(key)) return false;
+    return options_.only.empty() || key.find(options_.only) != std::string::npos;
+  }
+
+  // Cells of `frame` still to run, over every builder, layout, thread count and configured ray set.
+  std::size_t pending_in_frame(const std::string& scene, uint32_t frame) const {
+    std::size_t n = 0;
+    for (const auto& b : builders_)
+      for (const auto& layout : layouts_for(b))
+        for (int threads : cfg_.threads)
+          for (const auto& rs : cfg_.ray_sets) n += wanted(scene, b, layout, threads, rs.name, frame);
+    return n;
+  }
+
+  void run_scene(const std::string& name, CsvWriter& csv) {
+    AnimatedScene animated;
+    const double load_ms = time_ms([&] { animated = load_animated(name); });
+    if (!animated.animated()) {
+      log_ << fmt::format("skipping scene {}: static (animation experiments run only on animated scenes)\n",
+                          name);
+      return;
+    }
+    const std::vector<double> times =
+        cfg_.animation->times.empty() ? animated.frame_times(cfg_.animation->frames) : cfg_.animation->times;
+    log_ << fmt::format(
+        "scene {}: {} triangles ({} removed), animated over [{:.4g}, {:.4g}] s, {} frames, from {} in "
+        "{:.0f} ms\n",
+        name, animated.scene.triangles.size(), animated.scene.removed.total(), animated.start, animated.end,
+        times.size(), animated.scene.source, load_ms);
+
+    std::vector<std::size_t> pending(times.size());
+    std::size_t total = 0;
+    for (uint32_t f = 0; f < times.size(); ++f) total += pending[f] = pending_in_frame(name, f);
+    planned_ += total;
+    if (total == 0) return;
+
+    // One camera for every frame: the file's, else the automatic framing of all frames together.
+    std::vector<Triangle> triangles;
+    std::optional<Camera> camera = animated.scene.camera;
+    if (!camera) {
+      Aabb all;
+      for (double t : times) {
+        animated.positions_at(t, triangles);
+        all.extend(bounds_of(triangles));
+      }
+      camera = automatic_camera(all);
+    }
+
+    // Our trees of the first frame, refitted in place to every later frame. Trees are the same for any
+    // thread count, so one per builder run serves all.
+    std::vector<Triangle> first;
+    animated.positions_at(times.front(), first);
+    std::map<std::size_t, Bvh> refit_trees;
+    for (std::size_t i = 0; i < builders_.size(); ++i)
+      if (builders_[i].variant == Variant::kRefit)
+        refit_trees[i] = builders_[i].info->build(BuildInput::from_triangles(first), builders_[i].params);
+
+    for (uint32_t f = 0; f < times.size(); ++f) {
+      if (pending[f] == 0) continue;
+      FrameData frame = make_frame(animated, f, times[f], *camera);
+      for (const auto& [set, reason] : frame.skipped)
+        log_ << fmt::format("scene {} frame {}: skipping ray set '{}': {}\n", name, f, set, reason);
+      for (int threads : cfg_.threads) {
+        const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                        static_cast<std::size_t>(threads));
+        for (std::size_t i = 0; i < builders_.size(); ++i) {
+          const AnimatedBuilder& b = builders_[i];
+          bool any = false;
+          for (const auto& layout : layouts_for(b))
+            for (const auto& rs : frame.sets) any |= wanted(name, b, layout, threads, rs.name, f);
+          if (!any) continue;
+          switch (b.variant) {
+            case Variant::kRebuild:
+              run_rebuild(frame, b, threads, csv);
+              break;
+            case Variant::kRefit:
+              run_refit(frame, b, threads, refit_trees.at(i), csv);
+              break;
+            case Variant::kEmbreeRebuild:
+            case Variant::kEmbreeRefit:
+              run_embree(frame, b, threads, first, csv);
+              break;
+          }
+        }
+      }
+    }
+  }
+
+  FrameData make_frame(const AnimatedScene& animated, uint32_t index, double time, const Camera& camera) {
+    FrameData frame;
+    frame.index = index;
+    frame.time = time;
+    frame.scene = animated.scene;
+    frame.scene.camera = camera;
+    animated.positions_at(time, frame.scene.triangles);
+    const Aabb box = bounds_of(frame.scene.triangles);
+    frame.diagonal = box.is_empty() ? 1.0f : length(box.extent());
+    GeneratedRaySets generated = generate_ray_sets(frame.scene, cfg_.ray_sets, cfg_.seed);
+    frame.sets = std::move(generated.sets);
+    frame.skipped = std::move(generated.skipped);
+    for (const auto& rs : frame.sets) frame.references.push_back(make_reference(frame.scene, rs));
+    return frame;
+  }
+
+  Reference make_reference(const Scene& scene, const RaySet& rs) const {
+    ReferencePolicy policy = cfg_.reference;
+    if (policy == ReferencePolicy::kAuto)
+      policy = scene.triangles.size() <= cfg_.brute_force_max_triangles ? ReferencePolicy::kBruteForce
+                                                                        : ReferencePolicy::kEmbree;
+    Reference ref;
+    const std::size_t n = rs.rays.size();
+    if (policy == ReferencePolicy::kBruteForce) {
+      ref.name = "brute_force";
+      if (rs.occlusion) {
+        ref.occluded.resize(n);
+        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+          ref.occluded[i] = brute_force_any(scene.triangles, rs.rays[i]);
+        });
+      } else {
+        ref.hits.resize(n);
+        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+          ref.hits[i] = brute_force_closest(scene.triangles, rs.rays[i]);
+        });
+      }
+    } else if (policy == ReferencePolicy::kEmbree) {
+      // Embree in robust mode on a device of its own, released before any timed cell (see runner.cpp:
+      // a live device without a thread count would lift the timed cells' limit).
+      ref.name = "embree_robust";
+      EmbreeDevice device(0);
+      EmbreeSceneOptions options;
+      options.robust = true;
+      const EmbreeScene reference_scene(device, scene.triangles, EmbreeQuality::kMedium, options);
+      if (rs.occlusion) {
+        ref.occluded.resize(n);
+        embree_occluded1(reference_scene, rs.rays, ref.occluded);
+      } else {
+        ref.hits.resize(n);
+        embree_intersect1(reference_scene, rs.rays, ref.hits);
+      }
+    }
+    return ref;
+  }
+
+  static uint64_t count_mismatches(const Reference& ref, const RaySet& rs, float diagonal,
+                                   std::span<const Hit> hits, std::span<const uint8_t> occluded) {
+    uint64_t m = 0;
+    if (!ref.hits.empty())
+      for (std::size_t i = 0; i < hits.size(); ++i)
+        m += !same_hit(hits[i], ref.hits[i], diagonal / length(rs.rays[i].dir));
+    if (!ref.occluded.empty())
+      for (std::size_t i = 0; i < occluded.size(); ++i) m += (occluded[i] != 0) != (ref.occluded[i] != 0);
+    return m;
+  }
+
+  template <class Trace>
+  TimingSummary time_trace(std::size_t rays, Trace trace) const {
+    for (int w = 0; w < cfg_.reps.trace_warmup; ++w) trace();
+    std::vector<double> mrays;
+    for (int r = 0; r < cfg_.reps.trace; ++r)
+      mrays.push_back(static_cast<double>(rays) / (time_ms(trace) * 1e3));
+    return summarize(mrays);
+  }
+
+  // Warm-up, then timed repetitions of `step`, each after an untimed `reset`; the heap peak of the first
+  // timed one.
+  template <class Step, class Reset>
+  std::pair<TimingSummary, int64_t> time_steps(Step step, Reset reset) const {
+    for (int w = 0; w < cfg_.reps.build_warmup; ++w) step();
+    std::vector<double> ms;
+    int64_t peak = 0;
+    for (int r = 0; r < cfg_.reps.build; ++r) {
+      reset();
+      const int64_t before = heap_bytes();
+      reset_heap_peak();
+      ms.push_back(time_ms(step));
+      if (r == 0) peak = heap_peak_bytes() - before;
+    }
+    return {summarize(ms), peak};
+  }
+
+  CsvRow base_row(const FrameData& frame, const AnimatedBuilder& b, int threads) const {
+    CsvRow row;
+    row["run_id"] = run_id_;
+    row["git_commit"] = env_.git_commit;
+    row["cpu"] = env_.cpu;
+    row["compiler"] = env_.compiler;
+    row["threads"] = std::to_string(threads);
+    row["scene"] = frame.scene.name;
+    row["scene_triangles"] = std::to_string(frame.scene.triangles.size());
+    row["frame"] = std::to_string(frame.index);
+    row["frame_time"] = fmt::format("{:.6g}", frame.time);
+    row["builder"] = b.name;
+    row["builder_params"] = b.params_text;
+    row["build_reps"] = std::to_string(cfg_.reps.build);
+    row["trace_reps"] = std::to_string(cfg_.reps.trace);
+    row["config"] = cfg_.path.string();
+    row["seed"] = std::to_string(cfg_.seed);
+    row["scene_source"] = frame.scene.source;
+    row["scene_removed"] = std::to_string(frame.scene.removed.total());
+    row["embree_version"] = env_.embree;
+    return row;
+  }
+
+  static void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) {
+    row[prefix + "_median"] = fmt::format("{:.4f}", t.median);
+    row[prefix + "_min"] = fmt::format("{:.4f}", t.min);
+    row[prefix + "_max"] = fmt::format("{:.4f}", t.max);
+  }
+
+  void append(CsvWriter& csv, const CsvRow& row, const std::string& what) {
+    csv.append(row);
+    rows_.push_back(row);
+    ++done_;
+    const double elapsed = elapsed_s();
+    const double left =
+        elapsed / static_cast<double>(done_) * static_cast<double>(planned_ - std::min(planned_, done_));
+    // The total grows as scenes are loaded (their frame counts are known only then).
+    log_ << fmt::format("[{}/{}+] {} | elapsed {}, left in loaded scenes ~{}\n", done_, planned_, what,
+                        format_duration(elapsed), format_duration(left));
+  }
+
+  void run_rebuild(const FrameData& frame, const AnimatedBuilder& b, int threads, CsvWriter& csv) {
+    Bvh bvh;
+    // The previous repetition's tree is freed before the clock starts, as in a static run.
+    const auto [build_t, peak] =
+        time_steps([&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
+                   [&] { bvh = Bvh{}; });
+    trace_ours(frame, b, threads, bvh, build_t, peak, "", csv);
+  }
+
+  void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, Bvh& tree, CsvWriter& csv) {
+    // Every refit recomputes every box, so repeating it on the same frame times the same work.
+    const auto [refit_t, peak] = time_steps([&] { refit(tree, frame.scene.triangles); }, [] {});
+    trace_ours(frame, b, threads, tree, refit_t, peak, "tree of frame 0 refitted", csv);
+  }
+
+  void trace_ours(const FrameData& frame, const AnimatedBuilder& b, int threads, const Bvh& bvh,
+                  const TimingSummary& build_t, int64_t peak, const std::string& notes, CsvWriter& csv) {
+    const Scene& scene = frame.scene;
+    const SahCost cost = sah_cost_of(b.params);
+    const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
+    const bool valid = report.ok();
+    if (!valid) {
+      exit_code_ = 1;
+      log_ << fmt::format("INVALID tree from {} on {} frame {}:\n{}", b.label, scene.name, frame.index,
+                          report.summary());
+    }
+    // Statistics need a valid tree; an invalid one is reported and not traced (it could read out of bounds).
+    const BvhStats stats = valid ? compute_stats(bvh, scene.triangles.size(), cost) : BvhStats{};
+    for (const auto& layout_name : layouts_for(b)) {
+      bool any = false;
+      for (const auto& rs : frame.sets)
+        any |= wanted(scene.name, b, layout_name, threads, rs.name, frame.index);
+      if (!any) continue;
+      const LayoutSpec layout = parse_layout_spec(layout_name);
+      std::unique_ptr<CompiledLayout> compiled;
+      std::vector<double> compile_ms;
+      if (valid)
+        for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
+          compiled.reset();
+          compile_ms.push_back(time_ms([&] { compiled = compile_layout(layout, bvh, scene.triangles); }));
+        }
+      for (std::size_t s = 0; s < frame.sets.size(); ++s) {
+        const RaySet& rs = frame.sets[s];
+        if (!wanted(scene.name, b, layout_name, threads, rs.name, frame.index)) continue;
+        CsvRow row = base_row(frame, b, threads);
+        row["isa"] = env_.isa;
+        row["layout"] = layout_name;
+        put_timing(row, "build_ms", build_t);
+        row["nodes"] = std::to_string(bvh.nodes.size());
+        row["arity"] = std::to_string(bvh.arity);
+        row["ray_set"] = rs.name;
+        row["ray_count"] = std::to_string(rs.rays.size());
+        row["query"] = rs.occlusion ? "any" : "closest";
+        row["notes"] = notes;
+        if (!valid) {
+          row["notes"] = "invalid tree, not traced: " + report.errors.front();
+          append(csv, row,
+                 fmt::format("{} f{} {} {} t={} {}: INVALID tree, not traced", scene.name, frame.index,
+                             b.label, layout_name, threads, rs.name));
+          continue;
+        }
+        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
+        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
+        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
+          if (rs.occlusion)
+            compiled->trace_any(rs.rays, occluded);
+          else
+            compiled->trace_closest(rs.rays, hits);
+        });
+        const TraceCounts counts =
+            rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
+        const Reference& ref = frame.references[s];
+        row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);
+        row["isa"] = compiled->isa();
+        row["mem_bytes"] = std::to_string(compiled->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene);
+        row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
+        row["leaves"] = std::to_string(stats.leaves);
+        row["max_depth"] = std::to_string(stats.max_depth);
+        row["refs_per_prim"] = fmt::format("{:.4f}", stats.refs_per_prim);
+        row["sah_cost"] = fmt::format("{:.6f}", stats.sah_cost);
+        row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
+        row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
+        put_timing(row, "trace_mrays", trace_t);
+        row["nodes_per_ray"] = fmt::format(
+            "{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
+        row["prims_per_ray"] = fmt::format(
+            "{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
+        row["reference"] = ref.name;
+        row["mismatches"] = ref.name == "none"
+                                ? ""
+                                : std::to_string(count_mismatches(ref, rs, frame.diagonal, hits, occluded));
+        append(csv, row,
+               fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms, SAH {:.2f}, {:.2f} Mrays/s, {} mismatches",
+                           scene.name, frame.index, b.label, layout_name, threads, rs.name,
+                           b.variant == Variant::kRefit ? "refit" : "build", build_t.median, stats.sah_cost,
+                           trace_t.median, row["mismatches"]));
+      }
+    }
+  }
+
+  // Embree: a rebuild per frame, or (quality refit) its first-frame build refitted to this frame. The
+  // refit scene is made afresh for each frame and thread count from the first frame, so that every
+  // Embree refit, like ours, starts from the first frame's tree.
+  void run_embree(const FrameData& frame, const AnimatedBuilder& b, int threads,
+                  std::span<const Triangle> first, CsvWriter& csv) {
+    const Scene& scene = frame.scene;
+    EmbreeDevice device(threads);
+    std::unique_ptr<EmbreeScene> built;
+    std::vector<double> build_ms;
+    int64_t peak = 0;
+    if (b.variant == Variant::kEmbreeRefit) {
+      built = std::make_unique<EmbreeScene>(device, first, EmbreeQuality::kRefit);
+      for (int w = 0; w < cfg_.reps.build_warmup; ++w) built->update_vertices(scene.triangles);
+      for (int r = 0; r < cfg_.reps.build; ++r) {
+        const int64_t before = device.bytes();
+        device.reset_peak();
+        build_ms.push_back(built->update_vertices(scene.triangles));
+        if (r == 0) peak = device.peak_bytes() - before;
+      }
+    } else {
+      for (int w = 0; w < cfg_.reps.build_warmup; ++w)
+        built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
+      for (int r = 0; r < cfg_.reps.build; ++r) {
+        built.reset();
+        const int64_t before = device.bytes();
+        device.reset_peak();
+        built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
+        build_ms.push_back(built->commit_ms());
+        if (r == 0) peak = device.peak_bytes() - before;
+      }
+    }
+    const TimingSummary build_t = summarize(build_ms);
+    for (const auto& layout : embree_layouts_) {
+      for (std::size_t s = 0; s < frame.sets.size(); ++s) {
+        const RaySet& rs = frame.sets[s];
+        if (!wanted(scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
+        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
+        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
+        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
+          if (layout.packet_width == 1) {
+            if (rs.occlusion)
+              embree_occluded1(*built, rs.rays, occluded);
+            else
+              embree_intersect1(*built, rs.rays, hits);
+          } else {
+            if (rs.occlusion)
+              embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
+            else
+              embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
+          }
+        });
+        const Reference& ref = frame.references[s];
+        CsvRow row = base_row(frame, b, threads);
+        row["isa"] = "embree:" + embree_isa(device);
+        row["layout"] = layout.name;
+        put_timing(row, "build_ms", build_t);
+        row["mem_bytes"] = std::to_string(built->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene);
+        row["mem_peak_bytes"] = std::to_string(peak);
+        row["ray_set"] = rs.name;
+        row["ray_count"] = std::to_string(rs.rays.size());
+        put_timing(row, "trace_mrays", trace_t);
+        row["reference"] = ref.name;
+        row["mismatches"] = ref.name == "none"
+                                ? ""
+                                : std::to_string(count_mismatches(ref, rs, frame.diagonal, hits, occluded));
+        row["query"] = rs.occlusion ? "any" : "closest";
+        if (b.variant == Variant::kEmbreeRefit)
+          row["notes"] = "Embree refit of frame 0's build (dynamic scene, geometry quality refit)";
+        append(csv, row,
+               fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
+                           frame.index, b.label, layout.name, threads, rs.name,
+                           b.variant == Variant::kEmbreeRefit ? "refit" : "build", build_t.median,
+                           trace_t.median, row["mismatches"]));
+      }
+    }
+  }
+
+  // Per scene and thread count, one line per frame: each of our builders' refit and rebuild times, their
+  // ratio and the refit tree's SAH cost relative to the rebuild's, and Embree's refit time.
+  void print_summary() const {
+    struct Cell {
+      std::optional<double> build_ms, sah;
+    };
+    // (scene, threads) -> frame -> builder name + params -> first row's figures (build time and SAH
+    // are the same in every layout and ray-set row of a tree).
+    std::map<std::pair<std::string, int>, std::map<int, std::map<std::string, Cell>>> table;
+    std::map<std::pair<std::string, int>, std::map<int, std::string>> frame_times;
+    std::vector<std::pair<std::string, int>> order;
+    for (const auto& row : rows_) {
+      const auto key = std::make_pair(row.at("scene"), std::stoi(row.at("threads")));
+      if (std::find(order.begin(), order.end(), key) == order.end()) order.push_back(key);
+      const int frame = std::stoi(row.at("frame"));
+      frame_times[key][frame] = row.at("frame_time");
+      Cell& cell = table[key][frame][row.at("builder") + "|" + row.at("builder_params")];
+      if (!cell.build_ms) cell.build_ms = csv_number(row, "build_ms_median");
+      if (!cell.sah) cell.sah = csv_number(row, "sah_cost");
+    }
+    for (const auto& key : order) {
+      log_ << fmt::format(
+          "\nsummary: {}, {} thread{} (median ms; speed-up = rebuild / refit; SAH = refit / rebuild)\n",
+          key.first, key.second, key.second == 1 ? "" : "s");
+      for (const auto& [frame, cells] : table.at(key)) {
+        std::string line = fmt::format("  frame {:>3} t={:<8}", frame, frame_times.at(key).at(frame));
+        for (const auto& b : builders_) {
+          if (b.variant != Variant::kRefit && b.variant != Variant::kEmbreeRefit) continue;
+          const auto refit_cell = cells.find(b.name + "|" + b.params_text);
+          if (refit_cell == cells.end() || !refit_cell->second.build_ms) continue;
+          const Cell& r = refit_cell->second;
+          if (b.variant == Variant::kEmbreeRefit) {
+            line += fmt::format(" | embree refit {:.3f}", *r.build_ms);
+            continue;
+          }
+          line += fmt::format(" | {} refit {:.3f}", b.label, *r.build_ms);
+          const auto rebuild_cell = cells.find(b.info->name + "|" + b.params_text);
+          if (rebuild_cell == cells.end() || !rebuild_cell->second.build_ms) continue;
+          const Cell& k = rebuild_cell->second;
+          line += fmt::format(" rebuild {:.3f} ({:.1f}x)", *k.build_ms,
+                              *k.build_ms / std::max(*r.build_ms, 1e-9));
+          if (r.sah && k.sah && *k.sah > 0) line += fmt::format(" SAH {:.3f}", *r.sah / *k.sah);
+        }
+        log_ << line << "\n";
+      }
+    }
+  }
+
+  const ExperimentConfig& cfg_;
+  const RunOptions& options_;
+  std::ostream& log_;
+  Environment env_;
+  std::vector<AnimatedBuilder> builders_;
+  std::vector<EmbreeLayout> embree_layouts_;
+  std::filesystem::path output_;
+  std::string run_id_;
+  std::set<std::string> finished_;
+  std::vector<CsvRow> rows_;  // written by this run, for the summary
+  std::size_t planned_ = 0, done_ = 0;
+  std::chrono::steady_clock::time_point start_;
+  int exit_code_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::string> animation_columns() {
+  std::vector<std::string> columns = result_columns();
+  columns.push_back("frame_time");
+  return columns;
+}
+
+int run_animation_experiment(const ExperimentConfig& cfg, const RunOptions& options, std::ostream& log) {
+  if (!cfg.animation) throw Error(cfg.path.string() + ": not an animation experiment (no [animation] table)");
+  return AnimationRunner(cfg, options, log).run();
+}
+
+}  // namespace sahbench

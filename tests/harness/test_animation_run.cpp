@@ -1,0 +1,216 @@
+// Animation experiments: the [animation] table (errors named by key and line), Embree's refit scene
+// (EmbreeScene::update_vertices moves the geometry it traces), and a small animation run end to end:
+// rows per frame for refit and rebuild, no mismatches, static scenes skipped, resume.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include "core/error.h"
+#include "harness/animation_runner.h"
+#include "harness/config.h"
+#include "harness/csv.h"
+#include "harness/embree_scene.h"
+#include "harness/embree_trace.h"
+#include "harness/runner.h"
+#include "scenes/wave.h"
+#include "tests/support/hit_check.h"
+#include "tests/support/test_scenes.h"
+#include "traversal/brute_force.h"
+
+namespace sahbench {
+namespace {
+
+// Parses `text` as "anim.toml" and checks that its Error starts with "anim.toml:<line>:" and contains
+// every one of `parts`.
+void expect_error(std::string_view text, int line, std::initializer_list<std::string_view> parts) {
+  std::string message;
+  try {
+    parse_experiment_config(text, "anim.toml");
+  } catch (const Error& e) {
+    message = e.what();
+  }
+  ASSERT_FALSE(message.empty()) << "no error for:\n" << text;
+  const std::string prefix = "anim.toml:" + std::to_string(line) + ":";
+  EXPECT_EQ(message.substr(0, prefix.size()), prefix) << message;
+  for (auto part : parts)
+    EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
+}
+
+// A valid static config of 9 lines; tests append from line 10 on.
+constexpr std::string_view kBase = R"([experiment]
+name = "a"
+scenes = ["proc:wave:tris=1k"]
+
+[[builder]]
+name = "binned_sah"
+
+[[ray_set]]
+kind = "primary"
+)";
+
+ExperimentConfig parse_with(std::string_view extra) {
+  return parse_experiment_config(std::string(kBase) + std::string(extra), "anim.toml");
+}
+
+TEST(HarnessAnimationConfig, FramesTimesAndDefaults) {
+  EXPECT_FALSE(parse_with("").animation.has_value());
+  EXPECT_EQ(parse_with("[animation]\n").animation->frames, 10u);
+  const auto frames = parse_with("[animation]\nframes = 4\n").animation;
+  EXPECT_EQ(frames->frames, 4u);
+  EXPECT_TRUE(frames->times.empty());
+  const auto times = parse_with("[animation]\ntimes = [0, 0.5, 1.25]\n").animation;
+  EXPECT_EQ(times->times, (std::vector<double>{0.0, 0.5, 1.25}));
+  EXPECT_EQ(times->frames, 3u);
+  // Embree's refit exists only where there are frames to refit to.
+  const auto refit =
+      parse_with("[animation]\n[[builder]]\nname = \"embree\"\nquality = [\"refit\", \"medium\"]\n");
+  ASSERT_EQ(refit.builders.size(), 3u);
+  EXPECT_EQ(refit.builders[1].label(), "embree[quality=refit]");
+}
+
+TEST(HarnessAnimationConfig, ErrorsNameKeyAndLine) {
+  expect_error(std::string(kBase) + "[animation]\nframes = 0\n", 11, {"animation.frames = 0", "[1, 10000]"});
+  expect_error(std::string(kBase) + "[animation]\nframes = \"ten\"\n", 11,
+               {"animation.frames must be an integer"});
+  expect_error(std::string(kBase) + "[animation]\nframes = 20000\n", 11, {"animation.frames = 20000"});
+  expect_error(std::string(kBase) + "[animation]\ntimes = [0.5, 0.2]\n", 11,
+               {"animation.times must increase", "0.2", "0.5"});
+  expect_error(std::string(kBase) + "[animation]\ntimes = [0, \"1\"]\n", 11,
+               {"animation.times must be a list of numbers"});
+  expect_error(std::string(kBase) + "[animation]\ntimes = []\n", 11,
+               {"animation.times must not be an empty list"});
+  expect_error(std::string(kBase) + "[animation]\ntimes = 1.5\n", 11, {"animation.times must be a list"});
+  expect_error(std::string(kBase) + "[animation]\nframes = 3\ntimes = [0.0]\n", 12, {"exclude each other"});
+  expect_error(std::string(kBase) + "[animation]\nfps = 30\n", 11,
+               {"unknown key 'fps' in [animation]", "frames, times"});
+  expect_error("animation = 3\n" + std::string(kBase), 1, {"[animation] must be a table"});
+  expect_error(std::string(kBase) + "[[builder]]\nname = \"embree\"\nquality = \"refit\"\n", 12,
+               {"'refit'", "[animation]", "low, medium, high"});
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Embree's refit scene
+
+TEST(HarnessAnimationEmbree, RefitSceneTracesTheMovedTriangles) {
+  const WaveParams wave{2000, 4, 0.2, 4};
+  const std::vector<Triangle> first = generate_wave(wave, 0.0);
+  const std::vector<Triangle> moved = generate_wave(wave, 0.35);
+  const auto rays = test::random_rays(moved, 400, 5);
+  EmbreeDevice device(1);
+  for (EmbreeQuality quality : {EmbreeQuality::kRefit, EmbreeQuality::kMedium}) {
+    SCOPED_TRACE(to_string(quality));
+    EmbreeScene scene(device, first, quality, {.robust = true});
+    EXPECT_TRUE(scene.options().dynamic || quality != EmbreeQuality::kRefit)
+        << "refit implies a dynamic scene";
+    EXPECT_GE(scene.update_vertices(moved), 0.0);
+    std::vector<Hit> hits(rays.size());
+    embree_intersect1(scene, rays, hits);
+    std::size_t mismatches = 0, found = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const Hit ref = brute_force_closest(moved, rays[i]);
+      found += ref.found();
+      mismatches += !test::same_closest_hit(hits[i], ref, moved, rays[i]);
+    }
+    EXPECT_GT(found, rays.size() / 10) << "rays must hit the sheet for the check to mean anything";
+    EXPECT_EQ(mismatches, 0u);
+  }
+  EmbreeScene scene(device, first, EmbreeQuality::kRefit);
+  EXPECT_THROW(scene.update_vertices(std::span<const Triangle>(moved).first(10)), Error);
+}
+
+// ---------------------------------------------------------------------------------------------------
+// A run
+
+std::filesystem::path temp_dir() {
+  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_animation_run";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::filesystem::path write_config(const std::string& name) {
+  const auto dir = temp_dir();
+  const auto csv = dir / (name + ".csv");
+  std::filesystem::remove(csv);
+  const auto path = dir / (name + ".toml");
+  std::ofstream(path)
+      << "[experiment]\nname = \"" << name << "\"\noutput = \"" << csv.string() << "\"\n"
+      << "threads = [1, 2]\nscenes = [\"proc:wave:tris=1500,amplitude=0.2\", \"proc:sphere:tris=500\"]\n"
+      << "layouts = [\"bvh2\", \"bvh2_packed\"]\nreference = \"brute_force\"\n"
+      << "[repetitions]\nbuild = 2\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+      << "[animation]\nframes = 3\n"
+      << "[[builder]]\nname = \"binned_sah\"\n"
+      << "[[builder]]\nname = \"embree\"\nquality = [\"refit\", \"medium\"]\n"
+      << "[[ray_set]]\nkind = \"primary\"\nwidth = 20\nheight = 20\n"
+      << "[[ray_set]]\nkind = \"shadow\"\nwidth = 20\nheight = 20\n";
+  return path;
+}
+
+TEST(HarnessAnimationRun, RowsPerFrameForRefitAndRebuildWithoutMismatches) {
+  const auto config = write_config("animation_small");
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+  EXPECT_NE(log.str().find("skipping scene proc:sphere:tris=500: static"), std::string::npos) << log.str();
+  const auto csv = temp_dir() / "animation_small.csv";
+  const auto rows = read_csv(csv);
+
+  std::map<std::string, std::size_t> per_builder;
+  std::set<std::string> frames, keys;
+  std::map<std::string, std::string> sah;  // builder|frame|threads -> SAH cost
+  for (const auto& row : rows) {
+    const std::string what = row.at("builder") + " " + row.at("builder_params") + " " + row.at("layout") +
+                             " frame " + row.at("frame") + " " + row.at("ray_set");
+    EXPECT_EQ(row.at("scene"), "proc:wave:tris=1500,amplitude=0.2");
+    EXPECT_EQ(row.at("mismatches"), "0") << what;
+    EXPECT_EQ(row.at("reference"), "brute_force");
+    EXPECT_GT(std::stod(row.at("trace_mrays_median")), 0.0) << what;
+    EXPECT_GE(std::stod(row.at("build_ms_median")), 0.0) << what;
+    ++per_builder[row.at("builder")];
+    frames.insert(row.at("frame") + "@" + row.at("frame_time"));
+    EXPECT_TRUE(
+        keys.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"), row.at("layout"),
+                             std::stoi(row.at("threads")), row.at("ray_set"), std::stoi(row.at("frame"))))
+            .second)
+        << "one row per cell: " << what;
+    if (row.at("builder") != "embree") {
+      EXPECT_NE(row.at("sah_cost"), "") << what;
+      sah[row.at("builder") + "|" + row.at("frame") + "|" + row.at("threads")] = row.at("sah_cost");
+    }
+  }
+  // 3 frames x 2 thread counts x 2 layouts x 2 ray sets, for the rebuild and for the refit.
+  EXPECT_EQ(per_builder["binned_sah"], 24u);
+  EXPECT_EQ(per_builder["refit(binned_sah)"], 24u);
+  EXPECT_EQ(per_builder["embree"] % 24, 0u);  // 2 qualities x as many Embree layouts as the CPU has
+  EXPECT_GE(per_builder["embree"], 24u);
+  EXPECT_EQ(frames, (std::set<std::string>{"0@0", "1@0.5", "2@1"}));
+  // On the first frame the refitted tree is the built one; later its cost departs from a fresh build's.
+  EXPECT_EQ(sah["refit(binned_sah)|0|1"], sah["binned_sah|0|1"]);
+  EXPECT_NE(sah["refit(binned_sah)|1|1"], sah["binned_sah|1|1"]);
+  // The same trees whatever the thread count.
+  EXPECT_EQ(sah["refit(binned_sah)|1|1"], sah["refit(binned_sah)|1|2"]);
+  EXPECT_NE(log.str().find("summary: proc:wave"), std::string::npos) << log.str();
+
+  // Resume: every cell is done.
+  std::ostringstream again;
+  ASSERT_EQ(run_experiment({config, true, "", std::nullopt}, again), 0);
+  EXPECT_EQ(read_csv(csv).size(), rows.size());
+}
+
+TEST(HarnessAnimationRun, OnlyFiltersByBuilderAndFrame) {
+  const auto config = write_config("animation_only");
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "refit(binned_sah)|", std::nullopt}, log), 0) << log.str();
+  const auto rows = read_csv(temp_dir() / "animation_only.csv");
+  EXPECT_EQ(rows.size(), 24u);
+  for (const auto& row : rows) EXPECT_EQ(row.at("builder"), "refit(binned_sah)");
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -40,8 +40,8 @@ class CompiledLayout {
   /// Exact bytes of the compiled structure (nodes, references, packed leaves).
   virtual std::size_t bytes() const = 0;
   /// Refit: takes the new positions of the triangles it was compiled over (same count and indices) and
-  /// recomputes every box bottom up, keeping the topology. Layouts that borrow their tree (bvh2) throw
-  /// Error: refit the Bvh itself and compile again.
+  /// recomputes every box bottom up, keeping the topology. Layouts that borrow the triangles (bvh2)
+  /// borrow the new ones too, which must then outlive the layout. Throws Error for another count.
   virtual void refit(std::span<const Triangle> triangles);
   /// The instruction set its kernels run with ("scalar", "sse", "avx2", "avx512"), for the CSV.
   virtual std::string isa() const { return "scalar"; }

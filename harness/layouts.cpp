@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "harness/layout.h"
+#include "builders/refit.h"
 #include "harness/wide_layout.h"
 #include "traversal/bvh2_traversal.h"
 #include "traversal/variant_dispatch.h"
@@ -53,7 +54,8 @@ template <class Tri, class Box>
 class Bvh2Layout final : public CompiledLayout {
  public:
   /// The tree as built; `bvh` and `triangles` must outlive the layout.
-  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles) : bvh_(&bvh), triangles_(triangles) {}
+  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles)
+      : bvh_(&bvh), triangles_(triangles), triangle_count_(triangles.size()) {}
 
   /// Packed: owns a copy of the nodes and the triangles in leaf order.
   static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles) {
@@ -70,6 +72,7 @@ class Bvh2Layout final : public CompiledLayout {
     });
     layout->bvh_ = &layout->owned_;
     layout->triangles_ = layout->packed_;
+    layout->triangle_count_ = triangles.size();
     return layout;
   }
 
@@ -93,6 +96,24 @@ class Bvh2Layout final : public CompiledLayout {
   TraceCounts count_any(std::span<const Ray> rays) const override {
     return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c); });
   }
+  // Refit (builders/refit.h): as built, a copy of the borrowed tree is made the first time, and the new
+  // triangles are borrowed like the old ones; packed, the packed copies are rewritten first.
+  void refit(std::span<const Triangle> triangles) override {
+    if (triangles.size() != triangle_count_)
+      throw Error("refit with " + std::to_string(triangles.size()) + " triangles, compiled over " +
+                  std::to_string(triangle_count_));
+    if (ids_.empty()) {
+      if (bvh_ != &owned_) {
+        owned_ = *bvh_;
+        bvh_ = &owned_;
+      }
+      triangles_ = triangles;
+    } else {
+      tbb::parallel_for(std::size_t{0}, ids_.size(), [&](std::size_t i) { packed_[i] = triangles[ids_[i]]; });
+    }
+    sahbench::refit(owned_, triangles_);
+  }
+
   // As built: nodes and references. Packed: nodes, the packed triangles and the ids that map them back
   // (the identity references are an artefact of reusing the common-format kernel and are not counted).
   std::size_t bytes() const override {
@@ -105,7 +126,8 @@ class Bvh2Layout final : public CompiledLayout {
 
   const Bvh* bvh_ = nullptr;
   std::span<const Triangle> triangles_;
-  Bvh owned_;                      // packed only
+  std::size_t triangle_count_ = 0;  // of the scene, for refit's check
+  Bvh owned_;                      // packed; as built, once refitted
   std::vector<Triangle> packed_;   // packed only
   std::vector<uint32_t> ids_;      // packed only: scene index of each packed triangle
 };
@@ -160,9 +182,7 @@ const LayoutInfo& find_layout(std::string_view name) {
   throw Error("unknown layout '" + std::string(name) + "' (known: " + known + ")");
 }
 
-void CompiledLayout::refit(std::span<const Triangle>) {
-  throw Error("this layout borrows its tree and does not refit: refit the Bvh and compile it again");
-}
+void CompiledLayout::refit(std::span<const Triangle>) { throw Error("this layout does not refit"); }
 
 std::string LayoutSpec::text() const {
   std::string options;

@@ -10,11 +10,17 @@
 // 2n - 2 slots for its descendants: its two children first, then the left child's region (2 n_left - 2),
 // then the right child's. Leaves holding several primitives leave holes, which compact() removes. A wide
 // node with k children uses k + sum(2 n_i - 2) = 2n - k slots, so the same regions hold wide trees.
+//
+// Builders that split primitives (SBVH) add references as they go. Each node then owns `spare` reference
+// positions after its range, which its splits may fill and which its partition hands on to the children;
+// a node's subtree ends with at most size + spare references, and its slot region is sized for that many.
+// Positions left unused are holes in the reference order, and compact() gathers the leaves' references.
 
 #include <tbb/task_group.h>
 
 #include <algorithm>
 #include <bit>
+#include <cassert>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -49,8 +55,12 @@ struct NodeRange {
   uint32_t end = 0;
   Aabb bounds;
   Aabb centroid_bounds;
+  /// Positions [end, end + spare) are the node's to fill with references that splitting primitives adds.
+  uint32_t spare = 0;
 
   uint32_t size() const { return end - begin; }
+  /// The most references the node's subtree may end with.
+  uint32_t capacity() const { return size() + spare; }
 };
 
 /// A split proposed by a Splitter. `cost` is SahCost::split_cost; infinite when no split separates the
@@ -65,14 +75,17 @@ struct Split {
 };
 
 /// The two halves after partitioning: [left.begin, left.end) and [right.begin, right.end), both non-empty.
+/// The halves split the parent's positions: left.begin is the parent's begin, right.begin is
+/// left.begin + left.capacity(), and right ends its capacity where the parent's capacity ends.
 struct Partition {
   NodeRange left, right;
 };
 
 /*
  A Splitter provides:
-   Split find_split(const NodeRange&);                 // best split, or an invalid one
-   Partition partition(const NodeRange&, const Split&); // reorder so the split's left side comes first
+   S find_split(const NodeRange&);                     // best split, or an invalid one; S is Split or a type
+                                                       // with the same cost and valid()
+   Partition partition(const NodeRange&, const S&);    // reorder so the split's left side comes first
    Partition partition_median(const NodeRange&);        // fallback: halves by count, always non-empty
    uint32_t prim_id(uint32_t position) const;           // primitive at a position of the final order
  Each may be called concurrently on disjoint ranges.
@@ -102,12 +115,12 @@ inline bool must_halve(uint32_t depth, uint32_t n) { return depth + std::bit_wid
 template <class Splitter>
 class TopDownBuilder {
  public:
-  TopDownBuilder(Splitter& splitter, const TopDownConfig& config, uint32_t prim_count)
-      : splitter_(splitter), config_(config), slots_(std::make_unique_for_overwrite<SlotNode[]>(2 * std::size_t{prim_count} - 1)) {}
+  TopDownBuilder(Splitter& splitter, const TopDownConfig& config, uint32_t capacity)
+      : splitter_(splitter), config_(config), slots_(std::make_unique_for_overwrite<SlotNode[]>(2 * std::size_t{capacity} - 1)) {}
 
   Bvh build(const NodeRange& root) {
     build_node(root, 0, 1, 0);
-    return compact(root.size());
+    return compact(root.capacity());
   }
 
  private:
@@ -125,7 +138,7 @@ class TopDownBuilder {
       halves = splitter_.partition_median(range);
       return true;
     }
-    const Split split = splitter_.find_split(range);
+    const auto split = splitter_.find_split(range);
     const float leaf_cost = config_.cost.leaf_cost(n);
     // Prefer a leaf where the SAH does, unless the leaf would be too large to be useful.
     if (n <= config_.max_leaf && !(split.valid() && split.cost < leaf_cost)) return false;
@@ -135,6 +148,8 @@ class TopDownBuilder {
     // for lots of overlapping primitives this gives poor but valid trees.
     const bool informative = split.valid() && split.cost < config_.cost.c_trav + leaf_cost;
     halves = informative ? splitter_.partition(range, split) : splitter_.partition_median(range);
+    assert(halves.left.begin == range.begin && halves.right.begin == halves.left.begin + halves.left.capacity() &&
+           halves.right.begin + halves.right.capacity() == range.begin + range.capacity());
     return true;
   }
 
@@ -147,7 +162,8 @@ class TopDownBuilder {
   };
 
   // Builds the node for `range` into `slot`; its descendants go into slots [region, region + 2n - 2):
-  // its k children first, then each child's own region of 2 n_i - 2 slots, which sums to 2n - k.
+  // its k children first, then each child's own region of 2 n_i - 2 slots, which sums to 2n - k
+  // (n the capacities, where primitives are split).
   void build_node(const NodeRange& range, uint32_t slot, uint32_t region, uint32_t depth) {
     Partition halves;
     if (!try_split(range, depth, halves)) return make_leaf(range, slot);
@@ -188,24 +204,27 @@ class TopDownBuilder {
       tbb::task_group group;
       for (uint32_t c = 0; c + 1 < count; ++c) {
         group.run([&build_child, c, child_region] { build_child(c, child_region); });
-        child_region += 2 * children[c].range.size() - 2;
+        child_region += 2 * children[c].range.capacity() - 2;
       }
       build_child(count - 1, child_region);
       group.wait();
     } else {
       for (uint32_t c = 0; c < count; ++c) {
         build_child(c, child_region);
-        child_region += 2 * children[c].range.size() - 2;
+        child_region += 2 * children[c].range.capacity() - 2;
       }
     }
   }
 
-  // Copies the used slots into a dense node array in depth-first order, children pairs kept contiguous,
-  // and writes the primitive references in the splitter's final order.
-  Bvh compact(uint32_t prim_count) const {
+  // Copies the used slots into a dense node array in depth-first order, children kept contiguous, and
+  // writes each leaf's references in the splitter's final order, leaves in depth-first order. A child's
+  // positions come before its right siblings', so without spare positions the references are the
+  // splitter's order itself.
+  Bvh compact(uint32_t capacity) const {
     Bvh bvh;
     bvh.arity = config_.arity;
-    bvh.nodes.reserve(2 * std::size_t{prim_count} - 1);
+    bvh.nodes.reserve(2 * std::size_t{capacity} - 1);
+    bvh.prim_refs.reserve(capacity);
     bvh.nodes.push_back({slots_[0].bounds, 0, 0, 0});
     std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};  // (slot, index in bvh.nodes)
     while (!stack.empty()) {
@@ -214,8 +233,9 @@ class TopDownBuilder {
       const SlotNode& s = slots_[slot];
       Node& node = bvh.nodes[index];
       if (s.child_count == 0) {
-        node.first = s.first;
+        node.first = static_cast<uint32_t>(bvh.prim_refs.size());
         node.prim_count = static_cast<uint16_t>(s.prim_count);
+        for (uint32_t i = s.first; i < s.first + s.prim_count; ++i) bvh.prim_refs.push_back(splitter_.prim_id(i));
         continue;
       }
       node.first = static_cast<uint32_t>(bvh.nodes.size());
@@ -225,8 +245,6 @@ class TopDownBuilder {
       // Push the right child first so the left subtree is laid out right after the pair.
       for (uint32_t c = s.child_count; c-- > 0;) stack.emplace_back(s.first + c, first_child + c);
     }
-    bvh.prim_refs.resize(prim_count);
-    for (uint32_t i = 0; i < prim_count; ++i) bvh.prim_refs[i] = splitter_.prim_id(i);
     return bvh;
   }
 
@@ -237,12 +255,12 @@ class TopDownBuilder {
 
 }  // namespace detail
 
-/// Runs the shared recursion over `prim_count` primitives whose bounds are `root`. The caller checks the
-/// configuration (see check_config) before building.
+/// Runs the shared recursion over the primitives of `root`, whose capacity bounds the references the
+/// tree may end with. The caller checks the configuration (see check_config) before building.
 template <class Splitter>
 Bvh build_top_down(Splitter& splitter, const TopDownConfig& config, const NodeRange& root) {
   if (root.size() == 0) return Bvh{};
-  detail::TopDownBuilder<Splitter> builder(splitter, config, root.size());
+  detail::TopDownBuilder<Splitter> builder(splitter, config, root.capacity());
   return builder.build(root);
 }
 

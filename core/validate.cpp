@@ -1,14 +1,25 @@
 #include "core/validate.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
+
+#include "core/clip_polygon.h"
 
 namespace sahbench {
 namespace {
 
 // Enough messages to diagnose a broken builder without flooding the terminal.
 constexpr std::size_t kMaxMessages = 32;
+// Coverage of a clipped triangle is checked against its leaves' boxes grown by this fraction of the
+// triangle's largest coordinate: 2^-30 is far above the double rounding of clipped points (about
+// 2^-50 of it) and far below float resolution (2^-24), so a builder whose boxes miss a float-sized
+// sliver of a triangle still fails.
+constexpr double kCoverageTolerance = 0x1p-30;
+// Pieces of a triangle the coverage check keeps at once before it gives up (each box it subtracts may
+// cut a piece into six); SBVH trees need a handful.
+constexpr std::size_t kMaxCoveragePieces = 4096;
 
 bool has_nan(const Aabb& b) {
   for (std::size_t a = 0; a < 3; ++a)
@@ -24,7 +35,8 @@ std::string box_string(const Aabb& b) {
 
 class Checker {
  public:
-  Checker(const Bvh& bvh, std::span<const Aabb> prim_bounds) : bvh_(bvh), prim_bounds_(prim_bounds) {}
+  Checker(const Bvh& bvh, std::span<const Aabb> prim_bounds, std::span<const Triangle> triangles)
+      : bvh_(bvh), prim_bounds_(prim_bounds), triangles_(triangles) {}
 
   ValidationReport run() {
     if (bvh_.nodes.empty()) {
@@ -34,8 +46,11 @@ class Checker {
     }
     if (bvh_.arity != 2 && bvh_.arity != 4 && bvh_.arity != 8)
       fail("arity is " + std::to_string(bvh_.arity) + ", expected 2, 4 or 8");
+    count_references();
     walk();
     check_coverage();
+    // The coverage walk assumes a tree; a broken one has been reported already.
+    if (!triangles_.empty() && report_.ok()) check_clipped_coverage();
     return std::move(report_);
   }
 
@@ -112,9 +127,10 @@ class Checker {
       const Aabb& pb = prim_bounds_[prim];
       const bool inside = node.bounds.contains(pb);
       const bool overlaps = !merge_intersection(node.bounds, pb).is_empty();
-      if (!inside && !(allow_clipped() && overlaps))
+      if (!inside && !(may_be_clipped(prim) && overlaps))
         fail(where + " does not contain primitive " + std::to_string(prim) + " " + box_string(pb) +
              "; leaf box " + box_string(node.bounds));
+      if (!triangles_.empty() && inside) fully_contained_[prim] = 1;
     }
   }
 
@@ -122,8 +138,77 @@ class Checker {
     return {max(a.min, b.min), min(a.max, b.max)};
   }
 
-  // References repeat only when a builder split primitives; then leaves hold clipped parts.
-  bool allow_clipped() const { return bvh_.prim_refs.size() > prim_bounds_.size(); }
+  // A leaf may hold a clipped part of a primitive only when that primitive is split, i.e. referenced
+  // more than once. With bounds alone, the validator cannot tell which primitives are split and allows
+  // clipped parts of all of them as soon as references repeat.
+  bool may_be_clipped(uint32_t prim) const {
+    if (!triangles_.empty()) return reference_count_[prim] > 1;
+    return bvh_.prim_refs.size() > prim_bounds_.size();
+  }
+
+  // References per primitive (out-of-range ones are reported by check_leaf).
+  void count_references() {
+    if (triangles_.empty()) return;
+    reference_count_.assign(prim_bounds_.size(), 0);
+    fully_contained_.assign(prim_bounds_.size(), 0);
+    for (uint32_t prim : bvh_.prim_refs)
+      if (prim < reference_count_.size()) ++reference_count_[prim];
+  }
+
+  // Every point of a split triangle must lie in the box of some leaf that references it, or a ray may
+  // pass through the triangle without testing it. Leaves holding the whole box settle it at once;
+  // otherwise the check subtracts the leaves' boxes from the triangle, clipped exactly (ClipPolygon).
+  void check_clipped_coverage() {
+    std::vector<std::vector<Aabb>> boxes(prim_bounds_.size());
+    std::vector<uint32_t> stack{0};
+    while (!stack.empty()) {
+      const Node& node = bvh_.nodes[stack.back()];
+      stack.pop_back();
+      if (!node.is_leaf()) {
+        for (uint32_t c = 0; c < node.child_count; ++c) stack.push_back(node.first + c);
+        continue;
+      }
+      for (uint32_t r = node.first; r < node.first + node.prim_count; ++r) {
+        const uint32_t prim = bvh_.prim_refs[r];
+        if (prim < boxes.size() && !fully_contained_[prim] && reference_count_[prim] > 1)
+          boxes[prim].push_back(node.bounds);
+      }
+    }
+    for (uint32_t prim = 0; prim < boxes.size(); ++prim) {
+      if (boxes[prim].empty()) continue;
+      const std::string uncovered = uncovered_part(triangles_[prim], boxes[prim]);
+      if (!uncovered.empty())
+        fail("primitive " + std::to_string(prim) + " is split over " + std::to_string(boxes[prim].size()) +
+             " leaves whose boxes do not cover it: " + uncovered);
+    }
+  }
+
+  // Empty when the boxes (grown by the tolerance) cover the triangle; otherwise a point left over.
+  static std::string uncovered_part(const Triangle& tri, const std::vector<Aabb>& boxes) {
+    const double tol = kCoverageTolerance * coordinate_scale(tri);
+    std::vector<ClipPolygon> pieces{ClipPolygon::of(tri)}, next;
+    for (const Aabb& box : boxes) {
+      next.clear();
+      for (ClipPolygon piece : pieces) {
+        // Cut off the parts beyond each face in turn; what is left at the end lies in the box.
+        for (int axis = 0; axis < 3 && !piece.empty(); ++axis) {
+          const double lo = double(box.min[axis]) - tol, hi = double(box.max[axis]) + tol;
+          for (const bool below : {true, false}) {
+            const double face = below ? lo : hi;
+            ClipPolygon beyond = piece;
+            beyond.clip(axis, face, below);
+            if (beyond.reaches(axis, face, below)) next.push_back(beyond);
+            piece.clip(axis, face, !below);
+          }
+        }
+      }
+      if (next.size() > kMaxCoveragePieces) return "too many pieces to check (over " + std::to_string(kMaxCoveragePieces) + ")";
+      std::swap(pieces, next);
+      if (pieces.empty()) return {};
+    }
+    const auto& p = pieces.front().v[0];
+    return "e.g. near (" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " + std::to_string(p[2]) + ")";
+  }
 
   void check_coverage() {
     std::size_t missing = 0;
@@ -138,7 +223,10 @@ class Checker {
 
   const Bvh& bvh_;
   std::span<const Aabb> prim_bounds_;
+  std::span<const Triangle> triangles_;  // empty: bounds only
   std::vector<uint8_t> referenced_;
+  std::vector<uint32_t> reference_count_;  // with triangles: references per primitive
+  std::vector<uint8_t> fully_contained_;   // with triangles: some leaf box holds the whole primitive box
   ValidationReport report_;
 };
 
@@ -151,13 +239,13 @@ std::string ValidationReport::summary() const {
 }
 
 ValidationReport validate(const Bvh& bvh, std::span<const Aabb> prim_bounds) {
-  return Checker(bvh, prim_bounds).run();
+  return Checker(bvh, prim_bounds, {}).run();
 }
 
 ValidationReport validate(const Bvh& bvh, std::span<const Triangle> triangles) {
   std::vector<Aabb> bounds(triangles.size());
   for (std::size_t i = 0; i < triangles.size(); ++i) bounds[i] = triangles[i].bounds();
-  return validate(bvh, bounds);
+  return Checker(bvh, bounds, triangles).run();
 }
 
 }  // namespace sahbench

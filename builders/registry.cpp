@@ -4,6 +4,7 @@
 
 #include "builders/binned_sah.h"
 #include "builders/collapse.h"
+#include "builders/sbvh.h"
 #include "builders/sweep_sah.h"
 #include "core/error.h"
 
@@ -107,6 +108,44 @@ BuilderInfo sweep_sah_info() {
           [](const ParamSet& p) { check_config(top_down_config(p), "sweep_sah"); }};
 }
 
+SbvhParams sbvh_params(const ParamSet& p) {
+  SbvhParams s;
+  s.bins = p.get_uint("bins");
+  s.spatial_bins = p.get_uint("spatial_bins");
+  s.adaptive_bins = p.get_uint("adaptive_bins") != 0;
+  s.alpha = p.get_float("alpha");
+  s.node_overlap = p.get_float("node_overlap");
+  s.max_dup = p.get_float("max_dup");
+  s.unsplit = p.get_uint("unsplit") != 0;
+  s.top_down = top_down_config(p);
+  return s;
+}
+
+BuilderInfo sbvh_info() {
+  auto params = top_down_params();
+  const SbvhParams defaults;
+  // alpha and max_dup as doubles, so the CSV shows 1e-05 and 0.3 rather than their float roundings.
+  constexpr double kDefaultAlpha = 1e-5, kDefaultNodeOverlap = 0.1, kDefaultMaxDup = 0.3;
+  static_assert(float(kDefaultAlpha) == SbvhParams{}.alpha && float(kDefaultNodeOverlap) == SbvhParams{}.node_overlap &&
+                float(kDefaultMaxDup) == SbvhParams{}.max_dup);
+  params.insert(params.begin(),
+                {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins, "object-split bins per axis"},
+                 {"spatial_bins", ParamType::kInt, double(defaults.spatial_bins), kMinBins, kMaxBins,
+                  "spatial-split slabs per axis"},
+                 {"adaptive_bins", ParamType::kInt, double(defaults.adaptive_bins), 0, 1,
+                  "1: at most 4 + n/20 bins and slabs on a node of n references"},
+                 {"alpha", ParamType::kFloat, kDefaultAlpha, 0, 1,
+                  "spatial splits where object-split children overlap by more than alpha * root area (1: none)"},
+                 {"node_overlap", ParamType::kFloat, kDefaultNodeOverlap, 0, 1,
+                  "... and by at least node_overlap * node area (Embree's rule; 0: Stich et al.'s alone)"},
+                 {"max_dup", ParamType::kFloat, kDefaultMaxDup, 0, kSbvhMaxDup,
+                  "at most (1 + max_dup) * n references"},
+                 {"unsplit", ParamType::kInt, double(defaults.unsplit), 0, 1, "1: reference unsplitting"}});
+  return {"sbvh", "spatial-split BVH (Stich, Friedrich and Dietrich 2009), object and spatial binned SAH",
+          std::move(params), [](const BuildInput& input, const ParamSet& p) { return build_sbvh(input, sbvh_params(p)); },
+          [](const ParamSet& p) { check_sbvh_params(sbvh_params(p)); }};
+}
+
 std::vector<BuilderInfo>& registry() {
   // One line per builder.
   static std::vector<BuilderInfo> all = {
@@ -114,6 +153,7 @@ std::vector<BuilderInfo>& registry() {
       sweep_sah_info(),
       wide_binned_sah_info(),
       wide_collapse_info(),
+      sbvh_info(),
   };
   return all;
 }

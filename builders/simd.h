@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -99,6 +100,10 @@ inline Vec4f equal(Vec4i a, Vec4i b) {
 /// Bit i is set where a[i] < b[i], the lanes read as int32.
 inline int less_mask(Vec4i a, Vec4i b) {
   return _mm_movemask_ps(_mm_castsi128_ps(_mm_cmplt_epi32(a.v, b.v)));
+}
+/// Bit i is set where lane i of a comparison mask is set.
+inline int mask_bits(Vec4f mask) {
+  return _mm_movemask_ps(mask.v);
 }
 inline Vec4f operator|(Vec4f a, Vec4f b) {
   return {_mm_or_ps(a.v, b.v)};
@@ -242,6 +247,11 @@ inline int less_mask(Vec4i a, Vec4i b) {
   for (int i = 0; i < 4; ++i) mask |= (static_cast<int32_t>(a.v[i]) < static_cast<int32_t>(b.v[i])) << i;
   return mask;
 }
+inline int mask_bits(Vec4f mask) {
+  int bits_set = 0;
+  for (int i = 0; i < 4; ++i) bits_set |= static_cast<int>(bits(mask.v[i]) >> 31) << i;
+  return bits_set;
+}
 inline Vec4f operator|(Vec4f a, Vec4f b) {
   return per_lane([&](int i) { return std::bit_cast<float>(bits(a.v[i]) | bits(b.v[i])); });
 }
@@ -326,6 +336,63 @@ inline Vec8f splat8(float s) {
 }
 inline Vec8f min(Vec8f a, Vec8f b) {
   return {min(a.low, b.low), min(a.high, b.high)};
+}
+#endif
+
+// Four double lanes: one 256-bit register with AVX, lane by lane otherwise. Used where float rounding
+// is too coarse (points computed while clipping triangles); to_float rounds each lane to nearest, as
+// static_cast<float> does, on both paths.
+#if defined(__AVX__) && defined(__SSE4_1__)
+struct Vec4d {
+  __m256d v;
+};
+inline Vec4d make4d(double x, double y, double z, double w) {
+  return {_mm256_setr_pd(x, y, z, w)};
+}
+inline Vec4d splat4d(double s) {
+  return {_mm256_set1_pd(s)};
+}
+inline Vec4d operator+(Vec4d a, Vec4d b) {
+  return {_mm256_add_pd(a.v, b.v)};
+}
+inline Vec4d operator-(Vec4d a, Vec4d b) {
+  return {_mm256_sub_pd(a.v, b.v)};
+}
+inline Vec4d operator*(Vec4d a, Vec4d b) {
+  return {_mm256_mul_pd(a.v, b.v)};
+}
+/// Clears the sign bit, exactly as std::fabs does.
+inline Vec4d abs(Vec4d a) {
+  return {_mm256_andnot_pd(_mm256_set1_pd(-0.0), a.v)};
+}
+inline Vec4f to_float(Vec4d a) {
+  return {_mm256_cvtpd_ps(a.v)};
+}
+#else
+struct Vec4d {
+  double v[4];
+};
+inline Vec4d make4d(double x, double y, double z, double w) {
+  return {{x, y, z, w}};
+}
+inline Vec4d splat4d(double s) {
+  return {{s, s, s, s}};
+}
+inline Vec4d operator+(Vec4d a, Vec4d b) {
+  return {{a.v[0] + b.v[0], a.v[1] + b.v[1], a.v[2] + b.v[2], a.v[3] + b.v[3]}};
+}
+inline Vec4d operator-(Vec4d a, Vec4d b) {
+  return {{a.v[0] - b.v[0], a.v[1] - b.v[1], a.v[2] - b.v[2], a.v[3] - b.v[3]}};
+}
+inline Vec4d operator*(Vec4d a, Vec4d b) {
+  return {{a.v[0] * b.v[0], a.v[1] * b.v[1], a.v[2] * b.v[2], a.v[3] * b.v[3]}};
+}
+inline Vec4d abs(Vec4d a) {
+  return {{std::fabs(a.v[0]), std::fabs(a.v[1]), std::fabs(a.v[2]), std::fabs(a.v[3])}};
+}
+inline Vec4f to_float(Vec4d a) {
+  return make4(static_cast<float>(a.v[0]), static_cast<float>(a.v[1]), static_cast<float>(a.v[2]),
+               static_cast<float>(a.v[3]));
 }
 #endif
 

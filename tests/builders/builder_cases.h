@@ -1,12 +1,17 @@
 #pragma once
 // The builder variants and scenes every builder test runs over.
 
+#include <gtest/gtest.h>
+
+#include <cmath>
 #include <cstdint>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "builders/registry.h"
+#include "core/clip_polygon.h"
 #include "core/triangle.h"
 #include "tests/support/test_scenes.h"
 
@@ -39,7 +44,44 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back({"wide_collapse", {{"method", "greedy"}}});
   out.push_back({"wide_collapse", {{"arity", "4"}, {"source", "sweep_sah"}}});
   out.push_back({"wide_collapse", {{"method", "greedy"}, {"arity", "4"}, {"max_leaf", "1"}}});
+  // Spatial splits tried at every node: without unsplitting, with the fewest slabs everywhere; and with
+  // the most slabs, a large budget and single-reference leaves.
+  out.push_back({"sbvh", {{"alpha", "0"}, {"unsplit", "0"}, {"spatial_bins", "4"}, {"adaptive_bins", "0"}}});
+  out.push_back({"sbvh", {{"alpha", "0"}, {"max_dup", "2"}, {"max_leaf", "1"}, {"spatial_bins", "256"}, {"c_trav", "3"}}});
   return out;
+}
+
+/// The most references a builder may return for `prims` primitives: (1 + max_dup) n for builders with a
+/// duplication budget (spatial splits), n for the others.
+inline std::size_t max_references(const BuilderInfo& info, const ParamSet& params, std::size_t prims) {
+  for (const auto& spec : info.params)
+    if (spec.name == "max_dup")
+      return static_cast<std::size_t>(std::floor((1.0 + double(params.get_float("max_dup"))) * double(prims)));
+  return prims;
+}
+
+/// Each reference of each leaf: the leaf box (grown by the validator's tolerance) holds a part of its
+/// triangle, i.e. the triangle clipped to the box is not empty. The validator asks less of split
+/// triangles (their leaves together must cover them); a builder that clips only boxes can leave a
+/// reference whose box misses the triangle, but one that clips the triangles, as the SBVH does, never does.
+inline ::testing::AssertionResult leaves_hold_parts_of_their_triangles(const Bvh& bvh, std::span<const Triangle> tris) {
+  for (uint32_t n = 0; n < bvh.nodes.size(); ++n) {
+    const Node& node = bvh.nodes[n];
+    if (!node.is_leaf()) continue;
+    for (uint32_t r = node.first; r < node.first + node.prim_count; ++r) {
+      const Triangle& t = tris[bvh.prim_refs[r]];
+      const double tol = 0x1p-30 * coordinate_scale(t);
+      ClipPolygon part = ClipPolygon::of(t);
+      for (int a = 0; a < 3; ++a) {
+        part.clip(a, double(node.bounds.min[a]) - tol, false);
+        part.clip(a, double(node.bounds.max[a]) + tol, true);
+      }
+      if (part.empty())
+        return ::testing::AssertionFailure() << "leaf " << n << " holds triangle " << bvh.prim_refs[r]
+                                             << ", which does not meet its box";
+    }
+  }
+  return ::testing::AssertionSuccess();
 }
 
 struct SceneCase {

@@ -1,0 +1,164 @@
+// The SBVH builder on the inputs spatial splits exist for (long thin triangles) and on the shared scenes:
+// same hits as a reference, the duplication budget, clipped leaves, and the same tree for any thread
+// count. (The adversarial scene cases run through BuilderVsReference with the sbvh variants.)
+
+#include <gtest/gtest.h>
+
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "builders/registry.h"
+#include "core/bvh_stats.h"
+#include "core/validate.h"
+#include "scenes/generators.h"
+#include "scenes/load.h"
+#include "scenes/scene_path.h"
+#include "tests/builders/builder_cases.h"
+#include "tests/support/hit_check.h"
+#include "tests/support/test_scenes.h"
+#include "traversal/brute_force.h"
+#include "traversal/bvh2_traversal.h"
+
+namespace sahbench {
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kSanitized = true;
+#else
+constexpr bool kSanitized = false;
+#endif
+
+Bvh build(const std::string& builder, const std::vector<Triangle>& tris, const ParamOverrides& overrides = {}) {
+  const BuilderInfo& info = find_builder(builder);
+  return info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, overrides));
+}
+
+// Needles (aspect 100): boxes of long diagonal triangles overlap everything, the case of Stich et al.'s
+// Figure 1. Deterministic from the seed.
+const std::vector<Triangle>& needles() {
+  static const auto tris = generate_needles(kSanitized ? 6000 : 20000, 7, 100.0);
+  return tris;
+}
+
+TEST(Sbvh, NeedlesSameHitsAsBruteForceWithSplitsWithinBudget) {
+  const auto& tris = needles();
+  const Bvh sbvh = build("sbvh", tris);
+  const Bvh binned = build("binned_sah", tris);
+  const ValidationReport report = validate(sbvh, std::span<const Triangle>(tris));
+  ASSERT_TRUE(report.ok()) << report.summary();
+  EXPECT_TRUE(test::leaves_hold_parts_of_their_triangles(sbvh, tris));
+  // Spatial splits happened, within the default budget of 0.3 n extra references, and paid off; more
+  // so with a larger budget (these needles overlap so much that the default budget runs out early).
+  EXPECT_GT(sbvh.prim_refs.size(), tris.size());
+  EXPECT_LE(sbvh.prim_refs.size(), static_cast<std::size_t>(std::floor(1.3 * double(tris.size()))));
+  const SahCost cost;
+  EXPECT_LT(sah_cost(sbvh, cost), 0.95 * sah_cost(binned, cost));
+  EXPECT_LT(sah_cost(build("sbvh", tris, {{"max_dup", "1"}}), cost), 0.75 * sah_cost(binned, cost));
+
+  const auto rays = test::random_rays(tris, kSanitized ? 300 : 1500, 11);
+  std::size_t hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const Hit ref = brute_force_closest(tris, rays[i]);
+    hits += ref.found();
+    ASSERT_TRUE(test::same_closest_hit(closest_hit(sbvh, tris, rays[i]), ref, tris, rays[i])) << "ray " << i;
+    ASSERT_EQ(any_hit(sbvh, tris, rays[i]), brute_force_any(tris, rays[i])) << "ray " << i;
+  }
+  EXPECT_GT(hits, rays.size() / 20);
+}
+
+TEST(Sbvh, DuplicatesStayWithinTheBudget) {
+  const auto& tris = needles();
+  for (const char* max_dup : {"0", "0.01", "0.1", "1", "4"}) {
+    SCOPED_TRACE(std::string("max_dup ") + max_dup);
+    // alpha 0: spatial splits are tried at every node, so the budget is what stops them.
+    const Bvh bvh = build("sbvh", tris, {{"max_dup", max_dup}, {"alpha", "0"}});
+    ASSERT_TRUE(validate(bvh, std::span<const Triangle>(tris)).ok());
+    const double budget = (1.0 + std::stod(max_dup)) * double(tris.size());
+    EXPECT_LE(bvh.prim_refs.size(), static_cast<std::size_t>(std::floor(budget)));
+    if (std::string(max_dup) == "0") {
+      EXPECT_EQ(bvh.prim_refs.size(), tris.size());
+    } else {
+      EXPECT_GT(bvh.prim_refs.size(), tris.size());
+    }
+  }
+}
+
+TEST(Sbvh, AlphaOneTurnsSpatialSplitsOff) {
+  for (const auto& tris : {needles(), test::random_triangles(5000, 3, 10.0f, 8.0f)}) {
+    const Bvh bvh = build("sbvh", tris, {{"alpha", "1"}});
+    ASSERT_TRUE(validate(bvh, std::span<const Triangle>(tris)).ok());
+    EXPECT_EQ(bvh.prim_refs.size(), tris.size());
+  }
+}
+
+TEST(Sbvh, SameTreeForAnyThreadCount) {
+  // Large enough for parallel clipping, binning and subtree tasks (BuilderDeterminism covers the
+  // defaults on a random soup); alpha 0 splits wherever it pays, a large budget lets it.
+  const auto tris = generate_needles(kSanitized ? 20000 : 40000, 9, 50.0);
+  const BuilderInfo& info = find_builder("sbvh");
+  const BuildInput input = BuildInput::from_triangles(tris);
+  const ParamSet params = resolve_params(info.name, info.params, {{"alpha", "0"}, {"max_dup", "1"}});
+  auto build_with = [&](int threads) {
+    tbb::task_arena arena(threads);
+    return arena.execute([&] { return info.build(input, params); });
+  };
+  const Bvh one = build_with(1);
+  ASSERT_GT(one.prim_refs.size(), tris.size());
+  EXPECT_TRUE(one == build_with(4)) << "1 and 4 threads give different trees";
+}
+
+// Shared scenes: too large for brute force, so the reference is binned_sah's tree, which
+// BuilderVsReference checks against brute force. Under ASan only the smaller scene, with fewer rays.
+TEST(Sbvh, SharedScenesSameHitsAsBinnedSah) {
+  std::vector<std::string> names{"stanford_bunny"};
+  if (!kSanitized) names.push_back("crytek_sponza");
+  for (const auto& name : names) {
+    SCOPED_TRACE(name);
+    if (!find_scene_file(name)) {
+      std::cout << "[ skipped  ] shared scene '" << name << "' not found\n";
+      continue;
+    }
+    const Scene scene = load_scene(name);
+    const auto& tris = scene.triangles;
+    const Bvh sbvh = build("sbvh", tris);
+    const Bvh binned = build("binned_sah", tris);
+    const ValidationReport report = validate(sbvh, std::span<const Triangle>(tris));
+    ASSERT_TRUE(report.ok()) << report.summary();
+    EXPECT_GT(sbvh.prim_refs.size(), tris.size());
+    EXPECT_LE(sbvh.prim_refs.size(), static_cast<std::size_t>(std::floor(1.3 * double(tris.size()))));
+    const SahCost cost;
+    EXPECT_LT(sah_cost(sbvh, cost), sah_cost(binned, cost));
+
+    const auto rays = test::random_rays(tris, kSanitized ? 2000 : 20000, 5);
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const Hit ref = closest_hit(binned, tris, rays[i]);
+      hits += ref.found();
+      ASSERT_TRUE(test::same_closest_hit(closest_hit(sbvh, tris, rays[i]), ref, tris, rays[i])) << "ray " << i;
+      ASSERT_EQ(any_hit(sbvh, tris, rays[i]), any_hit(binned, tris, rays[i])) << "ray " << i;
+    }
+    EXPECT_GT(hits, rays.size() / 20);
+  }
+}
+
+TEST(Sbvh, RejectsBadParametersAndMissingTriangles) {
+  const BuilderInfo& info = find_builder("sbvh");
+  EXPECT_THROW(resolve_params(info.name, info.params, {{"alpha", "2"}}), Error);
+  EXPECT_THROW(resolve_params(info.name, info.params, {{"max_dup", "-0.1"}}), Error);
+  EXPECT_THROW(resolve_params(info.name, info.params, {{"spatial_bins", "2"}}), Error);
+  const auto tris = test::random_triangles(10, 1);
+  BuildInput input = BuildInput::from_triangles(tris);
+  input.triangles = {};
+  try {
+    info.build(input, resolve_params(info.name, info.params, {}));
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("needs the triangles"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace sahbench

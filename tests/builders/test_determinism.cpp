@@ -15,6 +15,9 @@ TEST(BuilderDeterminism, SameTreeForAnyThreadCount) {
   const auto tris = test::random_triangles(150000, 77, 100.0f);
   const BuildInput input = BuildInput::from_triangles(tris);
   for (const auto& info : builders()) {
+    // The SBVH clips every reference at every node of a soup like this one, which would take most of the
+    // suite's time; Sbvh.SameTreeForAnyThreadCount checks it on inputs of its own.
+    if (info.name == "sbvh") continue;
     const ParamSet params = resolve_params(info.name, info.params, {});
     auto build_with = [&](int threads) {
       tbb::task_arena arena(threads);

@@ -137,12 +137,13 @@ struct Box4 {
 // on the far side of y; branch-free, and at most two ulps loose.
 constexpr double kUlp = 0x1p-23;
 constexpr double kSmallest = std::numeric_limits<float>::min();
-inline Box4 outward(Vec4d x, Vec4d pad) {
+inline Box4 outward(Vec4d lo, Vec4d hi, Vec4d pad) {
   const Vec4d step_ulp = simd::splat4d(kUlp), smallest = simd::splat4d(kSmallest);
-  const Vec4d below = x - pad, above = x + pad;
+  const Vec4d below = lo - pad, above = hi + pad;
   return {simd::to_float(below - (simd::abs(below) * step_ulp + smallest)),
           simd::to_float(above + (simd::abs(above) * step_ulp + smallest))};
 }
+inline Box4 outward(Vec4d x, Vec4d pad) { return outward(x, x, pad); }
 
 inline Vec4d to_vec4d(const ClipPolygon::Point& p) { return simd::make4d(p[0], p[1], p[2], 0.0); }
 
@@ -194,8 +195,8 @@ class RefClipper {
   }
 
   // The crossing of the edge from `origin` with direction `slope` (per unit along `axis`) and plane p.
-  Box4 crossing(Vec4d origin, Vec4d slope, double start, double p) const {
-    return outward(origin + simd::splat4d(p - start) * slope, simd::splat4d(pad_));
+  static Vec4d crossing(Vec4d origin, Vec4d slope, double start, double p) {
+    return origin + simd::splat4d(p - start) * slope;
   }
 
   // A triangle (or a part with three corners): with its corners sorted along the axis, every plane
@@ -226,11 +227,14 @@ class RefClipper {
     const Vec4d long_slope = (p2 - p0) * simd::splat4d(1.0 / (x2 - x0));
     const Vec4d low_slope = x1 > x0 ? (p1 - p0) * simd::splat4d(1.0 / (x1 - x0)) : simd::splat4d(0.0);
     const Vec4d high_slope = x2 > x1 ? (p2 - p1) * simd::splat4d(1.0 / (x2 - x1)) : simd::splat4d(0.0);
+    const Vec4d pad = simd::splat4d(pad_);
     for (; j <= end; ++j) {
       const double p = grid.plane(axis, j);
       if (!(p < x2)) break;
-      Box4 c = crossing(p0, long_slope, x0, p);
-      c.extend(p < x1 ? crossing(p0, low_slope, x0, p) : crossing(p1, high_slope, x1, p));
+      // Both crossings bounded in double and rounded outward once.
+      const Vec4d a = crossing(p0, long_slope, x0, p);
+      const Vec4d b = p < x1 ? crossing(p0, low_slope, x0, p) : crossing(p1, high_slope, x1, p);
+      const Box4 c = outward(simd::min(a, b), simd::max(a, b), pad);
       parts[j - 1].extend(c);
       parts[j].extend(c);
     }
@@ -252,7 +256,7 @@ class RefClipper {
       for (; j <= end; ++j) {
         const double plane = grid.plane(axis, j);
         if (!(plane < hi)) break;
-        const Box4 c = crossing(vertex_[i], slope, xa, plane);
+        const Box4 c = outward(crossing(vertex_[i], slope, xa, plane), simd::splat4d(pad_));
         parts[j - 1].extend(c);
         parts[j].extend(c);
       }

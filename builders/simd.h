@@ -365,6 +365,13 @@ inline Vec4d operator*(Vec4d a, Vec4d b) {
 inline Vec4d abs(Vec4d a) {
   return {_mm256_andnot_pd(_mm256_set1_pd(-0.0), a.v)};
 }
+/// a < b ? a : b and a > b ? a : b per lane, as the Vec4f versions.
+inline Vec4d min(Vec4d a, Vec4d b) {
+  return {_mm256_min_pd(a.v, b.v)};
+}
+inline Vec4d max(Vec4d a, Vec4d b) {
+  return {_mm256_max_pd(a.v, b.v)};
+}
 inline Vec4f to_float(Vec4d a) {
   return {_mm256_cvtpd_ps(a.v)};
 }
@@ -389,6 +396,16 @@ inline Vec4d operator*(Vec4d a, Vec4d b) {
 }
 inline Vec4d abs(Vec4d a) {
   return {{std::fabs(a.v[0]), std::fabs(a.v[1]), std::fabs(a.v[2]), std::fabs(a.v[3])}};
+}
+inline Vec4d min(Vec4d a, Vec4d b) {
+  Vec4d r;
+  for (int i = 0; i < 4; ++i) r.v[i] = a.v[i] < b.v[i] ? a.v[i] : b.v[i];
+  return r;
+}
+inline Vec4d max(Vec4d a, Vec4d b) {
+  Vec4d r;
+  for (int i = 0; i < 4; ++i) r.v[i] = a.v[i] > b.v[i] ? a.v[i] : b.v[i];
+  return r;
 }
 inline Vec4f to_float(Vec4d a) {
   return make4(static_cast<float>(a.v[0]), static_cast<float>(a.v[1]), static_cast<float>(a.v[2]),

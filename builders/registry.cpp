@@ -81,7 +81,7 @@ BuilderInfo wide_collapse_info() {
                 {arity_param(),
                  choice_param("method", {"sah", "greedy"}, 0,
                               "sah: SAH-optimal collapse (Ylitie et al. 2017); greedy: open the largest child"),
-                 choice_param("source", {"binned_sah", "sweep_sah"}, 0,
+                 choice_param("source", {"binned_sah", "sweep_sah", "sbvh"}, 0,
                               "the binary builder whose tree is collapsed (with the bins and leaf parameters here); "
                               "method=sah may merge a subtree of up to max_leaf references into one leaf")});
   return {"wide_collapse",
@@ -89,8 +89,20 @@ BuilderInfo wide_collapse_info() {
           std::move(params),
           [](const BuildInput& input, const ParamSet& p) {
             const BinnedSahParams binary = binned_config(p);
-            const Bvh tree = p.get_choice("source") == "sweep_sah" ? build_sweep_sah(input, {binary.top_down})
-                                                                   : build_binned_sah(input, binary);
+            const std::string& source = p.get_choice("source");
+            Bvh tree;
+            if (source == "sweep_sah") {
+              tree = build_sweep_sah(input, {binary.top_down});
+            } else if (source == "sbvh") {
+              // Spatial splits with sbvh's defaults for its own parameters (alpha, max_dup, ...).
+              SbvhParams sbvh;
+              sbvh.bins = binary.bins;
+              sbvh.adaptive_bins = binary.adaptive_bins;
+              sbvh.top_down = binary.top_down;
+              tree = build_sbvh(input, sbvh);
+            } else {
+              tree = build_binned_sah(input, binary);
+            }
             if (p.get_choice("method") == "greedy") return collapse_greedy(tree, arity_of(p));
             return collapse_sah(tree, arity_of(p), sah_cost_of(p), p.get_uint("max_leaf"));
           },

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "builders/registry.h"
+#include "builders/sbvh.h"
 #include "core/clip_polygon.h"
 #include "core/triangle.h"
 #include "tests/support/test_scenes.h"
@@ -44,6 +45,7 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back({"wide_collapse", {{"method", "greedy"}}});
   out.push_back({"wide_collapse", {{"arity", "4"}, {"source", "sweep_sah"}}});
   out.push_back({"wide_collapse", {{"method", "greedy"}, {"arity", "4"}, {"max_leaf", "1"}}});
+  out.push_back({"wide_collapse", {{"source", "sbvh"}}});
   // Spatial splits tried at every node: without unsplitting, with the fewest slabs everywhere; and with
   // the most slabs, a large budget and single-reference leaves.
   out.push_back({"sbvh", {{"alpha", "0"}, {"unsplit", "0"}, {"spatial_bins", "4"}, {"adaptive_bins", "0"}}});
@@ -54,6 +56,9 @@ inline std::vector<BuilderVariant> builder_variants() {
 /// The most references a builder may return for `prims` primitives: (1 + max_dup) n for builders with a
 /// duplication budget (spatial splits), n for the others.
 inline std::size_t max_references(const BuilderInfo& info, const ParamSet& params, std::size_t prims) {
+  // wide_collapse source=sbvh collapses an SBVH with sbvh's default budget.
+  if (info.name == "wide_collapse" && params.get_choice("source") == "sbvh")
+    return static_cast<std::size_t>(std::floor((1.0 + double(SbvhParams{}.max_dup)) * double(prims)));
   for (const auto& spec : info.params)
     if (spec.name == "max_dup")
       return static_cast<std::size_t>(std::floor((1.0 + double(params.get_float("max_dup"))) * double(prims)));

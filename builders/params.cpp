@@ -10,7 +10,12 @@
 namespace sahbench {
 namespace {
 
-std::string format_value(double value, ParamType type) {
+std::string format_value(double value, const ParamSpec& spec) {
+  const ParamType type = spec.type;
+  if (type == ParamType::kChoice) {
+    const auto index = static_cast<std::size_t>(value);
+    return index < spec.choices.size() ? spec.choices[index] : "?";
+  }
   if (type == ParamType::kInt) return std::to_string(static_cast<long long>(value));
   char buf[32];
   // Shortest representation that reads back to the same double.
@@ -26,6 +31,13 @@ std::string known_names(const std::vector<ParamSpec>& specs) {
 
 double parse_value(std::string_view builder, const ParamSpec& spec, const std::string& text) {
   const std::string where = std::string(builder) + ": parameter '" + spec.name + "' = '" + text + "'";
+  if (spec.type == ParamType::kChoice) {
+    for (std::size_t i = 0; i < spec.choices.size(); ++i)
+      if (spec.choices[i] == text) return static_cast<double>(i);
+    std::string known;
+    for (const auto& c : spec.choices) known += (known.empty() ? "" : ", ") + c;
+    throw Error(where + " is not one of " + known);
+  }
   double value = 0.0;
   const char* end = text.data() + text.size();
   const auto result = std::from_chars(text.data(), end, value);
@@ -33,8 +45,8 @@ double parse_value(std::string_view builder, const ParamSpec& spec, const std::s
     throw Error(where + " is not a number");
   if (spec.type == ParamType::kInt && value != std::floor(value)) throw Error(where + " is not an integer");
   if (value < spec.min_value || value > spec.max_value)
-    throw Error(where + " is outside [" + format_value(spec.min_value, spec.type) + ", " +
-                format_value(spec.max_value, spec.type) + "]");
+    throw Error(where + " is outside [" + format_value(spec.min_value, spec) + ", " +
+                format_value(spec.max_value, spec) + "]");
   return value;
 }
 
@@ -48,8 +60,22 @@ double ParamSet::get(std::string_view name) const {
 
 std::string ParamSet::to_string() const {
   std::string out;
-  for (const auto& [spec, value] : values_) out += (out.empty() ? "" : ";") + spec.name + "=" + format_value(value, spec.type);
+  for (const auto& [spec, value] : values_) out += (out.empty() ? "" : ";") + spec.name + "=" + format_value(value, spec);
   return out;
+}
+
+const std::string& ParamSet::get_choice(std::string_view name) const {
+  for (const auto& [spec, value] : values_)
+    if (spec.name == name) {
+      if (spec.type != ParamType::kChoice) break;
+      return spec.choices.at(static_cast<std::size_t>(value));
+    }
+  throw Error(builder_ + ": no choice parameter '" + std::string(name) + "' is declared");
+}
+
+ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index, std::string help) {
+  const double last = static_cast<double>(choices.size()) - 1.0;
+  return {std::move(name), ParamType::kChoice, double(default_index), 0.0, last, std::move(help), std::move(choices)};
 }
 
 ParamSet resolve_params(std::string_view builder, const std::vector<ParamSpec>& specs,

@@ -3,6 +3,7 @@
 // `key=value` overrides are checked against that declaration, and the resolved set (every parameter with
 // its value) is what the builder reads and what the CSV's builder_params column records.
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -10,7 +11,8 @@
 
 namespace sahbench {
 
-enum class ParamType { kInt, kFloat };
+/// kChoice: one of a list of names, held as its index (min 0, max choices - 1) and written by name.
+enum class ParamType { kInt, kFloat, kChoice };
 
 struct ParamSpec {
   std::string name;
@@ -19,7 +21,11 @@ struct ParamSpec {
   double min_value = 0.0;
   double max_value = 0.0;
   std::string help;
+  std::vector<std::string> choices;  ///< kChoice only
 };
+
+/// A kChoice parameter whose default is choices[default_index].
+ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index, std::string help);
 
 using ParamOverrides = std::vector<std::pair<std::string, std::string>>;
 
@@ -33,6 +39,8 @@ class ParamSet {
   double get(std::string_view name) const;
   uint32_t get_uint(std::string_view name) const { return static_cast<uint32_t>(get(name)); }
   float get_float(std::string_view name) const { return static_cast<float>(get(name)); }
+  /// The name chosen for a kChoice parameter.
+  const std::string& get_choice(std::string_view name) const;
 
   /// "key=value;key=value" in declaration order, integers without a fraction: the CSV form.
   std::string to_string() const;

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "builders/binned_sah.h"
+#include "builders/collapse.h"
 #include "builders/sweep_sah.h"
 #include "core/error.h"
 
@@ -29,18 +30,71 @@ TopDownConfig top_down_config(const ParamSet& p) {
   return {p.get_uint("min_leaf"), p.get_uint("max_leaf"), sah_cost_of(p)};
 }
 
-BuilderInfo binned_sah_info() {
+std::vector<ParamSpec> binned_params() {
   auto params = top_down_params();
   const BinnedSahParams defaults;
   params.insert(params.begin(), {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins,
                                   "centroid bins per axis"},
                                  {"adaptive_bins", ParamType::kInt, double(defaults.adaptive_bins), 0, 1,
                                   "1: min(bins, 4 + n/20) bins on a node of n primitives (Embree's rule)"}});
-  return {"binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", std::move(params),
-          [](const BuildInput& input, const ParamSet& p) {
-            return build_binned_sah(input, {p.get_uint("bins"), p.get_uint("adaptive_bins") != 0, top_down_config(p)});
-          },
+  return params;
+}
+
+BinnedSahParams binned_config(const ParamSet& p) {
+  return {p.get_uint("bins"), p.get_uint("adaptive_bins") != 0, top_down_config(p)};
+}
+
+// Wide trees: 8 children by default, the width of an AVX2 node (Embree's BVH8).
+constexpr uint32_t kDefaultWideArity = 8;
+
+ParamSpec arity_param() {
+  return {"arity", ParamType::kInt, double(kDefaultWideArity), 2, kMaxArity, "children per inner node"};
+}
+
+uint32_t arity_of(const ParamSet& p) { return p.get_uint("arity"); }
+
+BuilderInfo binned_sah_info() {
+  return {"binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", binned_params(),
+          [](const BuildInput& input, const ParamSet& p) { return build_binned_sah(input, binned_config(p)); },
           [](const ParamSet& p) { check_config(top_down_config(p), "binned_sah"); }};
+}
+
+BuilderInfo wide_binned_sah_info() {
+  auto params = binned_params();
+  params.insert(params.begin(), arity_param());
+  auto config = [](const ParamSet& p) {
+    BinnedSahParams c = binned_config(p);
+    c.top_down.arity = arity_of(p);
+    return c;
+  };
+  return {"wide_binned_sah",
+          "binned SAH building wide nodes directly: the child of largest area is split until `arity` "
+          "children (Wald et al. 2008; Embree's BVHN builder)",
+          std::move(params), [config](const BuildInput& input, const ParamSet& p) { return build_binned_sah(input, config(p)); },
+          [config](const ParamSet& p) { check_config(config(p).top_down, "wide_binned_sah"); }, arity_of};
+}
+
+BuilderInfo wide_collapse_info() {
+  auto params = binned_params();
+  params.insert(params.begin(),
+                {arity_param(),
+                 choice_param("method", {"sah", "greedy"}, 0,
+                              "sah: SAH-optimal collapse (Ylitie et al. 2017); greedy: open the largest child"),
+                 choice_param("source", {"binned_sah", "sweep_sah"}, 0,
+                              "the binary builder whose tree is collapsed (with the bins and leaf parameters here)"),
+                 {"merge_leaf", ParamType::kInt, 8, 1, kMaxLeafPrims,
+                  "method=sah: the most references a leaf merged from a subtree may hold"}});
+  return {"wide_collapse",
+          "a binary SAH tree collapsed to `arity` children per node; build time includes the binary build",
+          std::move(params),
+          [](const BuildInput& input, const ParamSet& p) {
+            const BinnedSahParams binary = binned_config(p);
+            const Bvh tree = p.get_choice("source") == "sweep_sah" ? build_sweep_sah(input, {binary.top_down})
+                                                                   : build_binned_sah(input, binary);
+            if (p.get_choice("method") == "greedy") return collapse_greedy(tree, arity_of(p));
+            return collapse_sah(tree, arity_of(p), sah_cost_of(p), p.get_uint("merge_leaf"));
+          },
+          [](const ParamSet& p) { check_config(top_down_config(p), "wide_collapse"); }, arity_of};
 }
 
 BuilderInfo sweep_sah_info() {
@@ -54,6 +108,8 @@ std::vector<BuilderInfo>& registry() {
   static std::vector<BuilderInfo> all = {
       binned_sah_info(),
       sweep_sah_info(),
+      wide_binned_sah_info(),
+      wide_collapse_info(),
   };
   return all;
 }

@@ -23,6 +23,9 @@ struct BuilderInfo {
   /// Checks a combination of parameters that each lie in range but may not fit together (min_leaf above
   /// max_leaf, say), so configs fail when loaded rather than when the builder's turn comes. Optional.
   std::function<void(const ParamSet&)> check;
+  /// The arity of the trees built with these parameters, so the harness can pair the builder with
+  /// layouts before building. Optional: empty means binary.
+  std::function<uint32_t(const ParamSet&)> arity;
 };
 
 /// Every registered builder, in registration order.

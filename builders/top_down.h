@@ -8,7 +8,8 @@
 // race for node indices and the tree is the same for any thread count. A subtree over n primitives has at
 // most 2n - 1 nodes (a full binary tree with at most n leaves), so a node over n primitives reserves
 // 2n - 2 slots for its descendants: its two children first, then the left child's region (2 n_left - 2),
-// then the right child's. Leaves holding several primitives leave holes, which compact() removes.
+// then the right child's. Leaves holding several primitives leave holes, which compact() removes. A wide
+// node with k children uses k + sum(2 n_i - 2) = 2n - k slots, so the same regions hold wide trees.
 
 #include <tbb/task_group.h>
 
@@ -28,10 +29,18 @@
 
 namespace sahbench {
 
+/// Most children a node of the common format has (core/bvh.h allows 2 to 8).
+inline constexpr uint32_t kMaxArity = 8;
+
 struct TopDownConfig {
   uint32_t min_leaf = 1;  ///< nodes with this many primitives or fewer become leaves
   uint32_t max_leaf = 8;  ///< nodes with more are split even where the SAH prefers a leaf
   SahCost cost;
+  /// Children per inner node, 2 to 8. Above 2, a node's children are found by splitting, again and
+  /// again, the child of largest surface area until there are `arity` of them or none can be split
+  /// (the direct wide build of Wald, Benthin and Boulos 2008, "Getting Rid of Packets", and of
+  /// Embree's BVHN builders).
+  uint32_t arity = 2;
 };
 
 /// A node's primitives: the range [begin, end) of the splitter's reference order, and their bounds.
@@ -106,41 +115,88 @@ class TopDownBuilder {
     slots_[slot] = {range.bounds, range.begin, 0, range.size()};
   }
 
-  // Builds the node for `range` into `slot`; its descendants go into slots [region, region + 2n - 2).
-  void build_node(const NodeRange& range, uint32_t slot, uint32_t region, uint32_t depth) {
+  // Decides whether `range` is split and, if so, partitions it into `halves`; false makes it a leaf.
+  // `depth` counts binary splits from the root, so the depth bound holds for wide trees as well.
+  bool try_split(const NodeRange& range, uint32_t depth, Partition& halves) {
     const uint32_t n = range.size();
-    if (n <= config_.min_leaf) return make_leaf(range, slot);
-
-    Partition halves;
+    if (n <= config_.min_leaf) return false;
     if (must_halve(depth, n)) {
-      if (n <= config_.max_leaf) return make_leaf(range, slot);
+      if (n <= config_.max_leaf) return false;
       halves = splitter_.partition_median(range);
-    } else {
-      const Split split = splitter_.find_split(range);
-      const float leaf_cost = config_.cost.leaf_cost(n);
-      // Prefer a leaf where the SAH does, unless the leaf would be too large to be useful.
-      if (n <= config_.max_leaf && !(split.valid() && split.cost < leaf_cost)) return make_leaf(range, slot);
-      // A split whose children both keep the parent's full area costs c_trav + leaf cost: the SAH sees
-      // no difference between candidates (identical or nested primitives), and taking its first one
-      // would peel off one primitive per level. Halving by count instead keeps the depth logarithmic;
-      // for lots of overlapping primitives this gives poor but valid trees.
-      const bool informative = split.valid() && split.cost < config_.cost.c_trav + leaf_cost;
-      halves = informative ? splitter_.partition(range, split) : splitter_.partition_median(range);
+      return true;
+    }
+    const Split split = splitter_.find_split(range);
+    const float leaf_cost = config_.cost.leaf_cost(n);
+    // Prefer a leaf where the SAH does, unless the leaf would be too large to be useful.
+    if (n <= config_.max_leaf && !(split.valid() && split.cost < leaf_cost)) return false;
+    // A split whose children both keep the parent's full area costs c_trav + leaf cost: the SAH sees
+    // no difference between candidates (identical or nested primitives), and taking its first one
+    // would peel off one primitive per level. Halving by count instead keeps the depth logarithmic;
+    // for lots of overlapping primitives this gives poor but valid trees.
+    const bool informative = split.valid() && split.cost < config_.cost.c_trav + leaf_cost;
+    halves = informative ? splitter_.partition(range, split) : splitter_.partition_median(range);
+    return true;
+  }
+
+  // One child of the node being built: its primitives, its binary depth, and whether it was already
+  // found to be a leaf (so its split search is not repeated).
+  struct Child {
+    NodeRange range;
+    uint32_t depth;
+    bool leaf;
+  };
+
+  // Builds the node for `range` into `slot`; its descendants go into slots [region, region + 2n - 2):
+  // its k children first, then each child's own region of 2 n_i - 2 slots, which sums to 2n - k.
+  void build_node(const NodeRange& range, uint32_t slot, uint32_t region, uint32_t depth) {
+    Partition halves;
+    if (!try_split(range, depth, halves)) return make_leaf(range, slot);
+
+    Child children[kMaxArity];
+    uint32_t count = 2;
+    children[0] = {halves.left, depth + 1, false};
+    children[1] = {halves.right, depth + 1, false};
+    while (count < config_.arity) {
+      // Split the open child of largest area; its halves take its place, so children stay in
+      // primitive order.
+      uint32_t best = count;
+      float best_area = -1.0f;
+      for (uint32_t c = 0; c < count; ++c) {
+        const float area = children[c].range.bounds.half_area();
+        if (!children[c].leaf && area > best_area) best = c, best_area = area;
+      }
+      if (best == count) break;
+      Partition parts;
+      if (!try_split(children[best].range, children[best].depth, parts)) {
+        children[best].leaf = true;
+        continue;
+      }
+      const uint32_t child_depth = children[best].depth + 1;
+      std::move_backward(children + best + 1, children + count, children + count + 1);
+      children[best] = {parts.left, child_depth, false};
+      children[best + 1] = {parts.right, child_depth, false};
+      ++count;
     }
 
-    const uint32_t left_slot = region, right_slot = region + 1;
-    const uint32_t left_region = region + 2;
-    const uint32_t right_region = left_region + 2 * halves.left.size() - 2;
-    slots_[slot] = {range.bounds, left_slot, 2, 0};
-
-    if (n >= kSpawnThreshold) {
+    slots_[slot] = {range.bounds, region, count, 0};
+    uint32_t child_region = region + count;
+    auto build_child = [&](uint32_t c, uint32_t child_region_begin) {
+      if (children[c].leaf) return make_leaf(children[c].range, region + c);
+      build_node(children[c].range, region + c, child_region_begin, children[c].depth);
+    };
+    if (range.size() >= kSpawnThreshold) {
       tbb::task_group group;
-      group.run([&] { build_node(halves.left, left_slot, left_region, depth + 1); });
-      build_node(halves.right, right_slot, right_region, depth + 1);
+      for (uint32_t c = 0; c + 1 < count; ++c) {
+        group.run([&build_child, c, child_region] { build_child(c, child_region); });
+        child_region += 2 * children[c].range.size() - 2;
+      }
+      build_child(count - 1, child_region);
       group.wait();
     } else {
-      build_node(halves.left, left_slot, left_region, depth + 1);
-      build_node(halves.right, right_slot, right_region, depth + 1);
+      for (uint32_t c = 0; c < count; ++c) {
+        build_child(c, child_region);
+        child_region += 2 * children[c].range.size() - 2;
+      }
     }
   }
 
@@ -148,7 +204,7 @@ class TopDownBuilder {
   // and writes the primitive references in the splitter's final order.
   Bvh compact(uint32_t prim_count) const {
     Bvh bvh;
-    bvh.arity = 2;
+    bvh.arity = config_.arity;
     bvh.nodes.reserve(2 * std::size_t{prim_count} - 1);
     bvh.nodes.push_back({slots_[0].bounds, 0, 0, 0});
     std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};  // (slot, index in bvh.nodes)

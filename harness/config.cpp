@@ -253,9 +253,9 @@ void read_experiment(const Source& src, const toml::table& root, ExperimentConfi
     for (const auto& item : read_list(src, *n, "experiment.layouts", "strings")) {
       if (!item.is_string())
         src.fail(item, "experiment.layouts must be a list of strings, not contain " + type_name(item));
-      const std::string layout = read_string(src, item, "experiment.layouts item");
+      std::string layout;
       try {
-        find_layout(layout);
+        layout = parse_layout_spec(read_string(src, item, "experiment.layouts item")).text();
       } catch (const Error& e) {
         src.fail(item, std::string("experiment.layouts: ") + e.what());
       }

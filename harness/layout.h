@@ -13,6 +13,7 @@
 #include "core/bvh.h"
 #include "core/ray.h"
 #include "core/triangle.h"
+#include "traversal/kernel_variant.h"
 
 namespace sahbench {
 
@@ -35,18 +36,48 @@ class CompiledLayout {
   virtual TraceCounts count_any(std::span<const Ray> rays) const = 0;
   /// Exact bytes of the compiled structure (nodes, references, packed leaves).
   virtual std::size_t bytes() const = 0;
+  /// The instruction set its kernels run with ("scalar", "sse", "avx2", "avx512"), for the CSV.
+  virtual std::string isa() const { return "scalar"; }
+};
+
+/// A layout and its options, as a config or the CLI names it: `NAME[:key=value,...]` with the keys
+///   tri = watertight | mt | mt0   (triangle test; mt0 is Möller–Trumbore with epsilon 0)
+///   box = robust | fast           (ray/box test)
+///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto = the widest the CPU runs)
+/// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2".
+struct LayoutSpec {
+  std::string name;
+  KernelVariant variant;
+  KernelIsa isa = KernelIsa::kAuto;
+
+  /// The canonical text: the name, then the options that differ from the defaults, in the order above.
+  /// This is what the CSV's layout column holds, so "bvh2:tri=watertight" and "bvh2" are one cell.
+  std::string text() const;
 };
 
 struct LayoutInfo {
   std::string name;
   std::string summary;
+  /// The arity of the trees this layout is meant for; the harness pairs a builder only with the
+  /// layouts of its arity (a layout may still compile narrower trees, e.g. in tests).
+  uint32_t arity = 2;
+  /// Whether the `isa` option applies (the SIMD layouts).
+  bool has_isa = false;
   /// Compiles `bvh` over `triangles` (which must outlive the result). Throws Error when the tree does
-  /// not suit the layout (e.g. arity too large), naming both.
-  std::unique_ptr<CompiledLayout> (*compile)(const Bvh& bvh, std::span<const Triangle> triangles);
+  /// not suit the layout (e.g. arity too large) or the ISA is not available, naming both.
+  std::unique_ptr<CompiledLayout> (*compile)(const Bvh& bvh, std::span<const Triangle> triangles,
+                                             const LayoutSpec& spec);
 };
 
 std::span<const LayoutInfo> layouts();
 /// The layout called `name`; an unknown name is an error listing the known ones.
 const LayoutInfo& find_layout(std::string_view name);
+/// Parses and checks a layout spec; an unknown layout, key or value is an error naming it.
+LayoutSpec parse_layout_spec(std::string_view text);
+/// Compiles `bvh` with the layout `spec` names.
+std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,
+                                               std::span<const Triangle> triangles);
+std::unique_ptr<CompiledLayout> compile_layout(std::string_view spec, const Bvh& bvh,
+                                               std::span<const Triangle> triangles);
 
 }  // namespace sahbench

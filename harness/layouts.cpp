@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "harness/layout.h"
 #include "traversal/bvh2_traversal.h"
+#include "traversal/variant_dispatch.h"
 
 namespace sahbench {
 namespace {
@@ -46,7 +47,8 @@ TraceCounts count_rays(std::size_t count, Trace trace) {
 /// as built, its triangles reached through the references. `bvh2_packed` copies the triangles into
 /// leaf order, so a leaf's triangles are contiguous and no reference is chased per primitive (as
 /// tinybvh and Embree store leaves); its references become the identity and hits are mapped back to
-/// scene indices through `ids_`.
+/// scene indices through `ids_`. The triangle and box tests are template parameters (variant_dispatch.h).
+template <class Tri, class Box>
 class Bvh2Layout final : public CompiledLayout {
  public:
   /// The tree as built; `bvh` and `triangles` must outlive the layout.
@@ -73,7 +75,7 @@ class Bvh2Layout final : public CompiledLayout {
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
-        Hit hit = closest_hit(*bvh_, triangles_, rays[i]);
+        Hit hit = closest_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
         if (hit.found() && !ids_.empty()) hit.prim = ids_[hit.prim];
         hits[i] = hit;
       }
@@ -81,14 +83,14 @@ class Bvh2Layout final : public CompiledLayout {
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit(*bvh_, triangles_, rays[i]);
+      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
     });
   }
   TraceCounts count_closest(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted(*bvh_, triangles_, rays[i], c); });
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c); });
   }
   TraceCounts count_any(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted(*bvh_, triangles_, rays[i], c); });
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c); });
   }
   // As built: nodes and references. Packed: nodes, the packed triangles and the ids that map them back
   // (the identity references are an artefact of reusing the common-format kernel and are not counted).
@@ -113,18 +115,25 @@ void require_binary(const Bvh& bvh, const char* layout) {
                 std::to_string(bvh.arity));
 }
 
+std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
+  require_binary(bvh, "bvh2");
+  return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
+    return std::make_unique<Bvh2Layout<Tri, Box>>(bvh, tris);
+  });
+}
+
+std::unique_ptr<CompiledLayout> compile_bvh2_packed(const Bvh& bvh, std::span<const Triangle> tris,
+                                                    const LayoutSpec& spec) {
+  require_binary(bvh, "bvh2_packed");
+  return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
+    return Bvh2Layout<Tri, Box>::packed(bvh, tris);
+  });
+}
+
 const std::vector<LayoutInfo>& registry() {
   static const std::vector<LayoutInfo> all = {
-      {"bvh2", "the common format as built: 32-byte nodes, triangles through references",
-       [](const Bvh& bvh, std::span<const Triangle> tris) -> std::unique_ptr<CompiledLayout> {
-         require_binary(bvh, "bvh2");
-         return std::make_unique<Bvh2Layout>(bvh, tris);
-       }},
-      {"bvh2_packed", "common-format nodes, triangles copied into leaf order",
-       [](const Bvh& bvh, std::span<const Triangle> tris) -> std::unique_ptr<CompiledLayout> {
-         require_binary(bvh, "bvh2_packed");
-         return Bvh2Layout::packed(bvh, tris);
-       }},
+      {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false, compile_bvh2},
+      {"bvh2_packed", "common-format nodes, triangles copied into leaf order", 2, false, compile_bvh2_packed},
   };
   return all;
 }
@@ -139,6 +148,71 @@ const LayoutInfo& find_layout(std::string_view name) {
   std::string known;
   for (const auto& l : registry()) known += (known.empty() ? "" : ", ") + l.name;
   throw Error("unknown layout '" + std::string(name) + "' (known: " + known + ")");
+}
+
+std::string LayoutSpec::text() const {
+  std::string options;
+  auto add = [&](std::string_view key, std::string_view value) {
+    options += (options.empty() ? ":" : ",") + std::string(key) + "=" + std::string(value);
+  };
+  const KernelVariant defaults;
+  if (variant.triangle != defaults.triangle) add("tri", to_string(variant.triangle));
+  if (variant.box != defaults.box) add("box", to_string(variant.box));
+  if (isa != KernelIsa::kAuto) add("isa", to_string(isa));
+  return name + options;
+}
+
+LayoutSpec parse_layout_spec(std::string_view text) {
+  LayoutSpec spec;
+  const auto colon = text.find(':');
+  spec.name = std::string(text.substr(0, colon));
+  const LayoutInfo& info = find_layout(spec.name);
+  if (colon == std::string_view::npos) return spec;
+
+  const std::string where = "layout '" + std::string(text) + "'";
+  std::string_view rest = text.substr(colon + 1);
+  std::vector<std::string> seen;
+  while (true) {
+    const auto comma = rest.find(',');
+    const std::string_view item = rest.substr(0, comma);
+    const auto eq = item.find('=');
+    if (eq == std::string_view::npos || eq == 0)
+      throw Error(where + ": option '" + std::string(item) + "' is not of the form key=value (keys: tri, box" +
+                  (info.has_isa ? ", isa)" : ")"));
+    const std::string key(item.substr(0, eq));
+    const std::string value(item.substr(eq + 1));
+    if (std::find(seen.begin(), seen.end(), key) != seen.end())
+      throw Error(where + ": option '" + key + "' is given twice");
+    seen.push_back(key);
+    if (key == "tri") {
+      const auto kind = parse_triangle_test(value);
+      if (!kind) throw Error(where + ": tri = '" + value + "' is not one of watertight, mt, mt0");
+      spec.variant.triangle = *kind;
+    } else if (key == "box") {
+      const auto kind = parse_box_test(value);
+      if (!kind) throw Error(where + ": box = '" + value + "' is not one of robust, fast");
+      spec.variant.box = *kind;
+    } else if (key == "isa" && info.has_isa) {
+      const auto isa = parse_kernel_isa(value);
+      if (!isa) throw Error(where + ": isa = '" + value + "' is not one of auto, scalar, sse, avx2, avx512");
+      spec.isa = *isa;
+    } else {
+      throw Error(where + ": unknown option '" + key + "' (known: tri, box" + (info.has_isa ? ", isa)" : ")"));
+    }
+    if (comma == std::string_view::npos) break;
+    rest = rest.substr(comma + 1);
+  }
+  return spec;
+}
+
+std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,
+                                               std::span<const Triangle> triangles) {
+  return find_layout(spec.name).compile(bvh, triangles, spec);
+}
+
+std::unique_ptr<CompiledLayout> compile_layout(std::string_view spec, const Bvh& bvh,
+                                               std::span<const Triangle> triangles) {
+  return compile_layout(parse_layout_spec(spec), bvh, triangles);
 }
 
 }  // namespace sahbench

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
+#include <fmt/ranges.h>
 
 #include <ostream>
 
@@ -16,16 +17,27 @@ void print_catalogue(std::ostream& out) {
   fmt::print(out, "builders (--builder NAME[:key=value,...]):\n");
   for (const auto& b : builders()) {
     fmt::print(out, "  {:<14} {}\n", b.name, b.summary);
-    for (const auto& p : b.params)
+    for (const auto& p : b.params) {
+      if (p.type == ParamType::kChoice) {
+        fmt::print(out, "      {:<14} default {:<8} one of {}  {}\n", p.name,
+                   p.choices.at(static_cast<std::size_t>(p.default_value)), fmt::join(p.choices, "|"), p.help);
+        continue;
+      }
       fmt::print(out, "      {:<14} default {:<8} range [{}, {}]  {}\n", p.name, p.default_value, p.min_value,
                  p.max_value, p.help);
+    }
   }
   fmt::print(out, "  {:<14} {}\n", "embree_low", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_LOW");
   fmt::print(out, "  {:<14} {}\n", "embree_medium", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_MEDIUM");
   fmt::print(out, "  {:<14} {}\n", "embree_high", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_HIGH (spatial splits)");
 
-  fmt::print(out, "\nlayouts (config: layouts = [...]):\n");
-  for (const auto& l : layouts()) fmt::print(out, "  {:<14} {}\n", l.name, l.summary);
+  fmt::print(out, "\nlayouts (config: layouts = [\"NAME[:tri=watertight|mt|mt0,box=robust|fast,isa=...]\"]):\n");
+  for (const auto& l : layouts())
+    fmt::print(out, "  {:<14} arity {}{}  {}\n", l.name, l.arity, l.has_isa ? ", isa option" : "", l.summary);
+  fmt::print(out, "  kernel ISAs available here:");
+  for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
+    if (kernel_isa_available(isa)) fmt::print(out, " {}", to_string(isa));
+  fmt::print(out, " (auto = {})\n", to_string(best_kernel_isa()));
   fmt::print(out, "  {:<14} {}\n", "embree_1/8/16", "Embree's own BVH, rtcIntersect1/Occluded1 and 8/16-wide packets (builder embree)");
 
   fmt::print(out, "\nray sets (config: [[ray_set]] kind = ...):\n");

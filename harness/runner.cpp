@@ -37,7 +37,7 @@ namespace {
 // Columns written after DESIGN.md's (never renamed; these may grow).
 const std::vector<std::string>& extra_columns() {
   static const std::vector<std::string> columns = {"config", "seed", "scene_source", "scene_removed", "query",
-                                                   "embree_version", "notes"};
+                                                   "embree_version", "notes", "build_isa"};
   return columns;
 }
 
@@ -101,6 +101,7 @@ struct ResolvedBuilder {
   ParamSet params;
   EmbreeQuality quality = EmbreeQuality::kMedium;
   std::string params_text;  // the CSV form
+  uint32_t arity = 2;       // of the trees it builds; the harness traces them with layouts of that arity
   bool is_embree() const { return info == nullptr; }
 };
 
@@ -119,6 +120,13 @@ std::vector<ResolvedBuilder> resolve_builders(const ExperimentConfig& cfg) {
       b.info = &find_builder(run.name);
       b.params = resolve_params(b.info->name, b.info->params, run.params);
       b.params_text = b.params.to_string();
+      b.arity = b.info->arity ? b.info->arity(b.params) : 2;
+      const bool traceable = std::any_of(cfg.layouts.begin(), cfg.layouts.end(), [&](const std::string& l) {
+        return find_layout(parse_layout_spec(l).name).arity == b.arity;
+      });
+      if (!traceable)
+        throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
+                    "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
     }
     out.push_back(std::move(b));
   }
@@ -206,7 +214,8 @@ class ExperimentRunner {
     if (b.is_embree()) {
       for (const auto& l : supported_embree_layouts_) out.push_back(l.name);
     } else {
-      out = cfg_.layouts;
+      for (const auto& l : cfg_.layouts)
+        if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
     }
     return out;
   }
@@ -387,7 +396,7 @@ class ExperimentRunner {
       // Tracing a broken tree can read out of bounds: its cells get rows that say why, and no timings.
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.run.label(), scene.name, report.summary());
-      for (const auto& layout_name : cfg_.layouts)
+      for (const auto& layout_name : layouts_for(b))
         for (const auto& rs : sets) {
           if (!wanted(layout_name, rs)) continue;
           CsvRow row = base_row(scene, b, threads);
@@ -407,16 +416,16 @@ class ExperimentRunner {
       return;
     }
 
-    for (const auto& layout_name : cfg_.layouts) {
+    for (const auto& layout_name : layouts_for(b)) {
       bool any = false;
       for (const auto& rs : sets) any |= wanted(layout_name, rs);
       if (!any) continue;
-      const LayoutInfo& layout = find_layout(layout_name);
+      const LayoutSpec layout = parse_layout_spec(layout_name);
       std::unique_ptr<CompiledLayout> compiled;
       std::vector<double> compile_ms;
       for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
         compiled.reset();
-        compile_ms.push_back(time_ms([&] { compiled = layout.compile(bvh, scene.triangles); }));
+        compile_ms.push_back(time_ms([&] { compiled = compile_layout(layout, bvh, scene.triangles); }));
       }
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
@@ -430,7 +439,7 @@ class ExperimentRunner {
         const TraceCounts counts = rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
 
         CsvRow row = base_row(scene, b, threads);
-        row["isa"] = env_.isa;
+        row["isa"] = compiled->isa();
         row["layout"] = layout_name;
         put_timing(row, "build_ms", build_t);
         row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);

@@ -68,7 +68,7 @@ void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
   const BuilderInfo& info = find_builder(spec.name);
   const ParamSet params = resolve_params(info.name, info.params, spec.params);
   const Bvh bvh = info.build(BuildInput::from_triangles(scene.triangles), params);
-  const auto layout = find_layout(options.layout).compile(bvh, scene.triangles);
+  const auto layout = compile_layout(options.layout, bvh, scene.triangles);
   std::vector<Hit> hits(rays.size());
   layout->trace_closest(rays, hits);
 

@@ -146,4 +146,11 @@ class MollerTrumboreTest {
   float det_epsilon_;
 };
 
+/// MollerTrumboreTest with a determinant threshold of 0, as its own type so that kernels select it at
+/// compile time like the others: only an edge-on triangle (det == 0) is rejected.
+class MollerTrumboreNoEpsilonTest : public MollerTrumboreTest {
+ public:
+  explicit MollerTrumboreNoEpsilonTest(const Ray& ray) : MollerTrumboreTest(ray, 0.0f) {}
+};
+
 }  // namespace sahbench

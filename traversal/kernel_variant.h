@@ -1,0 +1,48 @@
+#pragma once
+// Which ray/triangle test, ray/box test and instruction set a traversal kernel uses. Layouts are
+// compiled for one variant, and the harness writes the variant into every CSV row, so the error of a
+// faster, less exact variant can be reported beside its speed (DESIGN.md, numerical policy).
+
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+namespace sahbench {
+
+enum class TriangleTestKind : uint8_t {
+  kWatertight,               ///< Woop et al. 2013 (triangle_tests.h), the default
+  kMollerTrumbore,           ///< Möller and Trumbore 1997 with its epsilon of 1e-6
+  kMollerTrumboreNoEpsilon,  ///< the same with epsilon 0: only det == 0 is rejected
+};
+
+enum class BoxTestKind : uint8_t {
+  kRobust,  ///< Ize 2013's conservative slab test (ray_box.h), the default
+  kFast,    ///< the plain slab test
+};
+
+/// The instruction set a SIMD kernel is compiled for. kAuto picks the widest one that is both compiled
+/// in and supported by the CPU running the program.
+enum class KernelIsa : uint8_t { kAuto, kScalar, kSse, kAvx2, kAvx512 };
+
+struct KernelVariant {
+  TriangleTestKind triangle = TriangleTestKind::kWatertight;
+  BoxTestKind box = BoxTestKind::kRobust;
+
+  friend constexpr bool operator==(const KernelVariant&, const KernelVariant&) = default;
+};
+
+std::string_view to_string(TriangleTestKind kind);
+std::string_view to_string(BoxTestKind kind);
+std::string_view to_string(KernelIsa isa);
+/// The inverse of to_string; nullopt for an unknown name.
+std::optional<TriangleTestKind> parse_triangle_test(std::string_view name);
+std::optional<BoxTestKind> parse_box_test(std::string_view name);
+std::optional<KernelIsa> parse_kernel_isa(std::string_view name);
+
+/// Whether kernels for `isa` are compiled into this program and the CPU (and OS) can run them. kScalar
+/// is always available; kAuto is never (resolve it first).
+bool kernel_isa_available(KernelIsa isa);
+/// The widest available of kAvx512, kAvx2, kSse, kScalar, never above `widest` (kAuto: no limit).
+KernelIsa best_kernel_isa(KernelIsa widest = KernelIsa::kAuto);
+
+}  // namespace sahbench

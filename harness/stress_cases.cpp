@@ -258,23 +258,45 @@ void make_axis_rays(CaseBuilder& b, const StressCaseSpec& s) {
     Vec3 lo;
     for (int a = 0; a < 3; ++a) lo[a] = 2.0f * static_cast<float>(rng.next() % static_cast<uint64_t>(k));
     Vec3 org;
-    bool inside = true;
+    bool on_plane[3];
+    int planes = 0, gaps = 0;
     for (int a = 0; a < 3; ++a) {
       // On the min or max face plane, the middle, the gap before the cube, or a random interior point.
-      switch (rng.next() % 5) {
-        case 0: org[a] = lo[a], inside = false; break;
-        case 1: org[a] = lo[a] + 1.0f, inside = false; break;
+      const uint64_t choice = rng.next() % 5;
+      on_plane[a] = choice <= 1;
+      planes += on_plane[a];
+      gaps += choice == 3;
+      switch (choice) {
+        case 0: org[a] = lo[a]; break;
+        case 1: org[a] = lo[a] + 1.0f; break;
         case 2: org[a] = lo[a] + 0.5f; break;
-        case 3: org[a] = lo[a] - 0.5f, inside = false; break;
+        case 3: org[a] = lo[a] - 0.5f; break;
         default: org[a] = lo[a] + static_cast<float>(rng.uniform(0.01, 0.99)); break;
       }
+    }
+    if (planes == 3) {  // a corner: move off one of its planes, to the middle of that axis
+      const auto a = static_cast<int>(rng.next() % 3);
+      org[a] = lo[a] + 0.5f;
+      on_plane[a] = false;
+      --planes;
     }
     Vec3 dir = axis_direction(rng);
     if (rng.next() % 3 == 0) {  // in a coordinate plane: one component +-0, the others random
       dir = rng.unit_vector();
       dir[rng.next() % 3] = rng.next() % 2 ? 0.0f : -0.0f;
     }
-    b.ray(org, dir, inside);
+    // An origin on the cube's surface (on a face plane, not in the gap on another axis) moves only
+    // within the planes it lies on: a ray leaving the surface from it would hit at exactly t = 0,
+    // which is self-intersection (the surface_origin kind's subject), not a crossing.
+    if (planes > 0 && gaps == 0) {
+      int free_axis = 0;
+      for (int a = 0; a < 3; ++a) {
+        if (on_plane[a]) dir[a] = rng.next() % 2 ? 0.0f : -0.0f;
+        else free_axis = a;
+      }
+      if (dir == Vec3{0.0f}) dir[free_axis] = rng.next() % 2 ? 1.0f : -1.0f;
+    }
+    b.ray(org, dir, planes == 0 && gaps == 0);
   }
 }
 

@@ -12,9 +12,8 @@ namespace sahbench {
 namespace {
 
 void check_arity(const Bvh& bvh, uint32_t arity, const char* pass) {
-  if (arity < 2 || arity > kMaxArity)
-    throw Error(std::string(pass) + ": arity " + std::to_string(arity) + " is outside [2, " +
-                std::to_string(kMaxArity) + "]");
+  if (arity != 2 && arity != 4 && arity != 8)
+    throw Error(std::string(pass) + ": arity " + std::to_string(arity) + " must be 2, 4 or 8");
   if (bvh.arity > arity)
     throw Error(std::string(pass) + ": the input tree has arity " + std::to_string(bvh.arity) +
                 ", wider than the requested " + std::to_string(arity));

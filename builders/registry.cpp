@@ -48,7 +48,7 @@ BinnedSahParams binned_config(const ParamSet& p) {
 constexpr uint32_t kDefaultWideArity = 8;
 
 ParamSpec arity_param() {
-  return {"arity", ParamType::kInt, double(kDefaultWideArity), 2, kMaxArity, "children per inner node"};
+  return {"arity", ParamType::kInt, double(kDefaultWideArity), 2, kMaxArity, "children per inner node: 2, 4 or 8"};
 }
 
 uint32_t arity_of(const ParamSet& p) { return p.get_uint("arity"); }
@@ -81,9 +81,8 @@ BuilderInfo wide_collapse_info() {
                  choice_param("method", {"sah", "greedy"}, 0,
                               "sah: SAH-optimal collapse (Ylitie et al. 2017); greedy: open the largest child"),
                  choice_param("source", {"binned_sah", "sweep_sah"}, 0,
-                              "the binary builder whose tree is collapsed (with the bins and leaf parameters here)"),
-                 {"merge_leaf", ParamType::kInt, 8, 1, kMaxLeafPrims,
-                  "method=sah: the most references a leaf merged from a subtree may hold"}});
+                              "the binary builder whose tree is collapsed (with the bins and leaf parameters here); "
+                              "method=sah may merge a subtree of up to max_leaf references into one leaf")});
   return {"wide_collapse",
           "a binary SAH tree collapsed to `arity` children per node; build time includes the binary build",
           std::move(params),
@@ -92,9 +91,14 @@ BuilderInfo wide_collapse_info() {
             const Bvh tree = p.get_choice("source") == "sweep_sah" ? build_sweep_sah(input, {binary.top_down})
                                                                    : build_binned_sah(input, binary);
             if (p.get_choice("method") == "greedy") return collapse_greedy(tree, arity_of(p));
-            return collapse_sah(tree, arity_of(p), sah_cost_of(p), p.get_uint("merge_leaf"));
+            return collapse_sah(tree, arity_of(p), sah_cost_of(p), p.get_uint("max_leaf"));
           },
-          [](const ParamSet& p) { check_config(top_down_config(p), "wide_collapse"); }, arity_of};
+          [](const ParamSet& p) {
+            TopDownConfig config = top_down_config(p);
+            config.arity = arity_of(p);
+            check_config(config, "wide_collapse");
+          },
+          arity_of};
 }
 
 BuilderInfo sweep_sah_info() {

@@ -14,9 +14,8 @@ void check_config(const TopDownConfig& config, std::string_view builder) {
   if (config.max_leaf > kMaxLeafPrims)
     throw Error(name + ": max_leaf = " + std::to_string(config.max_leaf) + " exceeds the node format's limit of " +
                 std::to_string(kMaxLeafPrims));
-  if (config.arity < 2 || config.arity > kMaxArity)
-    throw Error(name + ": arity = " + std::to_string(config.arity) + " is outside [2, " + std::to_string(kMaxArity) +
-                "]");
+  if (config.arity != 2 && config.arity != 4 && config.arity != 8)
+    throw Error(name + ": arity = " + std::to_string(config.arity) + " must be 2, 4 or 8 (the common format's widths)");
   if (!(config.cost.c_trav >= 0.0f) || !(config.cost.c_isect > 0.0f))
     throw Error(name + ": SAH constants must be c_trav >= 0 and c_isect > 0 (got c_trav = " +
                 std::to_string(config.cost.c_trav) + ", c_isect = " + std::to_string(config.cost.c_isect) + ")");

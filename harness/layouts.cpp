@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "harness/layout.h"
+#include "harness/wide_layout.h"
 #include "traversal/bvh2_traversal.h"
 #include "traversal/variant_dispatch.h"
 
@@ -134,6 +135,15 @@ const std::vector<LayoutInfo>& registry() {
   static const std::vector<LayoutInfo> all = {
       {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false, compile_bvh2},
       {"bvh2_packed", "common-format nodes, triangles copied into leaf order", 2, false, compile_bvh2_packed},
+      {"bvh4", "4-wide SoA nodes (128 B), triangles packed 4 per block, SIMD kernels (sse/avx2/avx512)", 4, true,
+       [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
+         return compile_wide_layout(4, bvh, tris, spec);
+       }},
+      {"bvh8", "8-wide SoA nodes (256 B), triangles packed 4 per block, SIMD kernels (avx2/avx512, sse in halves)",
+       8, true,
+       [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
+         return compile_wide_layout(8, bvh, tris, spec);
+       }},
   };
   return all;
 }

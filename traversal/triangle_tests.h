@@ -31,6 +31,31 @@ inline Components components(Vec3 a) {
 
 }  // namespace detail
 
+/// The per-ray part of the watertight test (Woop et al. 2013, section 3): the axis of largest |dir|
+/// becomes z (kz), the other two x and y, and the shear (sx, sy, sz) turns the ray into the +z axis.
+/// Shared by the scalar test below and the SIMD kernels (wide_kernels.inl), so both transform every
+/// vertex with the same float operations.
+struct WatertightShear {
+  uint8_t kx, ky, kz;
+  float sx, sy, sz;
+};
+
+inline WatertightShear watertight_shear(Vec3 dir) {
+  const Vec3 abs_dir{std::abs(dir.x), std::abs(dir.y), std::abs(dir.z)};
+  WatertightShear s;
+  // The axis of largest |dir| becomes z, so the shear divides by the largest component.
+  s.kz = static_cast<uint8_t>(largest_axis(abs_dir));
+  s.kx = static_cast<uint8_t>((s.kz + 1) % 3);
+  s.ky = static_cast<uint8_t>((s.kx + 1) % 3);
+  // Swapping x and y when the ray points down z keeps the winding, hence the sign of the edge
+  // functions and of the determinant, the same for both directions (section 3).
+  if (dir[s.kz] < 0.0f) std::swap(s.kx, s.ky);
+  s.sx = dir[s.kx] / dir[s.kz];
+  s.sy = dir[s.ky] / dir[s.kz];
+  s.sz = 1.0f / dir[s.kz];
+  return s;
+}
+
 /// Watertight ray/triangle intersection of Woop, Benthin and Wald 2013, "Watertight Ray/Triangle
 /// Intersection" (JCGT 2(1)). The ray is turned into the +z axis by a permutation and a shear computed
 /// once per ray (section 3); the vertices are transformed by the same float operations for every
@@ -46,28 +71,17 @@ inline Components components(Vec3 a) {
 class WatertightTriangleTest {
  public:
   /// `ray.dir` must not be the zero vector.
-  explicit WatertightTriangleTest(const Ray& ray) : org_(ray.org) {
-    const Vec3 abs_dir{std::abs(ray.dir.x), std::abs(ray.dir.y), std::abs(ray.dir.z)};
-    // The axis of largest |dir| becomes z, so the shear below divides by the largest component.
-    kz_ = static_cast<uint8_t>(largest_axis(abs_dir));
-    kx_ = static_cast<uint8_t>((kz_ + 1) % 3);
-    ky_ = static_cast<uint8_t>((kx_ + 1) % 3);
-    // Swapping x and y when the ray points down z keeps the winding, hence the sign of the edge
-    // functions and of the determinant, the same for both directions (section 3).
-    if (ray.dir[kz_] < 0.0f) std::swap(kx_, ky_);
-    sx_ = ray.dir[kx_] / ray.dir[kz_];
-    sy_ = ray.dir[ky_] / ray.dir[kz_];
-    sz_ = 1.0f / ray.dir[kz_];
-  }
+  explicit WatertightTriangleTest(const Ray& ray) : org_(ray.org), shear_(watertight_shear(ray.dir)) {}
 
   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
     // Vertices relative to the origin, then sheared so the ray is the +z axis through (0, 0).
     const detail::Components a = detail::components(tri.v0 - org_);
     const detail::Components b = detail::components(tri.v1 - org_);
     const detail::Components c = detail::components(tri.v2 - org_);
-    const float ax = a[kx_] - sx_ * a[kz_], ay = a[ky_] - sy_ * a[kz_];
-    const float bx = b[kx_] - sx_ * b[kz_], by = b[ky_] - sy_ * b[kz_];
-    const float cx = c[kx_] - sx_ * c[kz_], cy = c[ky_] - sy_ * c[kz_];
+    const auto [kx, ky, kz, sx, sy, sz] = shear_;
+    const float ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
+    const float bx = b[kx] - sx * b[kz], by = b[ky] - sy * b[kz];
+    const float cx = c[kx] - sx * c[kz], cy = c[ky] - sy * c[kz];
 
     // Scaled barycentrics: e0 weights v0 (edge v1-v2), e1 weights v1 (edge v2-v0), e2 weights v2.
     float e0 = cx * by - cy * bx;
@@ -86,7 +100,7 @@ class WatertightTriangleTest {
 
     // Scaled distance T = t * det. Compare it with [tmin, tmax] * |det| before dividing, so misses
     // never pay for the division (section 3); flipping both signs makes det positive.
-    const float az = sz_ * a[kz_], bz = sz_ * b[kz_], cz = sz_ * c[kz_];
+    const float az = sz * a[kz], bz = sz * b[kz], cz = sz * c[kz];
     const float scaled_t = e0 * az + e1 * bz + e2 * cz;
     const float abs_det = std::abs(det);
     const float signed_t = det < 0.0f ? -scaled_t : scaled_t;
@@ -103,8 +117,7 @@ class WatertightTriangleTest {
 
  private:
   Vec3 org_;
-  uint8_t kx_, ky_, kz_;
-  float sx_, sy_, sz_;
+  WatertightShear shear_;
 };
 
 /// Default determinant threshold of MollerTrumboreTest: EPSILON = 0.000001 in the code listing of

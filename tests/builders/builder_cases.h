@@ -34,6 +34,11 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back({"binned_sah", {{"max_leaf", "1"}}});
   out.push_back({"binned_sah", {{"min_leaf", "4"}, {"max_leaf", "16"}, {"c_trav", "3"}}});
   out.push_back({"sweep_sah", {{"max_leaf", "1"}}});
+  out.push_back({"wide_binned_sah", {{"arity", "4"}}});
+  out.push_back({"wide_binned_sah", {{"arity", "4"}, {"max_leaf", "1"}}});
+  out.push_back({"wide_collapse", {{"method", "greedy"}}});
+  out.push_back({"wide_collapse", {{"arity", "4"}, {"source", "sweep_sah"}}});
+  out.push_back({"wide_collapse", {{"method", "greedy"}, {"arity", "4"}, {"max_leaf", "1"}}});
   return out;
 }
 

@@ -1,0 +1,115 @@
+#include "harness/wide_layout.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "traversal/wide_bvh.h"
+
+namespace sahbench {
+namespace {
+
+// Rays per kernel call: their WideRay set-ups (80 bytes each) stay in L1 and one task amortises the
+// scheduling, as kRayChunk does for the binary layouts.
+constexpr std::size_t kWideChunk = 256;
+
+template <uint32_t N>
+class WideLayout final : public CompiledLayout {
+ public:
+  WideLayout(WideBvh<N> bvh, KernelIsa isa, const KernelVariant& variant) : bvh_(std::move(bvh)), isa_(isa) {
+    closest_ = find_wide_kernel(isa, N, variant, false, false);
+    any_ = find_wide_kernel(isa, N, variant, true, false);
+    count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
+    count_any_ = find_wide_kernel(KernelIsa::kScalar, N, variant, true, true);
+    if (!closest_ || !any_ || !count_closest_ || !count_any_)
+      throw Error("layout bvh" + std::to_string(N) + ": no " + std::string(to_string(isa)) + " kernels compiled in");
+  }
+
+  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
+    if (bvh_.nodes.empty()) return std::fill(hits.begin(), hits.end(), Hit{});  // no triangles
+    run(rays, [&](const WideBatch& batch, std::size_t begin) {
+      WideBatch b = batch;
+      b.hits = hits.data() + begin;
+      closest_(b);
+    });
+  }
+  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
+    if (bvh_.nodes.empty()) return std::fill(occluded.begin(), occluded.end(), uint8_t{0});
+    run(rays, [&](const WideBatch& batch, std::size_t begin) {
+      WideBatch b = batch;
+      b.occluded = occluded.data() + begin;
+      any_(b);
+    });
+  }
+  TraceCounts count_closest(std::span<const Ray> rays) const override { return count(rays, count_closest_); }
+  TraceCounts count_any(std::span<const Ray> rays) const override { return count(rays, count_any_); }
+  std::size_t bytes() const override { return bvh_.bytes(); }
+  std::string isa() const override { return std::string(to_string(isa_)); }
+
+ private:
+  // Sets up chunks of rays and hands each to `kernel(batch, first ray index)`, in parallel.
+  template <class Kernel>
+  void run(std::span<const Ray> rays, Kernel kernel) const {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kWideChunk),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        WideRay setup[kWideChunk];
+                        for (std::size_t i = r.begin(); i < r.end(); i += kWideChunk) {
+                          const std::size_t n = std::min(kWideChunk, r.end() - i);
+                          for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k]);
+                          kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr}, i);
+                        }
+                      });
+  }
+
+  TraceCounts count(std::span<const Ray> rays, WideKernel kernel) const {
+    if (bvh_.nodes.empty()) return {rays.size(), 0, 0};
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, rays.size(), kWideChunk), TraceCounts{},
+        [&](const tbb::blocked_range<std::size_t>& r, TraceCounts acc) {
+          WideRay setup[kWideChunk];
+          std::vector<Hit> hits(kWideChunk);
+          std::vector<uint8_t> occluded(kWideChunk);
+          for (std::size_t i = r.begin(); i < r.end(); i += kWideChunk) {
+            const std::size_t n = std::min(kWideChunk, r.end() - i);
+            for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k]);
+            WideCounts c;
+            kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c});
+            acc.rays += c.rays;
+            acc.nodes_visited += c.inner_visits + c.leaf_visits;
+            acc.prims_tested += c.prim_tests;
+          }
+          return acc;
+        },
+        [](TraceCounts a, const TraceCounts& b) {
+          a.rays += b.rays;
+          a.nodes_visited += b.nodes_visited;
+          a.prims_tested += b.prims_tested;
+          return a;
+        });
+  }
+
+  WideBvh<N> bvh_;
+  KernelIsa isa_;
+  WideKernel closest_ = nullptr, any_ = nullptr, count_closest_ = nullptr, count_any_ = nullptr;
+};
+
+}  // namespace
+
+std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh, std::span<const Triangle> triangles,
+                                                    const LayoutSpec& spec) {
+  KernelIsa isa = spec.isa == KernelIsa::kAuto ? best_kernel_isa() : spec.isa;
+  if (!kernel_isa_available(isa))
+    throw Error("layout '" + spec.text() + "': isa " + std::string(to_string(isa)) +
+                " is not available on this CPU or build (auto would pick " +
+                std::string(to_string(best_kernel_isa())) + ")");
+  if (width == 4) return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles), isa, spec.variant);
+  if (width == 8) return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles), isa, spec.variant);
+  throw Error("no " + std::to_string(width) + "-wide layout");
+}
+
+}  // namespace sahbench

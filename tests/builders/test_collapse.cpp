@@ -1,0 +1,101 @@
+// The collapse pass and the direct wide builder: valid wide trees that keep every primitive, the SAH
+// collapse never worse than the greedy one, and the two implementations of the greedy rule agreeing.
+
+#include <gtest/gtest.h>
+
+#include "builders/binned_sah.h"
+#include "builders/collapse.h"
+#include "builders/registry.h"
+#include "core/bvh_stats.h"
+#include "core/error.h"
+#include "core/validate.h"
+#include "tests/builders/builder_cases.h"
+
+namespace sahbench {
+namespace {
+
+Bvh build(const std::string& name, const ParamOverrides& overrides, const BuildInput& input) {
+  const BuilderInfo& info = find_builder(name);
+  return info.build(input, resolve_params(name, info.params, overrides));
+}
+
+TEST(Collapse, SahCollapseIsNeverCostlierThanGreedy) {
+  for (const auto& scene : test::scene_cases()) {
+    SCOPED_TRACE(scene.name);
+    const BuildInput input = BuildInput::from_triangles(scene.triangles);
+    const Bvh binary = build_binned_sah(input, {});
+    const SahCost cost;
+    for (uint32_t arity : {4u, 8u}) {
+      const Bvh greedy = collapse_greedy(binary, arity);
+      // Every greedy tree is among those the SAH collapse searches (it never has to merge leaves), so
+      // the optimum can only cost less or the same.
+      const Bvh optimal = collapse_sah(binary, arity, cost, TopDownConfig{}.max_leaf);
+      ASSERT_TRUE(validate(greedy, input.bounds).ok()) << validate(greedy, input.bounds).summary();
+      ASSERT_TRUE(validate(optimal, input.bounds).ok()) << validate(optimal, input.bounds).summary();
+      const double greedy_sah = compute_stats(greedy, scene.triangles.size(), cost).sah_cost;
+      const double optimal_sah = compute_stats(optimal, scene.triangles.size(), cost).sah_cost;
+      EXPECT_LE(optimal_sah, greedy_sah * (1 + 1e-5)) << "arity " << arity;
+      // Both keep the binary tree's references, only regrouped.
+      EXPECT_EQ(greedy.prim_refs.size(), binary.prim_refs.size());
+      EXPECT_EQ(optimal.prim_refs.size(), binary.prim_refs.size());
+    }
+  }
+}
+
+TEST(Collapse, GreedyCollapseEqualsTheDirectWideBuild) {
+  // The direct builder splits the child of largest area, the greedy collapse opens it: on the same
+  // binned splits both make the same tree (two implementations of one rule).
+  for (const auto& scene : test::scene_cases()) {
+    SCOPED_TRACE(scene.name);
+    const BuildInput input = BuildInput::from_triangles(scene.triangles);
+    for (const char* arity : {"4", "8"}) {
+      const Bvh direct = build("wide_binned_sah", {{"arity", arity}}, input);
+      const Bvh collapsed = build("wide_collapse", {{"arity", arity}, {"method", "greedy"}}, input);
+      EXPECT_EQ(direct.nodes.size(), collapsed.nodes.size());
+      const SahCost cost;
+      EXPECT_DOUBLE_EQ(compute_stats(direct, scene.triangles.size(), cost).sah_cost,
+                       compute_stats(collapsed, scene.triangles.size(), cost).sah_cost);
+    }
+  }
+}
+
+TEST(Collapse, WideTreesAreShallowerAndSmaller) {
+  const auto tris = test::random_triangles(20000, 4);
+  const BuildInput input = BuildInput::from_triangles(tris);
+  const Bvh binary = build_binned_sah(input, {});
+  const Bvh wide = collapse_greedy(binary, 8);
+  const auto b = compute_stats(binary, tris.size(), {});
+  const auto w = compute_stats(wide, tris.size(), {});
+  EXPECT_LT(w.nodes, b.nodes);
+  EXPECT_LT(w.max_depth, b.max_depth);
+  EXPECT_EQ(w.leaves, b.leaves);  // greedy keeps every leaf
+  EXPECT_EQ(wide.arity, 8u);
+}
+
+TEST(Collapse, RejectsWhatItCannotDo) {
+  const auto tris = test::random_triangles(100, 1);
+  const Bvh binary = build_binned_sah(BuildInput::from_triangles(tris), {});
+  EXPECT_THROW(collapse_greedy(binary, 3), Error);
+  EXPECT_THROW(collapse_sah(collapse_greedy(binary, 4), 8, {}, 8), Error);  // the DP needs a binary tree
+  EXPECT_THROW(collapse_greedy(collapse_greedy(binary, 8), 4), Error);      // narrower than the input
+  EXPECT_TRUE(collapse_greedy(Bvh{}, 8).nodes.empty());
+  EXPECT_TRUE(collapse_sah(Bvh{}, 8, {}, 8).nodes.empty());
+}
+
+TEST(Collapse, ParametersAreCheckedByName) {
+  const BuilderInfo& info = find_builder("wide_collapse");
+  try {
+    resolve_params(info.name, info.params, {{"method", "best"}});
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'method' = 'best' is not one of sah, greedy"), std::string::npos) << e.what();
+  }
+  const ParamSet p = resolve_params(info.name, info.params, {{"method", "greedy"}, {"arity", "4"}});
+  EXPECT_NE(p.to_string().find("method=greedy"), std::string::npos);
+  EXPECT_EQ(info.arity(p), 4u);
+  EXPECT_THROW(info.check(resolve_params(info.name, info.params, {{"arity", "5"}})), Error);
+  EXPECT_THROW(find_builder("wide_binned_sah").check(resolve_params("wide_binned_sah", find_builder("wide_binned_sah").params, {{"arity", "6"}})), Error);
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -1,0 +1,229 @@
+#include "traversal/wide_bvh.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "core/error.h"
+#include "traversal/triangle_tests.h"
+#include "traversal/wide_kernels_isa.h"
+
+namespace sahbench {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+template <uint32_t N>
+WideNode<N> empty_node() {
+  WideNode<N> node;
+  for (uint32_t i = 0; i < N; ++i) {
+    // An inverted box: the near distance is +inf and the far one -inf for any ray, so no ray enters it.
+    for (uint32_t axis = 0; axis < 3; ++axis) {
+      node.planes[2 * axis][i] = kInf;
+      node.planes[2 * axis + 1][i] = -kInf;
+    }
+    node.child[i] = 0;
+    node.count[i] = 0;
+  }
+  return node;
+}
+
+template <uint32_t N>
+void set_box(WideNode<N>& node, uint32_t slot, const Aabb& box) {
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    node.planes[2 * axis][slot] = box.min[axis];
+    node.planes[2 * axis + 1][slot] = box.max[axis];
+  }
+}
+
+// Writes the triangles of references [first, first + count) into blocks starting at `block`.
+void fill_blocks(std::span<const uint32_t> refs, std::span<const Triangle> triangles, TriangleBlock* block) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t i = 0; i < refs.size(); i += kBlockWidth, ++block) {
+    for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
+      const bool used = i + lane < refs.size();
+      const uint32_t prim = used ? refs[i + lane] : kInvalidPrim;
+      block->prim[lane] = prim;
+      for (uint32_t axis = 0; axis < 3; ++axis) {
+        block->v0[axis][lane] = used ? triangles[prim].v0[axis] : nan;
+        block->v1[axis][lane] = used ? triangles[prim].v1[axis] : nan;
+        block->v2[axis][lane] = used ? triangles[prim].v2[axis] : nan;
+      }
+    }
+  }
+}
+
+uint32_t blocks_for(uint32_t prims) { return (prims + kBlockWidth - 1) / kBlockWidth; }
+
+}  // namespace
+
+WideRay make_wide_ray(const Ray& ray) {
+  WideRay r;
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    r.org[axis] = ray.org[axis];
+    r.dir[axis] = ray.dir[axis];
+    // 1 / +-0 = +-inf, as in ray_box.h.
+    r.inv_dir[axis] = 1.0f / ray.dir[axis];
+    const bool negative = std::signbit(ray.dir[axis]);
+    r.near_plane[axis] = 2 * axis + (negative ? 1 : 0);
+    r.far_plane[axis] = 2 * axis + (negative ? 0 : 1);
+  }
+  r.tmin = ray.tmin;
+  r.tmax = ray.tmax;
+  const WatertightShear shear = watertight_shear(ray.dir);
+  r.kx = shear.kx, r.ky = shear.ky, r.kz = shear.kz;
+  r.sx = shear.sx, r.sy = shear.sy, r.sz = shear.sz;
+  return r;
+}
+
+template <uint32_t N>
+WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
+  if (bvh.arity > N)
+    throw Error("layout bvh" + std::to_string(N) + " takes trees of arity " + std::to_string(N) +
+                " or less; this tree has arity " + std::to_string(bvh.arity));
+  WideBvh<N> out;
+  if (bvh.nodes.empty()) return out;
+  for (uint32_t ref : bvh.prim_refs)
+    if (ref >= triangles.size())
+      throw Error("layout bvh" + std::to_string(N) + ": reference " + std::to_string(ref) + " is beyond the " +
+                  std::to_string(triangles.size()) + " triangles");
+
+  // Sizes first, so the arrays are allocated once.
+  std::size_t inner = 0, blocks = 0;
+  for (const Node& node : bvh.nodes) {
+    if (node.is_leaf()) blocks += blocks_for(node.prim_count);
+    else ++inner;
+  }
+  out.nodes.reserve(std::max<std::size_t>(inner, 1));
+  out.blocks.resize(blocks);
+
+  std::size_t next_block = 0;
+  // Places the children of common-format node `n` into wide node `w` (depth `depth`); inner children get
+  // new wide nodes right away, so siblings are contiguous and every child follows its parent.
+  struct Pending {
+    uint32_t n, w, depth;
+  };
+  std::vector<Pending> stack;
+  auto place = [&](std::span<const uint32_t> children, uint32_t w, uint32_t depth) {
+    WideNode<N> node = empty_node<N>();
+    for (uint32_t slot = 0; slot < children.size(); ++slot) {
+      const Node& child = bvh.nodes[children[slot]];
+      set_box(node, slot, child.bounds);
+      if (child.is_leaf()) {
+        node.child[slot] = static_cast<uint32_t>(next_block);
+        node.count[slot] = blocks_for(child.prim_count);
+        fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count), triangles, &out.blocks[next_block]);
+        next_block += node.count[slot];
+      } else {
+        node.child[slot] = static_cast<uint32_t>(out.nodes.size());
+        out.nodes.push_back(WideNode<N>{});
+        stack.push_back({children[slot], node.child[slot], depth + 1});
+      }
+    }
+    out.nodes[w] = node;
+    if (out.levels.size() <= depth) out.levels.resize(depth + 1);
+    out.levels[depth].push_back(w);
+  };
+
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    out.root_planes[2 * axis] = bvh.root().bounds.min[axis];
+    out.root_planes[2 * axis + 1] = bvh.root().bounds.max[axis];
+  }
+  out.nodes.push_back(WideNode<N>{});
+  const uint32_t root = 0;
+  if (bvh.root().is_leaf()) {
+    place(std::span(&root, 1), 0, 0);
+    return out;
+  }
+  stack.push_back({0, 0, 0});
+  std::vector<uint32_t> children;
+  while (!stack.empty()) {
+    const Pending p = stack.back();
+    stack.pop_back();
+    // The kernels' stack holds (N - 1) kMaxDepth + 1 entries (wide_kernels.inl), enough for wide nodes
+    // at depths 0 .. kMaxDepth - 1.
+    if (p.depth >= kMaxDepth)
+      throw Error("layout bvh" + std::to_string(N) + ": the tree is deeper than " + std::to_string(kMaxDepth) +
+                  " levels");
+    const Node& node = bvh.nodes[p.n];
+    children.resize(node.child_count);
+    for (uint32_t c = 0; c < node.child_count; ++c) children[c] = node.first + c;
+    const std::size_t first_new = stack.size();
+    place(children, p.w, p.depth);
+    // Depth first, first child next: reverse what place() pushed.
+    std::reverse(stack.begin() + static_cast<std::ptrdiff_t>(first_new), stack.end());
+  }
+  return out;
+}
+
+template <uint32_t N>
+void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles) {
+  // A slot's new box: a leaf's is the union of its triangles (rewritten into its blocks first), an inner
+  // child's the union of that child's slots, which a deeper level has already refitted.
+  auto union_of_slots = [](const WideNode<N>& node) {
+    Aabb box = Aabb::empty();
+    for (uint32_t i = 0; i < N; ++i) {
+      if (node.count[i] == 0 && node.child[i] == 0) continue;  // empty slot (no child is the root)
+      box.extend(Aabb{{node.planes[0][i], node.planes[2][i], node.planes[4][i]},
+                            {node.planes[1][i], node.planes[3][i], node.planes[5][i]}});
+    }
+    return box;
+  };
+  for (auto level = wide.levels.rbegin(); level != wide.levels.rend(); ++level) {
+    tbb::parallel_for(std::size_t{0}, level->size(), [&](std::size_t k) {
+      WideNode<N>& node = wide.nodes[(*level)[k]];
+      for (uint32_t i = 0; i < N; ++i) {
+        if (node.count[i] != 0) {
+          Aabb box = Aabb::empty();
+          for (uint32_t b = node.child[i]; b < node.child[i] + node.count[i]; ++b) {
+            TriangleBlock& block = wide.blocks[b];
+            for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
+              if (block.prim[lane] == kInvalidPrim) continue;
+              const Triangle& t = triangles[block.prim[lane]];
+              for (uint32_t axis = 0; axis < 3; ++axis) {
+                block.v0[axis][lane] = t.v0[axis];
+                block.v1[axis][lane] = t.v1[axis];
+                block.v2[axis][lane] = t.v2[axis];
+              }
+              box.extend(t.bounds());
+            }
+          }
+          set_box(node, i, box);
+        } else if (node.child[i] != 0) {
+          set_box(node, i, union_of_slots(wide.nodes[node.child[i]]));
+        }
+      }
+    });
+  }
+  if (!wide.nodes.empty()) {
+    const Aabb root = union_of_slots(wide.nodes[0]);
+    for (uint32_t axis = 0; axis < 3; ++axis) {
+      wide.root_planes[2 * axis] = root.min[axis];
+      wide.root_planes[2 * axis + 1] = root.max[axis];
+    }
+  }
+}
+
+template WideBvh<4> compile_wide<4>(const Bvh&, std::span<const Triangle>);
+template WideBvh<8> compile_wide<8>(const Bvh&, std::span<const Triangle>);
+template void refit_wide<4>(WideBvh<4>&, std::span<const Triangle>);
+template void refit_wide<8>(WideBvh<8>&, std::span<const Triangle>);
+
+WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit, bool counting) {
+  if (isa == KernelIsa::kScalar) return detail::wide_kernel_scalar(width, variant.triangle, variant.box, any_hit, counting);
+  if (counting) return nullptr;
+#if defined(SAHBENCH_HAVE_X86_KERNELS)
+  switch (isa) {
+    case KernelIsa::kSse: return detail::wide_kernel_sse(width, variant.triangle, variant.box, any_hit);
+    case KernelIsa::kAvx2: return detail::wide_kernel_avx2(width, variant.triangle, variant.box, any_hit);
+    case KernelIsa::kAvx512: return detail::wide_kernel_avx512(width, variant.triangle, variant.box, any_hit);
+    default: break;
+  }
+#endif
+  return nullptr;
+}
+
+}  // namespace sahbench

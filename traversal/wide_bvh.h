@@ -1,0 +1,128 @@
+#pragma once
+// The 4- and 8-wide layouts: a common-format tree of arity <= N compiled into nodes whose N child boxes
+// are stored as structure of arrays, so one SIMD instruction tests a ray against all of them (Wald,
+// Benthin and Boulos 2008, "Getting Rid of Packets"; Ernst and Greiner 2008, "Multi Bounding Volume
+// Hierarchies"; Embree's BVH4/BVH8 AABB nodes), and leaves whose triangles are packed four at a time,
+// vertex components as arrays, for 4-wide triangle tests.
+//
+// Node formats (bytes per node; both are multiples of a 64-byte cache line):
+//   WideNode<4>: planes[6][4] floats (96) + child[4] (16) + count[4] (16)  = 128 bytes
+//   WideNode<8>: planes[6][8] floats (192) + child[8] (32) + count[8] (32) = 256 bytes
+// planes[] holds min x, max x, min y, max y, min z, max z of each child, so a ray picks its near and
+// far plane per axis by index (2 axis + sign). A child slot is
+//   inner: count = 0, child = index of its WideNode;
+//   leaf:  count = number of TriangleBlocks, child = index of the first;
+//   empty: count = 0, child = 0, and an inverted box (min +inf, max -inf) that no ray can enter.
+// TriangleBlock: v0, v1, v2 as [component][lane] floats (144) + prim[4] (16) = 160 bytes per 4 triangles;
+// unused lanes have prim = kInvalidPrim and NaN vertices, which no test can hit.
+//
+// This header and wide_kernels.inl are also compiled for each SIMD instruction set
+// (wide_kernels_*.cpp), so the types here are plain data: no functions a kernel might share with
+// another instruction set's translation unit.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/bvh.h"
+#include "core/ray.h"
+#include "core/triangle.h"
+#include "traversal/kernel_variant.h"
+
+namespace sahbench {
+
+template <uint32_t N>
+struct alignas(64) WideNode {
+  float planes[6][N];
+  uint32_t child[N];
+  uint32_t count[N];
+};
+static_assert(sizeof(WideNode<4>) == 128 && sizeof(WideNode<8>) == 256, "node formats as documented");
+
+/// Triangles tested together by the 4-wide triangle kernels.
+inline constexpr uint32_t kBlockWidth = 4;
+
+struct alignas(16) TriangleBlock {
+  float v0[3][kBlockWidth];
+  float v1[3][kBlockWidth];
+  float v2[3][kBlockWidth];
+  uint32_t prim[kBlockWidth];
+};
+static_assert(sizeof(TriangleBlock) == 160, "block format as documented");
+
+/// A ray as the wide kernels read it, set up once per ray outside the kernels (wide_bvh.cpp): origin,
+/// direction, reciprocal direction, the near and far plane index per axis (chosen by the sign bit, so
+/// -0 counts as negative, as in ray_box.h), and the watertight test's shear (triangle_tests.h).
+struct WideRay {
+  float org[3];
+  float dir[3];
+  float inv_dir[3];
+  float tmin, tmax;
+  uint32_t near_plane[3];
+  uint32_t far_plane[3];
+  uint32_t kx, ky, kz;
+  float sx, sy, sz;
+};
+
+WideRay make_wide_ray(const Ray& ray);
+
+/// A compiled wide tree. Node 0 is the root (always an inner node: a tree that is a single leaf gets a
+/// root with one leaf slot); children have larger indices than their parents.
+template <uint32_t N>
+struct WideBvh {
+  /// The root's box as six planes (min x, max x, min y, ...): tested first, so rays that miss the scene
+  /// cost one box test, and so the kernels visit exactly the nodes bvh2_traversal.h visits on the same tree.
+  float root_planes[6] = {};
+  std::vector<WideNode<N>> nodes;
+  std::vector<TriangleBlock> blocks;
+  /// Node indices grouped by depth, deepest level last: levels[d] are the nodes at depth d (for refit).
+  std::vector<std::vector<uint32_t>> levels;
+
+  std::size_t bytes() const { return nodes.size() * sizeof(WideNode<N>) + blocks.size() * sizeof(TriangleBlock); }
+};
+
+/// Compiles `bvh` (arity <= N) over `triangles`. Throws Error for a wider or deeper tree than the
+/// kernels take (arity > N, depth > kMaxDepth) or a leaf reference out of range.
+template <uint32_t N>
+WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles);
+
+/// Refit: copies the new positions of `triangles` (same indices as at compile time) into the blocks and
+/// recomputes every child box bottom up, one level at a time, each level in parallel. The topology is
+/// kept, so the tree may lose quality as the geometry moves (issue: refit against rebuild).
+template <uint32_t N>
+void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles);
+
+extern template WideBvh<4> compile_wide<4>(const Bvh&, std::span<const Triangle>);
+extern template WideBvh<8> compile_wide<8>(const Bvh&, std::span<const Triangle>);
+extern template void refit_wide<4>(WideBvh<4>&, std::span<const Triangle>);
+extern template void refit_wide<8>(WideBvh<8>&, std::span<const Triangle>);
+
+/// Work counted by the counting kernels (summed over a batch).
+struct WideCounts {
+  uint64_t rays = 0;
+  uint64_t inner_visits = 0;  ///< wide nodes whose child boxes were tested
+  uint64_t leaf_visits = 0;   ///< leaves whose triangles were tested
+  uint64_t prim_tests = 0;    ///< triangles tested (occupied lanes)
+};
+
+/// One call of a kernel: `count` rays, answers into `hits` (closest) or `occluded` (any hit), work into
+/// `counts` (counting kernels only).
+struct WideBatch {
+  const float* root_planes;  ///< WideBvh::root_planes
+  const void* nodes;         ///< WideNode<N>[]
+  const TriangleBlock* blocks;
+  const WideRay* rays;
+  std::size_t count;
+  Hit* hits;
+  uint8_t* occluded;
+  WideCounts* counts;
+};
+
+using WideKernel = void (*)(const WideBatch&);
+
+/// The kernel for a width, variant and query, compiled for `isa` (not kAuto). Counting kernels exist for
+/// kScalar only: every instruction set computes the same distances and visits nodes in the same order,
+/// so the counts are the same. Null when that combination is not compiled in.
+WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit, bool counting);
+
+}  // namespace sahbench

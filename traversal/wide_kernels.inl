@@ -1,0 +1,440 @@
+// Closest-hit and any-hit kernels on the wide layouts (wide_bvh.h), written once and compiled once per
+// instruction set: wide_kernels_{scalar,sse,avx2,avx512}.cpp each define exactly one of
+// SAHBENCH_WIDE_SCALAR, _SSE, _AVX2 or _AVX512, then include this file inside a namespace of their own,
+// so the functions below never meet their twin from another instruction set at link time.
+//
+// Every lane computes exactly what the scalar kernels of ray_box.h and triangle_tests.h compute, in the
+// same order and with the same IEEE operations (min/max with the same NaN rule, no reciprocal
+// approximations, no fused multiply-add: the project builds with -ffp-contract=off), so every
+// instruction set returns the same hits, and visits the same nodes in the same order, as the scalar one.
+
+// The including file includes wide_kernels_isa.h (and <immintrin.h> for the SIMD sets) first: no
+// header may be included inside a namespace. Inline functions and templates from shared headers would
+// be compiled once per instruction set and merged by the linker, which may keep the AVX-512 copy for
+// every caller; so the code below calls none (compiler builtins and intrinsics only) and reads only
+// constants and plain structs from those headers.
+
+// The constants come from the scalar tests so the two cannot drift apart.
+inline constexpr float kWideFarScale = RobustRayBox::kFarScale;
+inline constexpr float kWideMtEpsilon = kMollerTrumboreEpsilon;
+
+// ---------------------------------------------------------------------------------------------------
+// Ray against the N child boxes of a node: bit i of the result is set when the ray enters child i within
+// [tmin, tmax]; t_entry[i] is then its entry distance. Slab test of Kay and Kajiya; with kRobust the far
+// distances are scaled by Ize 2013's bound, as RobustRayBox does.
+
+#if defined(SAHBENCH_WIDE_SCALAR)
+
+template <uint32_t N, bool kRobust>
+inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
+                                   float* t_entry) {
+  uint32_t mask = 0;
+  for (uint32_t i = 0; i < N; ++i) {
+    float t_near = tmin, t_far = tmax;
+    for (uint32_t axis = 0; axis < 3; ++axis) {
+      const float t0 = (node.planes[r.near_plane[axis]][i] - r.org[axis]) * r.inv_dir[axis];
+      float t1 = (node.planes[r.far_plane[axis]][i] - r.org[axis]) * r.inv_dir[axis];
+      if constexpr (kRobust) t1 *= kWideFarScale;
+      t_near = t0 > t_near ? t0 : t_near;
+      t_far = t1 < t_far ? t1 : t_far;
+    }
+    t_entry[i] = t_near;
+    mask |= static_cast<uint32_t>(t_near <= t_far) << i;
+  }
+  return mask;
+}
+
+#else
+
+// Four children at a time. _mm_max_ps(a, b) is a > b ? a : b and _mm_min_ps(a, b) is a < b ? a : b,
+// exactly the scalar updates, so a NaN distance (origin on a face plane of a zero direction component)
+// leaves the interval as it is, as in ray_box.h.
+template <bool kRobust>
+inline uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, float tmin, float tmax,
+                                    float* t_entry, uint32_t stride) {
+  __m128 t_near = _mm_set1_ps(tmin);
+  __m128 t_far = _mm_set1_ps(tmax);
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    const __m128 org = _mm_set1_ps(r.org[axis]);
+    const __m128 inv = _mm_set1_ps(r.inv_dir[axis]);
+    const __m128 near = _mm_load_ps(planes[r.near_plane[axis] * stride]);
+    const __m128 far = _mm_load_ps(planes[r.far_plane[axis] * stride]);
+    const __m128 t0 = _mm_mul_ps(_mm_sub_ps(near, org), inv);
+    __m128 t1 = _mm_mul_ps(_mm_sub_ps(far, org), inv);
+    if constexpr (kRobust) t1 = _mm_mul_ps(t1, _mm_set1_ps(kWideFarScale));
+    t_near = _mm_max_ps(t0, t_near);
+    t_far = _mm_min_ps(t1, t_far);
+  }
+  _mm_storeu_ps(t_entry, t_near);
+  return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmple_ps(t_near, t_far)));
+}
+
+template <uint32_t N, bool kRobust>
+inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
+                                   float* t_entry) {
+  if constexpr (N == 4) {
+    return intersect_children4<kRobust>(reinterpret_cast<const float (*)[4]>(node.planes), r, tmin, tmax,
+                                        t_entry, 1);
+  } else {
+#if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
+    __m256 t_near = _mm256_set1_ps(tmin);
+    __m256 t_far = _mm256_set1_ps(tmax);
+    for (uint32_t axis = 0; axis < 3; ++axis) {
+      const __m256 org = _mm256_set1_ps(r.org[axis]);
+      const __m256 inv = _mm256_set1_ps(r.inv_dir[axis]);
+      const __m256 near = _mm256_load_ps(node.planes[r.near_plane[axis]]);
+      const __m256 far = _mm256_load_ps(node.planes[r.far_plane[axis]]);
+      const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(near, org), inv);
+      __m256 t1 = _mm256_mul_ps(_mm256_sub_ps(far, org), inv);
+      if constexpr (kRobust) t1 = _mm256_mul_ps(t1, _mm256_set1_ps(kWideFarScale));
+      t_near = _mm256_max_ps(t0, t_near);
+      t_far = _mm256_min_ps(t1, t_far);
+    }
+    _mm256_storeu_ps(t_entry, t_near);
+#if defined(SAHBENCH_WIDE_AVX512)
+    // AVX-512VL compares straight into a mask register.
+    return static_cast<uint32_t>(_mm256_cmp_ps_mask(t_near, t_far, _CMP_LE_OQ));
+#else
+    return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(t_near, t_far, _CMP_LE_OQ)));
+#endif
+#else
+    // SSE: the two halves of the eight children. planes[p] is 8 floats; as [4]-rows, plane p's first
+    // half is row 2p and its second half row 2p + 1.
+    const auto* rows = reinterpret_cast<const float (*)[4]>(node.planes);
+    const uint32_t lo = intersect_children4<kRobust>(rows, r, tmin, tmax, t_entry, 2);
+    const uint32_t hi = intersect_children4<kRobust>(rows + 1, r, tmin, tmax, t_entry + 4, 2);
+    return lo | (hi << 4);
+#endif
+  }
+}
+
+#endif
+
+// ---------------------------------------------------------------------------------------------------
+// Ray against the four triangles of a block: bit i is set when lane i is hit within [tmin, tmax], with
+// its t, u, v in the arrays. Watertight: Woop et al. 2013 as WatertightTriangleTest; Möller–Trumbore as
+// MollerTrumboreTest with `epsilon`.
+
+#if defined(SAHBENCH_WIDE_SCALAR)
+
+inline float component(const float (&v)[3][kBlockWidth], uint32_t axis, uint32_t lane) { return v[axis][lane]; }
+
+inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
+                                           float* t_out, float* u_out, float* v_out) {
+  uint32_t mask = 0;
+  for (uint32_t i = 0; i < kBlockWidth; ++i) {
+    if (b.prim[i] == kInvalidPrim) continue;
+    const float a_x = b.v0[r.kx][i] - r.org[r.kx], a_y = b.v0[r.ky][i] - r.org[r.ky], a_z = b.v0[r.kz][i] - r.org[r.kz];
+    const float b_x = b.v1[r.kx][i] - r.org[r.kx], b_y = b.v1[r.ky][i] - r.org[r.ky], b_z = b.v1[r.kz][i] - r.org[r.kz];
+    const float c_x = b.v2[r.kx][i] - r.org[r.kx], c_y = b.v2[r.ky][i] - r.org[r.ky], c_z = b.v2[r.kz][i] - r.org[r.kz];
+    const float ax = a_x - r.sx * a_z, ay = a_y - r.sy * a_z;
+    const float bx = b_x - r.sx * b_z, by = b_y - r.sy * b_z;
+    const float cx = c_x - r.sx * c_z, cy = c_y - r.sy * c_z;
+    float e0 = cx * by - cy * bx;
+    float e1 = ax * cy - ay * cx;
+    float e2 = bx * ay - by * ax;
+    if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f) {
+      e0 = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
+      e1 = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
+      e2 = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
+    }
+    if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) continue;
+    const float det = e0 + e1 + e2;
+    if (det == 0.0f) continue;
+    const float az = r.sz * a_z, bz = r.sz * b_z, cz = r.sz * c_z;
+    const float scaled_t = e0 * az + e1 * bz + e2 * cz;
+    const float abs_det = det < 0.0f ? -det : det;
+    const float signed_t = det < 0.0f ? -scaled_t : scaled_t;
+    if (!(signed_t >= tmin * abs_det && signed_t <= tmax * abs_det)) continue;
+    const float inv_det = 1.0f / det;
+    const float t = scaled_t * inv_det;
+    if (!(t >= tmin && t <= tmax)) continue;
+    t_out[i] = t;
+    u_out[i] = e1 * inv_det;
+    v_out[i] = e2 * inv_det;
+    mask |= 1u << i;
+  }
+  return mask;
+}
+
+inline uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,
+                                   float* t_out, float* u_out, float* v_out) {
+  uint32_t mask = 0;
+  for (uint32_t i = 0; i < kBlockWidth; ++i) {
+    if (b.prim[i] == kInvalidPrim) continue;
+    const float e1x = b.v1[0][i] - b.v0[0][i], e1y = b.v1[1][i] - b.v0[1][i], e1z = b.v1[2][i] - b.v0[2][i];
+    const float e2x = b.v2[0][i] - b.v0[0][i], e2y = b.v2[1][i] - b.v0[1][i], e2z = b.v2[2][i] - b.v0[2][i];
+    const float px = r.dir[1] * e2z - r.dir[2] * e2y;
+    const float py = r.dir[2] * e2x - r.dir[0] * e2z;
+    const float pz = r.dir[0] * e2y - r.dir[1] * e2x;
+    const float det = e1x * px + e1y * py + e1z * pz;
+    if (!((det < 0.0f ? -det : det) > epsilon)) continue;
+    const float inv_det = 1.0f / det;
+    const float sx = r.org[0] - b.v0[0][i], sy = r.org[1] - b.v0[1][i], sz = r.org[2] - b.v0[2][i];
+    const float u = (sx * px + sy * py + sz * pz) * inv_det;
+    if (!(u >= 0.0f && u <= 1.0f)) continue;
+    const float qx = sy * e1z - sz * e1y;
+    const float qy = sz * e1x - sx * e1z;
+    const float qz = sx * e1y - sy * e1x;
+    const float v = (r.dir[0] * qx + r.dir[1] * qy + r.dir[2] * qz) * inv_det;
+    if (!(v >= 0.0f && u + v <= 1.0f)) continue;
+    const float t = (e2x * qx + e2y * qy + e2z * qz) * inv_det;
+    if (!(t >= tmin && t <= tmax)) continue;
+    t_out[i] = t;
+    u_out[i] = u;
+    v_out[i] = v;
+    mask |= 1u << i;
+  }
+  return mask;
+}
+
+#else
+
+inline __m128 lanes_valid(const TriangleBlock& b) {
+  const __m128i prim = _mm_load_si128(reinterpret_cast<const __m128i*>(b.prim));
+  const __m128i invalid = _mm_cmpeq_epi32(prim, _mm_set1_epi32(-1));
+  return _mm_castsi128_ps(_mm_xor_si128(invalid, _mm_set1_epi32(-1)));
+}
+
+inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
+                                           float* t_out, float* u_out, float* v_out) {
+  const __m128 valid = lanes_valid(b);
+  const __m128 ox = _mm_set1_ps(r.org[r.kx]), oy = _mm_set1_ps(r.org[r.ky]), oz = _mm_set1_ps(r.org[r.kz]);
+  const __m128 sx = _mm_set1_ps(r.sx), sy = _mm_set1_ps(r.sy);
+  // Vertices relative to the origin, in the ray's permuted axes, then sheared.
+  const __m128 a_x = _mm_sub_ps(_mm_load_ps(b.v0[r.kx]), ox), a_y = _mm_sub_ps(_mm_load_ps(b.v0[r.ky]), oy),
+               a_z = _mm_sub_ps(_mm_load_ps(b.v0[r.kz]), oz);
+  const __m128 b_x = _mm_sub_ps(_mm_load_ps(b.v1[r.kx]), ox), b_y = _mm_sub_ps(_mm_load_ps(b.v1[r.ky]), oy),
+               b_z = _mm_sub_ps(_mm_load_ps(b.v1[r.kz]), oz);
+  const __m128 c_x = _mm_sub_ps(_mm_load_ps(b.v2[r.kx]), ox), c_y = _mm_sub_ps(_mm_load_ps(b.v2[r.ky]), oy),
+               c_z = _mm_sub_ps(_mm_load_ps(b.v2[r.kz]), oz);
+  const __m128 ax = _mm_sub_ps(a_x, _mm_mul_ps(sx, a_z)), ay = _mm_sub_ps(a_y, _mm_mul_ps(sy, a_z));
+  const __m128 bx = _mm_sub_ps(b_x, _mm_mul_ps(sx, b_z)), by = _mm_sub_ps(b_y, _mm_mul_ps(sy, b_z));
+  const __m128 cx = _mm_sub_ps(c_x, _mm_mul_ps(sx, c_z)), cy = _mm_sub_ps(c_y, _mm_mul_ps(sy, c_z));
+  __m128 e0 = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+  __m128 e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+  __m128 e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+
+  const __m128 zero = _mm_setzero_ps();
+  const __m128 on_edge = _mm_and_ps(
+      valid, _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)), _mm_cmpeq_ps(e2, zero)));
+  if (const int lanes = _mm_movemask_ps(on_edge)) [[unlikely]] {
+    // Through an edge to float precision: those lanes' edge functions again in double (section 4).
+    alignas(16) float axs[4], ays[4], bxs[4], bys[4], cxs[4], cys[4], f0[4], f1[4], f2[4];
+    _mm_store_ps(axs, ax), _mm_store_ps(ays, ay), _mm_store_ps(bxs, bx), _mm_store_ps(bys, by);
+    _mm_store_ps(cxs, cx), _mm_store_ps(cys, cy), _mm_store_ps(f0, e0), _mm_store_ps(f1, e1), _mm_store_ps(f2, e2);
+    for (int i = 0; i < 4; ++i) {
+      if (!(lanes & (1 << i))) continue;
+      f0[i] = static_cast<float>(static_cast<double>(cxs[i]) * bys[i] - static_cast<double>(cys[i]) * bxs[i]);
+      f1[i] = static_cast<float>(static_cast<double>(axs[i]) * cys[i] - static_cast<double>(ays[i]) * cxs[i]);
+      f2[i] = static_cast<float>(static_cast<double>(bxs[i]) * ays[i] - static_cast<double>(bys[i]) * axs[i]);
+    }
+    e0 = _mm_load_ps(f0), e1 = _mm_load_ps(f1), e2 = _mm_load_ps(f2);
+  }
+  // Inside when no edge function has the wrong sign.
+  const __m128 some_negative =
+      _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
+  const __m128 some_positive =
+      _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
+  const __m128 det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
+  // det == 0 misses; a NaN det passes here, as in the scalar test, and fails the distance test below.
+  __m128 hit = _mm_andnot_ps(_mm_and_ps(some_negative, some_positive), valid);
+  hit = _mm_andnot_ps(_mm_cmpeq_ps(det, zero), hit);
+  if (!_mm_movemask_ps(hit)) return 0;
+
+  const __m128 sz = _mm_set1_ps(r.sz);
+  const __m128 az = _mm_mul_ps(sz, a_z), bz = _mm_mul_ps(sz, b_z), cz = _mm_mul_ps(sz, c_z);
+  const __m128 scaled_t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  const __m128 abs_det = _mm_andnot_ps(sign, det);
+  const __m128 signed_t = _mm_xor_ps(scaled_t, _mm_and_ps(det, sign));
+  const __m128 lo = _mm_set1_ps(tmin), hi = _mm_set1_ps(tmax);
+  hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(signed_t, _mm_mul_ps(lo, abs_det)),
+                                   _mm_cmple_ps(signed_t, _mm_mul_ps(hi, abs_det))));
+  if (!_mm_movemask_ps(hit)) return 0;
+  const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
+  const __m128 t = _mm_mul_ps(scaled_t, inv_det);
+  hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(t, lo), _mm_cmple_ps(t, hi)));
+  _mm_storeu_ps(t_out, t);
+  _mm_storeu_ps(u_out, _mm_mul_ps(e1, inv_det));
+  _mm_storeu_ps(v_out, _mm_mul_ps(e2, inv_det));
+  return static_cast<uint32_t>(_mm_movemask_ps(hit));
+}
+
+inline uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,
+                                   float* t_out, float* u_out, float* v_out) {
+  const __m128 valid = lanes_valid(b);
+  const __m128 v0x = _mm_load_ps(b.v0[0]), v0y = _mm_load_ps(b.v0[1]), v0z = _mm_load_ps(b.v0[2]);
+  const __m128 e1x = _mm_sub_ps(_mm_load_ps(b.v1[0]), v0x), e1y = _mm_sub_ps(_mm_load_ps(b.v1[1]), v0y),
+               e1z = _mm_sub_ps(_mm_load_ps(b.v1[2]), v0z);
+  const __m128 e2x = _mm_sub_ps(_mm_load_ps(b.v2[0]), v0x), e2y = _mm_sub_ps(_mm_load_ps(b.v2[1]), v0y),
+               e2z = _mm_sub_ps(_mm_load_ps(b.v2[2]), v0z);
+  const __m128 dx = _mm_set1_ps(r.dir[0]), dy = _mm_set1_ps(r.dir[1]), dz = _mm_set1_ps(r.dir[2]);
+  // p = dir x edge2, det = edge1 . p (vec3.h's cross and dot, term for term).
+  const __m128 px = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(dz, e2y));
+  const __m128 py = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(dx, e2z));
+  const __m128 pz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(dy, e2x));
+  const __m128 det = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e1x, px), _mm_mul_ps(e1y, py)), _mm_mul_ps(e1z, pz));
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  __m128 hit = _mm_and_ps(valid, _mm_cmpgt_ps(_mm_andnot_ps(sign, det), _mm_set1_ps(epsilon)));
+  if (!_mm_movemask_ps(hit)) return 0;
+  const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
+  const __m128 sx = _mm_sub_ps(_mm_set1_ps(r.org[0]), v0x), sy = _mm_sub_ps(_mm_set1_ps(r.org[1]), v0y),
+               sz = _mm_sub_ps(_mm_set1_ps(r.org[2]), v0z);
+  const __m128 u = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(sx, px), _mm_mul_ps(sy, py)), _mm_mul_ps(sz, pz)), inv_det);
+  const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+  hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmple_ps(u, one)));
+  const __m128 qx = _mm_sub_ps(_mm_mul_ps(sy, e1z), _mm_mul_ps(sz, e1y));
+  const __m128 qy = _mm_sub_ps(_mm_mul_ps(sz, e1x), _mm_mul_ps(sx, e1z));
+  const __m128 qz = _mm_sub_ps(_mm_mul_ps(sx, e1y), _mm_mul_ps(sy, e1x));
+  const __m128 v = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)), inv_det);
+  hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(v, zero), _mm_cmple_ps(_mm_add_ps(u, v), one)));
+  const __m128 t = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)), _mm_mul_ps(e2z, qz)), inv_det);
+  hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(tmin)), _mm_cmple_ps(t, _mm_set1_ps(tmax))));
+  _mm_storeu_ps(t_out, t);
+  _mm_storeu_ps(u_out, u);
+  _mm_storeu_ps(v_out, v);
+  return static_cast<uint32_t>(_mm_movemask_ps(hit));
+}
+
+#endif
+
+template <TriangleTestKind kTri>
+inline uint32_t intersect_block(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float* t, float* u,
+                                float* v) {
+  if constexpr (kTri == TriangleTestKind::kWatertight) return intersect_block_watertight(b, r, tmin, tmax, t, u, v);
+  else if constexpr (kTri == TriangleTestKind::kMollerTrumbore)
+    return intersect_block_mt(b, r, tmin, tmax, kWideMtEpsilon, t, u, v);
+  else return intersect_block_mt(b, r, tmin, tmax, 0.0f, t, u, v);
+}
+
+inline uint32_t occupied_lanes(const TriangleBlock& b) {
+  uint32_t n = 0;
+  for (uint32_t i = 0; i < kBlockWidth; ++i) n += b.prim[i] != kInvalidPrim;
+  return n;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// The traversal: depth first with an explicit stack of child slots (inner nodes and leaves alike), the
+// children a ray enters pushed so that the nearest is popped first (closest hit) or in storage order
+// (any hit), and entries entered beyond the closest hit so far skipped when popped. The same loop as
+// bvh2_traversal.h, with a node's N box tests done at once.
+
+struct WideStackEntry {
+  uint32_t child;
+  uint32_t count;  // 0: inner node `child`; else a leaf of `count` blocks from `child`
+  float t_entry;
+};
+
+// Stack bound: compile_wide() rejects wide nodes deeper than kMaxDepth - 1, and popping a node then
+// pushing its at most N children leaves at most N - 1 entries per level, so (N - 1) kMaxDepth + 1 entries
+// suffice: 449 for N = 8.
+inline constexpr uint32_t kWideStackCapacity = 7 * kMaxDepth + 1;
+
+// The root's box, one lane: the scalar slab test of intersect_children.
+template <bool kRobust>
+inline bool intersect_root(const float* planes, const WideRay& r, float& t_entry) {
+  float t_near = r.tmin, t_far = r.tmax;
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    const float t0 = (planes[r.near_plane[axis]] - r.org[axis]) * r.inv_dir[axis];
+    float t1 = (planes[r.far_plane[axis]] - r.org[axis]) * r.inv_dir[axis];
+    if constexpr (kRobust) t1 *= kWideFarScale;
+    t_near = t0 > t_near ? t0 : t_near;
+    t_far = t1 < t_far ? t1 : t_far;
+  }
+  t_entry = t_near;
+  return t_near <= t_far;
+}
+
+template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>
+inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const TriangleBlock* blocks, const WideRay& r,
+                     WideCounts* counts) {
+  Hit best;
+  float t_root;
+  if (!intersect_root<kRobust>(root_planes, r, t_root)) return best;
+  WideStackEntry stack[kWideStackCapacity];
+  uint32_t size = 0;
+  stack[size++] = {0, 0, t_root};
+  float best_t = r.tmax;
+  while (size > 0) {
+    const WideStackEntry entry = stack[--size];
+    if constexpr (!kAnyHit) {
+      if (entry.t_entry > best_t) continue;
+    }
+    if (entry.count != 0) {
+      if constexpr (kCount) ++counts->leaf_visits;
+      for (uint32_t b = entry.child; b < entry.child + entry.count; ++b) {
+        alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
+        uint32_t lanes = intersect_block<kTri>(blocks[b], r, r.tmin, best_t, t, u, v);
+        if constexpr (kCount) counts->prim_tests += occupied_lanes(blocks[b]);
+        if constexpr (kAnyHit) {
+          if (lanes) return {blocks[b].prim[__builtin_ctz(lanes)], t[__builtin_ctz(lanes)], 0.0f, 0.0f};
+        } else {
+          // Closer, or as close with a lower primitive index (the tie rule of bvh2_traversal.h).
+          for (; lanes; lanes &= lanes - 1) {
+            const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
+            const uint32_t prim = blocks[b].prim[i];
+            if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
+              best = {prim, t[i], u[i], v[i]};
+              best_t = t[i];
+            }
+          }
+        }
+      }
+      continue;
+    }
+
+    const WideNode<N>& node = nodes[entry.child];
+    if constexpr (kCount) ++counts->inner_visits;
+    alignas(32) float t_entry[N];
+    uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
+    const uint32_t base = size;
+    for (; mask; mask &= mask - 1) {
+      const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
+      const WideStackEntry child{node.child[i], node.count[i], t_entry[i]};
+      uint32_t slot = size++;
+      if constexpr (!kAnyHit) {
+        // Insertion sort into this node's part of the stack, nearest on top.
+        while (slot > base && stack[slot - 1].t_entry < child.t_entry) {
+          stack[slot] = stack[slot - 1];
+          --slot;
+        }
+      }
+      stack[slot] = child;
+    }
+  }
+  return best;
+}
+
+template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>
+void trace_batch(const WideBatch& batch) {
+  const auto* nodes = static_cast<const WideNode<N>*>(batch.nodes);
+  for (std::size_t i = 0; i < batch.count; ++i) {
+    if constexpr (kCount) ++batch.counts->rays;
+    const Hit hit = trace_ray<N, kTri, kRobust, kAnyHit, kCount>(batch.root_planes, nodes, batch.blocks, batch.rays[i], batch.counts);
+    if constexpr (kAnyHit) batch.occluded[i] = hit.prim != kInvalidPrim;
+    else batch.hits[i] = hit;
+  }
+}
+
+// The table of this instruction set's kernels: [width 4, 8][triangle test][box test][closest, any].
+template <bool kCount>
+WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
+  auto pick = [&]<uint32_t N, TriangleTestKind kTri>() -> WideKernel {
+    if (box == BoxTestKind::kRobust)
+      return any_hit ? &trace_batch<N, kTri, true, true, kCount> : &trace_batch<N, kTri, true, false, kCount>;
+    return any_hit ? &trace_batch<N, kTri, false, true, kCount> : &trace_batch<N, kTri, false, false, kCount>;
+  };
+  auto by_tri = [&]<uint32_t N>() -> WideKernel {
+    switch (tri) {
+      case TriangleTestKind::kWatertight: return pick.template operator()<N, TriangleTestKind::kWatertight>();
+      case TriangleTestKind::kMollerTrumbore: return pick.template operator()<N, TriangleTestKind::kMollerTrumbore>();
+      case TriangleTestKind::kMollerTrumboreNoEpsilon:
+        return pick.template operator()<N, TriangleTestKind::kMollerTrumboreNoEpsilon>();
+    }
+    return nullptr;
+  };
+  if (width == 4) return by_tri.template operator()<4>();
+  if (width == 8) return by_tri.template operator()<8>();
+  return nullptr;
+}

@@ -1,0 +1,19 @@
+// The wide kernels for AVX2 (x86-64-v3): 8-wide nodes in one 256-bit register, 4-wide triangle blocks.
+// traversal/CMakeLists.txt compiles this file alone with the matching -march level; the program only
+// calls it after kernel_isa_available() has checked the CPU.
+#define SAHBENCH_WIDE_AVX2
+#include <immintrin.h>
+
+#include "traversal/wide_kernels_isa.h"
+
+namespace sahbench::wide_avx2 {
+#include "traversal/wide_kernels.inl"
+}  // namespace sahbench::wide_avx2
+
+namespace sahbench::detail {
+
+WideKernel wide_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
+  return wide_avx2::select_kernel<false>(width, tri, box, any_hit);
+}
+
+}  // namespace sahbench::detail

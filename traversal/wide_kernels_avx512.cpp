@@ -1,0 +1,19 @@
+// The wide kernels for AVX-512 (x86-64-v4): as AVX2, with compares into mask registers (AVX-512VL).
+// traversal/CMakeLists.txt compiles this file alone with the matching -march level; the program only
+// calls it after kernel_isa_available() has checked the CPU.
+#define SAHBENCH_WIDE_AVX512
+#include <immintrin.h>
+
+#include "traversal/wide_kernels_isa.h"
+
+namespace sahbench::wide_avx512 {
+#include "traversal/wide_kernels.inl"
+}  // namespace sahbench::wide_avx512
+
+namespace sahbench::detail {
+
+WideKernel wide_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
+  return wide_avx512::select_kernel<false>(width, tri, box, any_hit);
+}
+
+}  // namespace sahbench::detail

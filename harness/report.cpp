@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "harness/csv.h"
+#include "harness/stress_report.h"
 
 namespace sahbench {
 namespace {
@@ -45,6 +46,8 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   if (run.empty()) run = rows.back().at("run_id");
   std::erase_if(rows, [&](const CsvRow& r) { return r.at("run_id") != run; });
   if (rows.empty()) throw Error("no rows with run_id '" + run + "'");
+  // Results of `sahbench stress` have tables of their own (harness/stress_report.h).
+  if (is_stress_result(rows)) return print_stress_report(rows, out);
 
   const CsvRow& first = rows.front();
   fmt::print(out, "# sahbench report: run {}\n\ncommit {}, {}, {}, {}; build reps {}, trace reps {}; config {}\n\n", run,

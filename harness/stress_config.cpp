@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include "builders/registry.h"
@@ -214,8 +215,19 @@ void read_cases(const Reader& r, const toml::table& root, StressConfig& c) {
 }  // namespace
 
 std::vector<std::string> all_builder_specs() {
+  std::set<uint32_t> layout_arities;
+  for (const auto& layout : layouts()) layout_arities.insert(layout.arity);
   std::vector<std::string> out;
-  for (const auto& b : builders()) out.push_back(b.name);
+  for (const auto& b : builders()) {
+    out.push_back(b.name);
+    // A builder with an `arity` parameter also runs at every other arity some layout traverses, so
+    // that every layout gets a tree.
+    const bool has_arity = std::any_of(b.params.begin(), b.params.end(), [](const ParamSpec& p) { return p.name == "arity"; });
+    if (!has_arity || !b.arity) continue;
+    const uint32_t default_arity = b.arity(resolve_params(b.name, b.params, {}));
+    for (const uint32_t arity : layout_arities)
+      if (arity != default_arity && arity != 2) out.push_back(b.name + ":arity=" + std::to_string(arity));
+  }
   return out;
 }
 

@@ -53,7 +53,8 @@ struct StressConfig {
   bool operator==(const StressConfig&) const = default;
 };
 
-/// Every registered builder with its defaults.
+/// Every registered builder with its defaults; builders with an `arity` parameter also at every other
+/// wide arity a registered layout traverses (e.g. wide_collapse:arity=4 beside its default 8).
 std::vector<std::string> all_builder_specs();
 /// Every registered layout with every triangle test and every box test, the defaults first.
 std::vector<std::string> all_layout_variants();

@@ -1,11 +1,18 @@
 #include "harness/stress_metrics.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "core/error.h"
 #include "traversal/ulp_distance.h"
 
 namespace sahbench {
+namespace {
+
+constexpr uint32_t kSaturatedUlps = std::numeric_limits<uint32_t>::max();
+
+}  // namespace
 
 ErrorMetrics measure_errors(std::span<const Hit> hits, std::span<const ExactHit> exact,
                             std::span<const uint8_t> must_hit) {
@@ -29,10 +36,14 @@ ErrorMetrics measure_errors(std::span<const Hit> hits, std::span<const ExactHit>
     } else if (e.found()) {
       if (!e.accepts(h.prim)) {
         ++m.wrong_prim;
+        const double gap = std::abs(static_cast<double>(h.t) - static_cast<double>(e.t));
+        m.wrong_prim_far += !(gap <= kFarRelative * std::max(std::abs(static_cast<double>(e.t)), std::abs(static_cast<double>(h.t))));
         continue;
       }
       const uint32_t ulps = ulp_distance(h.t, e.t);
       m.t_err_ulps_max = std::max<uint64_t>(m.t_err_ulps_max, ulps);
+      // An infinite t against a finite one (ulp_distance saturates) would swamp the mean: max only.
+      if (ulps == kSaturatedUlps) continue;
       ulps_sum += ulps;
       ++measured;
     }

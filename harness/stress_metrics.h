@@ -10,6 +10,10 @@
 
 namespace sahbench {
 
+/// Relative difference in t beyond which a wrong primitive is "far": 1e-5, the harness's tie tolerance
+/// (traversal/hit_compare.h), far above the rounding of a triangle test and below any real gap.
+inline constexpr double kFarRelative = 1e-5;
+
 struct ErrorMetrics {
   uint64_t rays = 0;
   uint64_t exact_hits = 0;    ///< rays the exact reference says hit
@@ -18,9 +22,15 @@ struct ErrorMetrics {
   /// Both hit, but the variant's primitive is not among those hit at the exact closest distance (a
   /// tie accepts any of its primitives, so a tie is never a wrong primitive).
   uint64_t wrong_prim = 0;
+  /// The part of wrong_prim whose distance also differs from the exact one by more than
+  /// kFarRelative: the variant went past the closest surface (or stopped at one that is farther
+  /// off), rather than choosing the neighbour across an edge within rounding of the exact point.
+  uint64_t wrong_prim_far = 0;
   uint64_t ties = 0;          ///< rays whose exact closest hit is a tie of several primitives
   /// |t - exact t| in ulps (ulp_distance to the correctly rounded exact t), over the rays where the
-  /// variant's primitive is accepted.
+  /// variant's primitive is accepted; the max is UINT32_MAX where a t is infinite and the exact one is
+  /// not, and the mean leaves those out. Near t = 0 (a ray starting on a surface) ulps are tiny, so
+  /// small absolute errors there are huge in ulps.
   uint64_t t_err_ulps_max = 0;
   double t_err_ulps_mean = 0.0;
   /// Rays that must hit (from inside a closed mesh, or aimed into one from outside; the exact

@@ -79,6 +79,24 @@ bool embree_accepts(const Ray& ray) {
   return !std::isnan(ray.tmin) && !std::isnan(ray.tmax);
 }
 
+// Where the default kernels' no-leak guarantee holds. The watertight test (traversal/triangle_tests.h)
+// forms its scaled distance from products of three coordinates taken relative to the ray origin, so
+// in float it overflows (NaN or inf, a miss) once those reach about FLT_MAX^(1/3) = 7e12; the
+// guarantee is asserted on closed cases whose triangles and ray origins lie within +-1e12. Cases beyond
+// it still count their leaks in the CSV.
+constexpr double kWatertightRange = 1e12;
+
+bool within_watertight_range(const StressCase& c) {
+  auto within = [](Vec3 p) {
+    return std::abs(p.x) <= kWatertightRange && std::abs(p.y) <= kWatertightRange && std::abs(p.z) <= kWatertightRange;
+  };
+  for (const Triangle& t : c.scene.triangles)
+    if (!within(t.v0) || !within(t.v1) || !within(t.v2)) return false;
+  for (const Ray& r : c.rays)
+    if (!within(r.org)) return false;
+  return true;
+}
+
 struct BuiltTree {
   Bvh bvh;
   double ms = 0.0;
@@ -128,6 +146,7 @@ class StressRunner {
     std::vector<ExactHit> exact;
     double reference_ms = 0.0;
     uint64_t must_hit = 0;
+    bool guaranteed = false;  // closed, within kWatertightRange: the default kernels must not miss
   };
 
   void fail(std::string what) {
@@ -141,6 +160,7 @@ class StressRunner {
     const double gen_ms = time_ms([&] { c = generate_stress_case(spec); });
     ctx.c = &c;
     ctx.triangles = std::make_shared<const std::vector<Triangle>>(c.scene.triangles);
+    ctx.guaranteed = c.closed && within_watertight_range(c);
     ctx.reference_ms = time_ms([&] { ctx.exact = ExactReference(*ctx.triangles).closest(c.rays); });
     uint64_t exact_hits = 0, ties = 0, must_hit_missed = 0;
     for (std::size_t i = 0; i < c.rays.size(); ++i) {
@@ -153,6 +173,9 @@ class StressRunner {
                         "generated in {:.0f} ms, exact reference {:.0f} ms\n",
                         spec.name, spec.kind, c.scene.triangles.size(), c.scene.removed.total(), c.rays.size(),
                         exact_hits, ties, ctx.must_hit, gen_ms, ctx.reference_ms);
+    if (c.closed && !ctx.guaranteed)
+      log_ << fmt::format("  closed, but beyond +-{:g}: the default kernels' no-leak guarantee is not asserted\n",
+                          kWatertightRange);
     if (c.scene.removed.total() != c.invalid_made)
       fail(fmt::format("case {}: the filter removed {} triangles, the generator made {} invalid ones", spec.name,
                        c.scene.removed.total(), c.invalid_made));
@@ -228,6 +251,7 @@ class StressRunner {
     row["false_misses"] = std::to_string(m.false_misses);
     row["false_hits"] = std::to_string(m.false_hits);
     row["wrong_prim"] = std::to_string(m.wrong_prim);
+    row["wrong_prim_far"] = std::to_string(m.wrong_prim_far);
     row["ties"] = std::to_string(m.ties);
     row["t_err_ulps_max"] = std::to_string(m.t_err_ulps_max);
     row["t_err_ulps_mean"] = fmt::format("{:.3f}", m.t_err_ulps_mean);
@@ -328,7 +352,7 @@ class StressRunner {
         r["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / n);
         r["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / n);
         log_ << fmt::format("  {} {}: {} Mrays/s; {}\n", info->name, r["layout"], r["trace_mrays_median"], metrics_summary(m));
-        if (c.closed && layout.variant == KernelVariant{} && (m.false_misses || m.leaks))
+        if (ctx.guaranteed && layout.variant == KernelVariant{} && (m.false_misses || m.leaks))
           fail(fmt::format("{} layout {}: the default kernels have {} false misses and {} leaks on a closed case", label,
                            r["layout"], m.false_misses, m.leaks));
       } catch (const Error& e) {
@@ -410,7 +434,7 @@ class StressRunner {
 }  // namespace
 
 const std::vector<std::string>& stress_metric_columns() {
-  static const std::vector<std::string> columns = {"false_misses", "false_hits", "wrong_prim", "ties",
+  static const std::vector<std::string> columns = {"false_misses", "false_hits", "wrong_prim", "wrong_prim_far", "ties",
                                                    "t_err_ulps_max", "t_err_ulps_mean", "leaks", "build_failed",
                                                    "nan_bounds"};
   return columns;

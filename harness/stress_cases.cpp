@@ -39,11 +39,11 @@ struct IndexedMesh {
 IndexedMesh icosphere(int levels) {
   const double p = (1.0 + std::sqrt(5.0)) / 2.0;  // the golden ratio: the icosahedron's corners
   IndexedMesh m;
-  m.unit = {{-1, p, 0}, {1, p, 0}, {-1, -p, 0}, {1, -p, 0}, {0, -1, p}, {0, 1, p},
-            {0, -1, -p}, {0, 1, -p}, {p, 0, -1}, {p, 0, 1}, {-p, 0, -1}, {-p, 0, 1}};
-  m.faces = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-             {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-             {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  m.unit = {{-1, p, 0},  {1, p, 0},  {-1, -p, 0}, {1, -p, 0}, {0, -1, p},  {0, 1, p},
+            {0, -1, -p}, {0, 1, -p}, {p, 0, -1},  {p, 0, 1},  {-p, 0, -1}, {-p, 0, 1}};
+  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   auto normalise = [](Point3 v) {
     const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     return Point3{v[0] / len, v[1] / len, v[2] / len};
@@ -208,8 +208,12 @@ void closed_mesh_rays(CaseBuilder& b, const PlacedMesh& m, float inner_radius) {
     const auto& [ea, eb] = m.edges[pick % m.edges.size()];
     const Vec3 edge_mid = (m.vertices[ea] + m.vertices[eb]) * 0.5f;
     switch (i % 6) {
-      case 0: b.ray(m.centre, vertex - m.centre, true); break;
-      case 1: b.ray(m.centre, edge_mid - m.centre, true); break;
+      case 0:
+        b.ray(m.centre, vertex - m.centre, true);
+        break;
+      case 1:
+        b.ray(m.centre, edge_mid - m.centre, true);
+        break;
       case 2:
       case 3: {  // from outside: o = target + w, dir = -w, so o + dir is the target when o is exact
         const Vec3 target = i % 6 == 2 ? vertex : edge_mid;
@@ -218,11 +222,14 @@ void closed_mesh_rays(CaseBuilder& b, const PlacedMesh& m, float inner_radius) {
         break;
       }
       case 4: {
-        const Vec3 org = m.centre + rng.unit_vector() * (inner_radius * static_cast<float>(rng.uniform(0.0, 0.5)));
+        const Vec3 org =
+            m.centre + rng.unit_vector() * (inner_radius * static_cast<float>(rng.uniform(0.0, 0.5)));
         b.ray(org, rng.unit_vector(), true);
         break;
       }
-      default: b.ray(m.centre, axis_direction(rng), true); break;
+      default:
+        b.ray(m.centre, axis_direction(rng), true);
+        break;
     }
   }
 }
@@ -267,11 +274,21 @@ void make_axis_rays(CaseBuilder& b, const StressCaseSpec& s) {
       planes += on_plane[a];
       gaps += choice == 3;
       switch (choice) {
-        case 0: org[a] = lo[a]; break;
-        case 1: org[a] = lo[a] + 1.0f; break;
-        case 2: org[a] = lo[a] + 0.5f; break;
-        case 3: org[a] = lo[a] - 0.5f; break;
-        default: org[a] = lo[a] + static_cast<float>(rng.uniform(0.01, 0.99)); break;
+        case 0:
+          org[a] = lo[a];
+          break;
+        case 1:
+          org[a] = lo[a] + 1.0f;
+          break;
+        case 2:
+          org[a] = lo[a] + 0.5f;
+          break;
+        case 3:
+          org[a] = lo[a] - 0.5f;
+          break;
+        default:
+          org[a] = lo[a] + static_cast<float>(rng.uniform(0.01, 0.99));
+          break;
       }
     }
     if (planes == 3) {  // a corner: move off one of its planes, to the middle of that axis
@@ -291,8 +308,10 @@ void make_axis_rays(CaseBuilder& b, const StressCaseSpec& s) {
     if (planes > 0 && gaps == 0) {
       int free_axis = 0;
       for (int a = 0; a < 3; ++a) {
-        if (on_plane[a]) dir[a] = rng.next() % 2 ? 0.0f : -0.0f;
-        else free_axis = a;
+        if (on_plane[a])
+          dir[a] = rng.next() % 2 ? 0.0f : -0.0f;
+        else
+          free_axis = a;
       }
       if (dir == Vec3{0.0f}) dir[free_axis] = rng.next() % 2 ? 1.0f : -1.0f;
     }
@@ -331,7 +350,8 @@ void make_grazing(CaseBuilder& b, const StressCaseSpec& s) {
     const Vec3 flat{static_cast<float>(std::cos(phi)), static_cast<float>(std::sin(phi)), 0.0f};
     switch (i % 5) {
       case 0: {  // grazing onto the z = 0 square
-        const Vec3 target{static_cast<float>(rng.uniform(-0.9, 0.9)), static_cast<float>(rng.uniform(-0.9, 0.9)), 0};
+        const Vec3 target{static_cast<float>(rng.uniform(-0.9, 0.9)),
+                          static_cast<float>(rng.uniform(-0.9, 0.9)), 0};
         const Vec3 dir{flat.x, flat.y, -slope};
         b.ray(target - dir * 2.0f, dir);
         break;
@@ -438,12 +458,24 @@ void make_degenerate(CaseBuilder& b, const StressCaseSpec& s) {
     const Vec3 v{dyadic(), dyadic(), dyadic()}, e{dyadic() / 4, dyadic() / 4, dyadic() / 4};
     invalid_sites.push_back(v + e);
     switch (i % 6) {
-      case 0: b.add_invalid({v, v, v + e + Vec3{0.5f}}); break;
-      case 1: b.add_invalid({v, v, v}); break;
-      case 2: b.add_invalid({v, v + e, v + e * 2.0f}); break;
-      case 3: b.add_invalid({v, {kNaN, v.y, v.z}, v + Vec3{0.1f, 0.2f, 0.0f}}); break;
-      case 4: b.add_invalid({v, v + Vec3{0.1f, 0.0f, 0.3f}, {v.x, kInf, v.z}}); break;
-      default: b.add_invalid({{v.x, v.y, -kInf}, v + Vec3{0.1f, 0.2f, 0.0f}, v + Vec3{0.0f, 0.2f, 0.1f}}); break;
+      case 0:
+        b.add_invalid({v, v, v + e + Vec3{0.5f}});
+        break;
+      case 1:
+        b.add_invalid({v, v, v});
+        break;
+      case 2:
+        b.add_invalid({v, v + e, v + e * 2.0f});
+        break;
+      case 3:
+        b.add_invalid({v, {kNaN, v.y, v.z}, v + Vec3{0.1f, 0.2f, 0.0f}});
+        break;
+      case 4:
+        b.add_invalid({v, v + Vec3{0.1f, 0.0f, 0.3f}, {v.x, kInf, v.z}});
+        break;
+      default:
+        b.add_invalid({{v.x, v.y, -kInf}, v + Vec3{0.1f, 0.2f, 0.0f}, v + Vec3{0.0f, 0.2f, 0.1f}});
+        break;
     }
   }
   for (std::size_t i = 0; i < std::max<uint64_t>(1, s.size / 8); ++i) {
@@ -489,7 +521,8 @@ void make_same_centroid(CaseBuilder& b, const StressCaseSpec& s) {
 // just beside their edges.
 void make_coincident(CaseBuilder& b, const StressCaseSpec& s) {
   SplitMix64 setup = b.rng(kSetupItem);
-  const Triangle t{random_point(setup, -1.0, 1.0), random_point(setup, -1.0, 1.0), random_point(setup, -1.0, 1.0)};
+  const Triangle t{random_point(setup, -1.0, 1.0), random_point(setup, -1.0, 1.0),
+                   random_point(setup, -1.0, 1.0)};
   for (std::size_t i = 0; i < s.size; ++i) b.add(t);
   const Vec3 v[3] = {t.v0, t.v1, t.v2};
   for (uint32_t i = 0; i < b.ray_count(); ++i) {
@@ -497,9 +530,15 @@ void make_coincident(CaseBuilder& b, const StressCaseSpec& s) {
     const int e = static_cast<int>(rng.next() % 3);
     Vec3 target;
     switch (i % 4) {
-      case 0: target = point_on(t, rng); break;
-      case 1: target = (v[e] + v[(e + 1) % 3]) * 0.5f; break;
-      case 2: target = v[e]; break;
+      case 0:
+        target = point_on(t, rng);
+        break;
+      case 1:
+        target = (v[e] + v[(e + 1) % 3]) * 0.5f;
+        break;
+      case 2:
+        target = v[e];
+        break;
       default: {  // just outside an edge: its midpoint pushed away from the opposite vertex
         const Vec3 mid = (v[e] + v[(e + 1) % 3]) * 0.5f;
         target = mid + (mid - v[(e + 2) % 3]) * 1e-6f;
@@ -557,9 +596,15 @@ void make_surface_origin(CaseBuilder& b, const StressCaseSpec& s) {
     const Vec3 n = normalize(t.normal());
     Vec3 dir = rng.unit_vector();
     switch (i % 3) {
-      case 0: b.ray(org, dot(dir, n) < 0 ? -dir : dir); break;
-      case 1: b.ray(org, dot(dir, n) > 0 ? -dir : dir, true); break;
-      default: b.ray(org, t.v1 - t.v0); break;
+      case 0:
+        b.ray(org, dot(dir, n) < 0 ? -dir : dir);
+        break;
+      case 1:
+        b.ray(org, dot(dir, n) > 0 ? -dir : dir, true);
+        break;
+      default:
+        b.ray(org, t.v1 - t.v0);
+        break;
     }
   }
 }
@@ -573,7 +618,8 @@ void make_empty_interval(CaseBuilder& b, const StressCaseSpec& s) {
   for (uint32_t i = 0; i < b.ray_count(); ++i) {
     SplitMix64 rng = b.rng(i);
     Vec3 org;
-    for (int a = 0; a < 3; ++a) org[a] = static_cast<float>(static_cast<int64_t>(rng.next() % 31) - 15) / 16.0f;
+    for (int a = 0; a < 3; ++a)
+      org[a] = static_cast<float>(static_cast<int64_t>(rng.next() % 31) - 15) / 16.0f;
     Vec3 dir = axis_direction(rng);
     const int axis = dir.x != 0 ? 0 : (dir.y != 0 ? 1 : 2);
     if (i % 6 == 3) {  // oblique, dyadic: the distance to the face plane is still exact
@@ -582,15 +628,24 @@ void make_empty_interval(CaseBuilder& b, const StressCaseSpec& s) {
     }
     const float d = 1.0f - org[axis] * dir[axis];  // exact: |dir[axis]| = 1, dyadic origin
     switch (i % 6) {
-      case 0: case 3: b.ray(org, dir, false, d, d); break;
-      case 1: b.ray(org, dir, false, std::nextafter(d, kInf), std::nextafter(d, kInf)); break;
-      case 2: b.ray(org, dir, false, std::nextafter(d, 0.0f), std::nextafter(d, 0.0f)); break;
+      case 0:
+      case 3:
+        b.ray(org, dir, false, d, d);
+        break;
+      case 1:
+        b.ray(org, dir, false, std::nextafter(d, kInf), std::nextafter(d, kInf));
+        break;
+      case 2:
+        b.ray(org, dir, false, std::nextafter(d, 0.0f), std::nextafter(d, 0.0f));
+        break;
       case 4: {
         org[axis] = dir[axis] > 0 ? 1.0f : -1.0f;  // on the face it looks at
         b.ray(org, dir, false, 0.0f, 0.0f);
         break;
       }
-      default: b.ray(org, dir, false, d * 0.5f, d * 0.5f); break;
+      default:
+        b.ray(org, dir, false, d * 0.5f, d * 0.5f);
+        break;
     }
   }
 }
@@ -602,39 +657,68 @@ struct KindEntry {
 
 const std::vector<KindEntry>& kinds() {
   static const std::vector<KindEntry> all = {
-      {{"sphere", "closed icosphere (20 * 4^k >= size triangles, k <= 6) of radius `scale` centred at `offset`; "
-                  "rays from inside and outside through vertices and edge midpoints", true, {"scale", "offset"}},
+      {{"sphere",
+        "closed icosphere (20 * 4^k >= size triangles, k <= 6) of radius `scale` centred at `offset`; "
+        "rays from inside and outside through vertices and edge midpoints",
+        true,
+        {"scale", "offset"}},
        make_sphere},
-      {{"cube_grid", "closed cube of half-size `scale` at `offset`, n x n quads per face (12 n^2 ~ size); "
-                     "rays through grid vertices and edges", true, {"scale", "offset"}},
+      {{"cube_grid",
+        "closed cube of half-size `scale` at `offset`, n x n quads per face (12 n^2 ~ size); "
+        "rays through grid vertices and edges",
+        true,
+        {"scale", "offset"}},
        make_cube_grid},
-      {{"axis_rays", "lattice of closed unit cubes (12 per cube ~ size); axis-parallel rays with +-0 components "
-                     "and rays in box face planes", true, {}},
+      {{"axis_rays",
+        "lattice of closed unit cubes (12 per cube ~ size); axis-parallel rays with +-0 components "
+        "and rays in box face planes",
+        true,
+        {}},
        make_axis_rays},
-      {{"grazing", "a square at z = 0 and size/2 rotated squares; rays nearly parallel to them, in their "
-                   "plane, and just above it", false, {}},
+      {{"grazing",
+        "a square at z = 0 and size/2 rotated squares; rays nearly parallel to them, in their "
+        "plane, and just above it",
+        false,
+        {}},
        make_grazing},
-      {{"huge_tiny", "triangles at 1e18 and 1e30 with triangles of edge 1e-20 near the origin; size/4 huge "
-                     "and size/2 tiny, plus 8 that collapse to zero area", false, {}},
+      {{"huge_tiny",
+        "triangles at 1e18 and 1e30 with triangles of edge 1e-20 near the origin; size/4 huge "
+        "and size/2 tiny, plus 8 that collapse to zero area",
+        false,
+        {}},
        make_huge_tiny},
-      {{"degenerate", "size random triangles mixed with size/4 invalid ones (zero area, NaN, +-inf) and size/8 "
-                      "slivers", false, {}},
+      {{"degenerate",
+        "size random triangles mixed with size/4 invalid ones (zero area, NaN, +-inf) and size/8 "
+        "slivers",
+        false,
+        {}},
        make_degenerate},
       {{"same_centroid", "size triangles of random shapes, all with the same centroid", false, {}},
        make_same_centroid},
-      {{"coincident", "size bitwise-identical triangles; rays at their interior, edges, vertices and just "
-                      "beside", false, {}},
+      {{"coincident",
+        "size bitwise-identical triangles; rays at their interior, edges, vertices and just "
+        "beside",
+        false,
+        {}},
        make_coincident},
       {{"needles", "size needles of length/width `aspect` (the scenes' generator)", false, {"aspect"}},
        make_needles},
-      {{"tiny_in_huge", "tiny spheres inside a closed cube of half-size `outer` (size triangles); every ray "
-                        "starts inside", true, {"outer"}},
+      {{"tiny_in_huge",
+        "tiny spheres inside a closed cube of half-size `outer` (size triangles); every ray "
+        "starts inside",
+        true,
+        {"outer"}},
        make_tiny_in_huge},
-      {{"surface_origin", "rays starting on an icosphere's surface: outwards, inwards, along an edge",
-        false, {"scale", "offset"}},
+      {{"surface_origin",
+        "rays starting on an icosphere's surface: outwards, inwards, along an edge",
+        false,
+        {"scale", "offset"}},
        make_surface_origin},
-      {{"empty_interval", "rays with tmin = tmax inside a cube grid: at the exact distance of a face, one ulp "
-                          "off it, 0 on a face", false, {}},
+      {{"empty_interval",
+        "rays with tmin = tmax inside a cube grid: at the exact distance of a face, one ulp "
+        "off it, 0 on a face",
+        false,
+        {}},
        make_empty_interval},
   };
   return all;

@@ -25,12 +25,12 @@ struct StressCaseSpec {
   std::string name;
   std::string kind;
   uint64_t seed = 1;
-  uint64_t size = 1000;   ///< about this many triangles (each kind says how it rounds)
+  uint64_t size = 1000;  ///< about this many triangles (each kind says how it rounds)
   uint32_t rays = 2000;
-  double scale = 1.0;     ///< sphere, cube_grid, surface_origin: radius or half-size of the mesh
-  double offset = 0.0;    ///< sphere, cube_grid: the mesh's centre is (offset, offset, offset)
-  double aspect = 1e4;    ///< needles: length / width
-  double outer = 1e6;     ///< tiny_in_huge: half-size of the enclosing cube
+  double scale = 1.0;   ///< sphere, cube_grid, surface_origin: radius or half-size of the mesh
+  double offset = 0.0;  ///< sphere, cube_grid: the mesh's centre is (offset, offset, offset)
+  double aspect = 1e4;  ///< needles: length / width
+  double outer = 1e6;   ///< tiny_in_huge: half-size of the enclosing cube
 
   bool operator==(const StressCaseSpec&) const = default;
 };
@@ -47,8 +47,8 @@ struct StressKindInfo {
 
 struct StressCase {
   StressCaseSpec spec;
-  bool closed = false;   ///< as the kind's StressKindInfo::closed
-  Scene scene;           ///< valid triangles only; scene.removed counts the others
+  bool closed = false;  ///< as the kind's StressKindInfo::closed
+  Scene scene;          ///< valid triangles only; scene.removed counts the others
   std::vector<Ray> rays;
   /// 1 where the ray starts strictly inside a closed mesh or is aimed into one from outside, so that a
   /// miss is a leak through the mesh.

@@ -33,7 +33,8 @@ class Reader {
     throw Error(file_ + ":" + std::to_string(std::max<uint32_t>(at.source().begin.line, 1)) + ": " + what);
   }
 
-  void check_keys(const toml::table& table, const std::string& where, const std::vector<std::string>& known) const {
+  void check_keys(const toml::table& table, const std::string& where,
+                  const std::vector<std::string>& known) const {
     for (const auto& [key, node] : table) {
       if (std::find(known.begin(), known.end(), std::string(key.str())) != known.end()) continue;
       std::string list;
@@ -93,7 +94,8 @@ class Reader {
     std::vector<std::string> out;
     for (const auto& item : *list) {
       std::string value = string(item, key + " item");
-      if (std::find(out.begin(), out.end(), value) != out.end()) fail(item, key + " lists \"" + value + "\" twice");
+      if (std::find(out.begin(), out.end(), value) != out.end())
+        fail(item, key + " lists \"" + value + "\" twice");
       out.push_back(std::move(value));
     }
     return out;
@@ -108,16 +110,20 @@ void read_settings(const Reader& r, const toml::table& root, StressConfig& c) {
   if (!node) throw Error(c.path.string() + ":1: missing table [stress]");
   const auto* t = node->as_table();
   if (!t) r.fail(*node, "stress must be a table");
-  r.check_keys(*t, "[stress]", {"name", "output", "rays", "threads", "trace_reps", "trace_warmup",
-                                "build_time_limit_s", "builders", "layouts", "embree"});
+  r.check_keys(*t, "[stress]",
+               {"name", "output", "rays", "threads", "trace_reps", "trace_warmup", "build_time_limit_s",
+                "builders", "layouts", "embree"});
   const toml::node* name = t->get("name");
   if (!name) r.fail(*node, "[stress] needs a name");
   c.name = r.name(*name, "stress.name");
   c.output = "results/" + c.name + ".csv";
   if (const auto* v = t->get("output")) c.output = r.string(*v, "stress.output");
-  if (const auto* v = t->get("rays")) c.rays = static_cast<uint32_t>(r.integer(*v, "stress.rays", 1, kMaxCaseRays));
-  if (const auto* v = t->get("threads")) c.threads = static_cast<int>(r.integer(*v, "stress.threads", 1, kMaxThreads));
-  if (const auto* v = t->get("trace_reps")) c.trace_reps = static_cast<int>(r.integer(*v, "stress.trace_reps", 1, kMaxReps));
+  if (const auto* v = t->get("rays"))
+    c.rays = static_cast<uint32_t>(r.integer(*v, "stress.rays", 1, kMaxCaseRays));
+  if (const auto* v = t->get("threads"))
+    c.threads = static_cast<int>(r.integer(*v, "stress.threads", 1, kMaxThreads));
+  if (const auto* v = t->get("trace_reps"))
+    c.trace_reps = static_cast<int>(r.integer(*v, "stress.trace_reps", 1, kMaxReps));
   if (const auto* v = t->get("trace_warmup"))
     c.trace_warmup = static_cast<int>(r.integer(*v, "stress.trace_warmup", 0, kMaxReps));
   if (const auto* v = t->get("build_time_limit_s"))
@@ -170,7 +176,8 @@ void read_cases(const Reader& r, const toml::table& root, StressConfig& c) {
   if (!list || !list->is_array_of_tables()) r.fail(*node, "case must be [[case]] tables");
   for (const auto& item : *list) {
     const auto& t = *item.as_table();
-    r.check_keys(t, "[[case]]", {"name", "kind", "seed", "size", "rays", "scale", "offset", "aspect", "outer"});
+    r.check_keys(t, "[[case]]",
+                 {"name", "kind", "seed", "size", "rays", "scale", "offset", "aspect", "outer"});
     StressCaseSpec s;
     const toml::node* name = t.get("name");
     const toml::node* kind = t.get("kind");
@@ -189,8 +196,10 @@ void read_cases(const Reader& r, const toml::table& root, StressConfig& c) {
     s.rays = c.rays;
     if (const auto* v = t.get("seed"))
       s.seed = static_cast<uint64_t>(r.integer(*v, where + "seed", 0, std::numeric_limits<int64_t>::max()));
-    if (const auto* v = t.get("size")) s.size = static_cast<uint64_t>(r.integer(*v, where + "size", 1, kMaxCaseTriangles));
-    if (const auto* v = t.get("rays")) s.rays = static_cast<uint32_t>(r.integer(*v, where + "rays", 1, kMaxCaseRays));
+    if (const auto* v = t.get("size"))
+      s.size = static_cast<uint64_t>(r.integer(*v, where + "size", 1, kMaxCaseTriangles));
+    if (const auto* v = t.get("rays"))
+      s.rays = static_cast<uint32_t>(r.integer(*v, where + "rays", 1, kMaxCaseRays));
     // Real parameters: only those the kind reads, so that none is silently ignored.
     struct Real {
       const char* key;
@@ -222,7 +231,8 @@ std::vector<std::string> all_builder_specs() {
     out.push_back(b.name);
     // A builder with an `arity` parameter also runs at every other arity some layout traverses, so
     // that every layout gets a tree.
-    const bool has_arity = std::any_of(b.params.begin(), b.params.end(), [](const ParamSpec& p) { return p.name == "arity"; });
+    const bool has_arity =
+        std::any_of(b.params.begin(), b.params.end(), [](const ParamSpec& p) { return p.name == "arity"; });
     if (!has_arity || !b.arity) continue;
     const uint32_t default_arity = b.arity(resolve_params(b.name, b.params, {}));
     for (const uint32_t arity : layout_arities)

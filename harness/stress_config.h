@@ -45,8 +45,8 @@ struct StressConfig {
   int trace_reps = 5;
   int trace_warmup = 1;
   double build_time_limit_s = 30.0;
-  std::vector<std::string> builders;   ///< builder specs "name[:key=value,...]" (build_command.h's form)
-  std::vector<std::string> layouts;    ///< layout specs in canonical form (LayoutSpec::text)
+  std::vector<std::string> builders;  ///< builder specs "name[:key=value,...]" (build_command.h's form)
+  std::vector<std::string> layouts;   ///< layout specs in canonical form (LayoutSpec::text)
   std::vector<bool> embree_robust{false, true};
   std::vector<StressCaseSpec> cases;
 

@@ -37,7 +37,8 @@ ErrorMetrics measure_errors(std::span<const Hit> hits, std::span<const ExactHit>
       if (!e.accepts(h.prim)) {
         ++m.wrong_prim;
         const double gap = std::abs(static_cast<double>(h.t) - static_cast<double>(e.t));
-        m.wrong_prim_far += !(gap <= kFarRelative * std::max(std::abs(static_cast<double>(e.t)), std::abs(static_cast<double>(h.t))));
+        m.wrong_prim_far += !(gap <= kFarRelative * std::max(std::abs(static_cast<double>(e.t)),
+                                                             std::abs(static_cast<double>(h.t))));
         continue;
       }
       const uint32_t ulps = ulp_distance(h.t, e.t);

@@ -26,7 +26,7 @@ struct ErrorMetrics {
   /// kFarRelative: the variant went past the closest surface (or stopped at one that is farther
   /// off), rather than choosing the neighbour across an edge within rounding of the exact point.
   uint64_t wrong_prim_far = 0;
-  uint64_t ties = 0;          ///< rays whose exact closest hit is a tie of several primitives
+  uint64_t ties = 0;  ///< rays whose exact closest hit is a tie of several primitives
   /// |t - exact t| in ulps (ulp_distance to the correctly rounded exact t), over the rays where the
   /// variant's primitive is accepted; the max is UINT32_MAX where a t is infinite and the exact one is
   /// not, and the mean leaves those out. Near t = 0 (a ray starting on a surface) ulps are tiny, so

@@ -18,17 +18,22 @@ namespace {
 // ulp_distance saturates here for an infinite or NaN t against a finite one.
 constexpr double kSaturatedUlps = std::numeric_limits<uint32_t>::max();
 
-double number(const CsvRow& row, const std::string& column) { return csv_number(row, column).value_or(0.0); }
+double number(const CsvRow& row, const std::string& column) {
+  return csv_number(row, column).value_or(0.0);
+}
 
 // "embree (robust)" for Embree's modes, the builder's name otherwise (the layout column tells the arity).
 std::string builder_label(const CsvRow& row) {
   const std::string& params = row.at("builder_params");
   const auto mode = params.find("mode=");
-  if (row.at("builder") == "embree" && mode != std::string::npos) return "embree (" + params.substr(mode + 5) + ")";
+  if (row.at("builder") == "embree" && mode != std::string::npos)
+    return "embree (" + params.substr(mode + 5) + ")";
   return row.at("builder");
 }
 
-std::string layout_label(const CsvRow& row) { return row.at("layout").empty() ? "(not traced)" : row.at("layout"); }
+std::string layout_label(const CsvRow& row) {
+  return row.at("layout").empty() ? "(not traced)" : row.at("layout");
+}
 
 std::string ulps(double value) {
   if (value >= kSaturatedUlps) return "inf";
@@ -78,33 +83,44 @@ void print_error_against_time(const std::vector<CsvRow>& rows, std::ostream& out
   std::optional<double> anchor;
   std::string anchor_name;
   for (const auto& key : keys)
-    if (!anchor && totals[key].mrays()) anchor = totals[key].mrays(), anchor_name = key.first + " " + key.second;
-  fmt::print(out, "## Error against run time, all cases\n\n"
-                  "| builder | layout | cases | Mrays/s | speed | false misses | false hits | wrong prim (far) | leaks | "
-                  "t err max ulps | t err mean ulps | builds failed | NaN bounds |\n"
-                  "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    if (!anchor && totals[key].mrays())
+      anchor = totals[key].mrays(), anchor_name = key.first + " " + key.second;
+  fmt::print(
+      out,
+      "## Error against run time, all cases\n\n"
+      "| builder | layout | cases | Mrays/s | speed | false misses | false hits | wrong prim (far) | leaks | "
+      "t err max ulps | t err mean ulps | builds failed | NaN bounds |\n"
+      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
   for (const auto& key : keys) {
     const Totals& t = totals[key];
     const auto mrays = t.mrays();
-    fmt::print(out, "| {} | {} | {} | {} | {} | {:.0f} | {:.0f} | {:.0f} ({:.0f}) | {:.0f} | {} | {} | {:.0f} | {:.0f} |\n",
+    fmt::print(out,
+               "| {} | {} | {} | {} | {} | {:.0f} | {:.0f} | {:.0f} ({:.0f}) | {:.0f} | {} | {} | {:.0f} | "
+               "{:.0f} |\n",
                key.first, key.second, t.cases, mrays ? fmt::format("{:.2f}", *mrays) : "-",
                mrays && anchor ? fmt::format("{:.2f}x", *mrays / *anchor) : "-", t.false_misses, t.false_hits,
                t.wrong_prim, t.wrong_prim_far, t.leaks, ulps(t.max_ulps),
-               t.hits > 0 ? fmt::format("{:.3g}", t.weighted_mean_ulps / t.hits) : "-", t.build_failed, t.nan_bounds);
+               t.hits > 0 ? fmt::format("{:.3g}", t.weighted_mean_ulps / t.hits) : "-", t.build_failed,
+               t.nan_bounds);
   }
-  fmt::print(out, "\nMrays/s: geometric mean over the cases of each case's median rays/second (one traversal pass over "
-                  "its rays on the run's threads); speed: that mean over {}'s. Errors are against the exact "
-                  "reference: a tie on a shared edge or vertex accepts any of its triangles; (far): wrong primitives "
-                  "more than 1e-5 (relative) away in t. t errors are over hits on an accepted primitive; inf: an "
-                  "infinite t where the exact one is finite; the mean leaves those out and is weighted by exact "
-                  "hits.\n\n", anchor_name);
+  fmt::print(
+      out,
+      "\nMrays/s: geometric mean over the cases of each case's median rays/second (one traversal pass over "
+      "its rays on the run's threads); speed: that mean over {}'s. Errors are against the exact "
+      "reference: a tie on a shared edge or vertex accepts any of its triangles; (far): wrong primitives "
+      "more than 1e-5 (relative) away in t. t errors are over hits on an accepted primitive; inf: an "
+      "infinite t where the exact one is finite; the mean leaves those out and is weighted by exact "
+      "hits.\n\n",
+      anchor_name);
 }
 
 void print_wrong_cases(const std::vector<CsvRow>& rows, std::ostream& out) {
-  fmt::print(out, "## Where a variant is wrong\n\n"
-                  "Per case, the variants with the same errors together; variants without errors are not listed.\n\n"
-                  "| case | variants | false misses | false hits | wrong prim (far) | leaks | t err max ulps | notes |\n"
-                  "|---|---|---:|---:|---:|---:|---:|---|\n");
+  fmt::print(
+      out,
+      "## Where a variant is wrong\n\n"
+      "Per case, the variants with the same errors together; variants without errors are not listed.\n\n"
+      "| case | variants | false misses | false hits | wrong prim (far) | leaks | t err max ulps | notes |\n"
+      "|---|---|---:|---:|---:|---:|---:|---|\n");
   std::vector<std::string> cases;
   for (const CsvRow& r : rows)
     if (std::find(cases.begin(), cases.end(), r.at("scene")) == cases.end()) cases.push_back(r.at("scene"));
@@ -115,10 +131,11 @@ void print_wrong_cases(const std::vector<CsvRow>& rows, std::ostream& out) {
     std::map<Errors, double> max_ulps;
     for (const CsvRow& r : rows) {
       if (r.at("scene") != name) continue;
-      const Errors e{number(r, "false_misses"), number(r, "false_hits"), number(r, "wrong_prim"),
-                     number(r, "wrong_prim_far"), number(r, "leaks"), r.at("notes")};
-      const bool wrong = std::get<0>(e) + std::get<1>(e) + std::get<2>(e) + std::get<4>(e) + number(r, "build_failed") > 0 ||
-                         r.at("notes").starts_with("trace failed");
+      const Errors e{number(r, "false_misses"),   number(r, "false_hits"), number(r, "wrong_prim"),
+                     number(r, "wrong_prim_far"), number(r, "leaks"),      r.at("notes")};
+      const bool wrong =
+          std::get<0>(e) + std::get<1>(e) + std::get<2>(e) + std::get<4>(e) + number(r, "build_failed") > 0 ||
+          r.at("notes").starts_with("trace failed");
       if (!wrong) continue;
       if (!variants.count(e)) order.push_back(e);
       variants[e].push_back(builder_label(r) + "|" + layout_label(r));
@@ -130,30 +147,38 @@ void print_wrong_cases(const std::vector<CsvRow>& rows, std::ostream& out) {
       for (const auto& v : variants[e]) {
         const auto bar = v.find('|');
         const std::string builder = v.substr(0, bar), layout = v.substr(bar + 1);
-        auto it = std::find_if(by_builder.begin(), by_builder.end(), [&](const auto& p) { return p.first == builder; });
-        if (it == by_builder.end()) by_builder.emplace_back(builder, layout);
-        else it->second += ", " + layout;
+        auto it = std::find_if(by_builder.begin(), by_builder.end(),
+                               [&](const auto& p) { return p.first == builder; });
+        if (it == by_builder.end())
+          by_builder.emplace_back(builder, layout);
+        else
+          it->second += ", " + layout;
       }
       std::string list;
-      for (const auto& [builder, layouts] : by_builder) list += (list.empty() ? "" : "; ") + builder + " " + layouts;
-      fmt::print(out, "| {} | {} | {:.0f} | {:.0f} | {:.0f} ({:.0f}) | {:.0f} | {} | {} |\n", name, list, std::get<0>(e),
-                 std::get<1>(e), std::get<2>(e), std::get<3>(e), std::get<4>(e), ulps(max_ulps[e]), std::get<5>(e));
+      for (const auto& [builder, layouts] : by_builder)
+        list += (list.empty() ? "" : "; ") + builder + " " + layouts;
+      fmt::print(out, "| {} | {} | {:.0f} | {:.0f} | {:.0f} ({:.0f}) | {:.0f} | {} | {} |\n", name, list,
+                 std::get<0>(e), std::get<1>(e), std::get<2>(e), std::get<3>(e), std::get<4>(e),
+                 ulps(max_ulps[e]), std::get<5>(e));
     }
   }
   fmt::print(out, "\n");
 }
 
 void print_cases(const std::vector<CsvRow>& rows, std::ostream& out) {
-  fmt::print(out, "## Cases\n\n"
-                  "| case | kind | triangles | removed | rays | exact hits | ties | must hit | closed | exact reference ms |\n"
-                  "|---|---|---:|---:|---:|---:|---:|---:|---|---:|\n");
+  fmt::print(out,
+             "## Cases\n\n"
+             "| case | kind | triangles | removed | rays | exact hits | ties | must hit | closed | exact "
+             "reference ms |\n"
+             "|---|---|---:|---:|---:|---:|---:|---:|---|---:|\n");
   std::vector<std::string> seen;
   for (const CsvRow& r : rows) {
     if (std::find(seen.begin(), seen.end(), r.at("scene")) != seen.end()) continue;
     seen.push_back(r.at("scene"));
     fmt::print(out, "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", r.at("scene"), r.at("case_kind"),
-               r.at("scene_triangles"), r.at("scene_removed"), r.at("ray_count"), r.at("exact_hits"), r.at("ties"),
-               r.at("must_hit_rays"), r.at("closed") == "1" ? "yes" : "no", r.at("reference_ms"));
+               r.at("scene_triangles"), r.at("scene_removed"), r.at("ray_count"), r.at("exact_hits"),
+               r.at("ties"), r.at("must_hit_rays"), r.at("closed") == "1" ? "yes" : "no",
+               r.at("reference_ms"));
   }
   fmt::print(out, "\n");
 }
@@ -166,10 +191,13 @@ bool is_stress_result(const std::vector<CsvRow>& rows) {
 
 void print_stress_report(const std::vector<CsvRow>& rows, std::ostream& out) {
   const CsvRow& first = rows.front();
-  fmt::print(out, "# sahbench stress report: run {}\n\ncommit {}, {}, {}, {}; {} thread(s), trace reps {}, build time bound {} s; "
-                  "config {}\n\n",
-             first.at("run_id"), first.at("git_commit"), first.at("cpu"), first.at("compiler"), first.at("embree_version"),
-             first.at("threads"), first.at("trace_reps"), first.at("build_time_limit_s"), first.at("config"));
+  fmt::print(out,
+             "# sahbench stress report: run {}\n\ncommit {}, {}, {}, {}; {} thread(s), trace reps {}, build "
+             "time bound {} s; "
+             "config {}\n\n",
+             first.at("run_id"), first.at("git_commit"), first.at("cpu"), first.at("compiler"),
+             first.at("embree_version"), first.at("threads"), first.at("trace_reps"),
+             first.at("build_time_limit_s"), first.at("config"));
   print_error_against_time(rows, out);
   print_wrong_cases(rows, out);
   print_cases(rows, out);

@@ -33,9 +33,10 @@ namespace {
 // Columns after DESIGN.md's and the metrics: what the case was, and how the run went.
 const std::vector<std::string>& extra_columns() {
   static const std::vector<std::string> columns = {
-      "config",        "case_kind",    "case_seed",       "case_size",    "closed",
-      "scene_removed", "invalid_made", "exact_hits",      "must_hit_rays", "reference_ms",
-      "build_time_limit_s", "embree_version", "notes"};
+      "config",        "case_kind",     "case_seed",          "case_size",
+      "closed",        "scene_removed", "invalid_made",       "exact_hits",
+      "must_hit_rays", "reference_ms",  "build_time_limit_s", "embree_version",
+      "notes"};
   return columns;
 }
 
@@ -74,7 +75,8 @@ constexpr float kEmbreeLargeFloat = 1.844e18f;
 bool embree_accepts(const Ray& ray) {
   for (int a = 0; a < 3; ++a) {
     const auto axis = static_cast<std::size_t>(a);
-    if (!(std::abs(ray.org[axis]) <= kEmbreeLargeFloat) || !(std::abs(ray.dir[axis]) <= kEmbreeLargeFloat)) return false;
+    if (!(std::abs(ray.org[axis]) <= kEmbreeLargeFloat) || !(std::abs(ray.dir[axis]) <= kEmbreeLargeFloat))
+      return false;
   }
   return !std::isnan(ray.tmin) && !std::isnan(ray.tmax);
 }
@@ -88,7 +90,8 @@ constexpr double kWatertightRange = 1e12;
 
 bool within_watertight_range(const StressCase& c) {
   auto within = [](Vec3 p) {
-    return std::abs(p.x) <= kWatertightRange && std::abs(p.y) <= kWatertightRange && std::abs(p.z) <= kWatertightRange;
+    return std::abs(p.x) <= kWatertightRange && std::abs(p.y) <= kWatertightRange &&
+           std::abs(p.z) <= kWatertightRange;
   };
   for (const Triangle& t : c.scene.triangles)
     if (!within(t.v0) || !within(t.v1) || !within(t.v2)) return false;
@@ -109,14 +112,17 @@ struct EmbreeBuilt {
 };
 
 std::string metrics_summary(const ErrorMetrics& m) {
-  return fmt::format("false misses {}, false hits {}, wrong prim {}, leaks {}, t err max {} ulps", m.false_misses,
-                     m.false_hits, m.wrong_prim, m.leaks, m.t_err_ulps_max);
+  return fmt::format("false misses {}, false hits {}, wrong prim {}, leaks {}, t err max {} ulps",
+                     m.false_misses, m.false_hits, m.wrong_prim, m.leaks, m.t_err_ulps_max);
 }
 
 class StressRunner {
  public:
   StressRunner(const StressConfig& cfg, const StressOptions& options, std::ostream& log)
-      : cfg_(cfg), options_(options), log_(log), env_(current_environment()),
+      : cfg_(cfg),
+        options_(options),
+        log_(log),
+        env_(current_environment()),
         run_id_(cfg.name + "-" + now_stamp()) {}
 
   StressSummary run() {
@@ -124,16 +130,18 @@ class StressRunner {
     if (output.has_parent_path()) std::filesystem::create_directories(output.parent_path());
     CsvWriter csv(output, all_columns());
     csv_ = &csv;
-    log_ << fmt::format("stress run {}: {} cases, builders {}, {} layout variants, Embree modes {}; writing {}\n",
-                        run_id_, cfg_.cases.size(), fmt::join(cfg_.builders, " "), cfg_.layouts.size(),
-                        cfg_.embree_robust.size(), output.string());
+    log_ << fmt::format(
+        "stress run {}: {} cases, builders {}, {} layout variants, Embree modes {}; writing {}\n", run_id_,
+        cfg_.cases.size(), fmt::join(cfg_.builders, " "), cfg_.layouts.size(), cfg_.embree_robust.size(),
+        output.string());
     const auto start = std::chrono::steady_clock::now();
     for (const StressCaseSpec& spec : cfg_.cases) {
       if (!options_.only.empty() && spec.name.find(options_.only) == std::string::npos) continue;
       run_case(spec);
     }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    log_ << fmt::format("done in {:.1f} s: {} rows, {} guarantee failures\n", s, summary_.rows, summary_.failures.size());
+    log_ << fmt::format("done in {:.1f} s: {} rows, {} guarantee failures\n", s, summary_.rows,
+                        summary_.failures.size());
     for (const auto& f : summary_.failures) log_ << "FAILED: " << f << "\n";
     return summary_;
   }
@@ -169,20 +177,24 @@ class StressRunner {
       ctx.must_hit += c.must_hit[i];
       must_hit_missed += c.must_hit[i] && !ctx.exact[i].found();
     }
-    log_ << fmt::format("case {} ({}): {} triangles ({} removed), {} rays ({} hit exactly, {} ties, {} must hit); "
-                        "generated in {:.0f} ms, exact reference {:.0f} ms\n",
-                        spec.name, spec.kind, c.scene.triangles.size(), c.scene.removed.total(), c.rays.size(),
-                        exact_hits, ties, ctx.must_hit, gen_ms, ctx.reference_ms);
+    log_ << fmt::format(
+        "case {} ({}): {} triangles ({} removed), {} rays ({} hit exactly, {} ties, {} must hit); "
+        "generated in {:.0f} ms, exact reference {:.0f} ms\n",
+        spec.name, spec.kind, c.scene.triangles.size(), c.scene.removed.total(), c.rays.size(), exact_hits,
+        ties, ctx.must_hit, gen_ms, ctx.reference_ms);
     if (c.closed && !ctx.guaranteed)
-      log_ << fmt::format("  closed, but beyond +-{:g}: the default kernels' no-leak guarantee is not asserted\n",
-                          kWatertightRange);
+      log_ << fmt::format(
+          "  closed, but beyond +-{:g}: the default kernels' no-leak guarantee is not asserted\n",
+          kWatertightRange);
     if (c.scene.removed.total() != c.invalid_made)
-      fail(fmt::format("case {}: the filter removed {} triangles, the generator made {} invalid ones", spec.name,
-                       c.scene.removed.total(), c.invalid_made));
+      fail(fmt::format("case {}: the filter removed {} triangles, the generator made {} invalid ones",
+                       spec.name, c.scene.removed.total(), c.invalid_made));
     if (must_hit_missed)
-      fail(fmt::format("case {}: {} rays flagged must-hit miss exactly (a generator error)", spec.name, must_hit_missed));
+      fail(fmt::format("case {}: {} rays flagged must-hit miss exactly (a generator error)", spec.name,
+                       must_hit_missed));
 
-    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(cfg_.threads));
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(cfg_.threads));
     std::set<uint32_t> arities_with_variants;
     for (const std::string& builder : cfg_.builders) run_builder(ctx, builder, arities_with_variants);
     for (const bool robust : cfg_.embree_robust) run_embree(ctx, robust);
@@ -227,7 +239,8 @@ class StressRunner {
   }
 
   static void put_build(CsvRow& row, double ms) {
-    for (const char* suffix : {"_median", "_min", "_max"}) row[std::string("build_ms") + suffix] = fmt::format("{:.4f}", ms);
+    for (const char* suffix : {"_median", "_min", "_max"})
+      row[std::string("build_ms") + suffix] = fmt::format("{:.4f}", ms);
   }
 
   // Times closest-hit tracing of the case's rays, compares with the exact answers and fills the row.
@@ -272,7 +285,8 @@ class StressRunner {
     return out;
   }
 
-  void run_builder(const CaseContext& ctx, const std::string& builder_text, std::set<uint32_t>& arities_with_variants) {
+  void run_builder(const CaseContext& ctx, const std::string& builder_text,
+                   std::set<uint32_t>& arities_with_variants) {
     const StressCase& c = *ctx.c;
     const BuilderSpec spec = parse_builder_spec(builder_text);
     const BuilderInfo* info = &find_builder(spec.name);
@@ -295,7 +309,8 @@ class StressRunner {
     std::string failure;
     if (built.timed_out) {
       ++summary_.abandoned_builds;
-      failure = fmt::format("still running after the time bound of {} s (abandoned)", cfg_.build_time_limit_s);
+      failure =
+          fmt::format("still running after the time bound of {} s (abandoned)", cfg_.build_time_limit_s);
     } else if (!built.value) {
       failure = "threw: " + built.error;
     }
@@ -314,7 +329,8 @@ class StressRunner {
     const ValidationReport report = validate(bvh, std::span<const Triangle>(*ctx.triangles));
     if (!report.ok() || nan_bounds) {
       row["build_failed"] = "1";
-      row["notes"] = "invalid tree, not traced: " + (report.ok() ? std::string("NaN bounds") : report.errors.front());
+      row["notes"] =
+          "invalid tree, not traced: " + (report.ok() ? std::string("NaN bounds") : report.errors.front());
       write(row);
       fail(label + ": " + row["notes"]);
       return;
@@ -333,7 +349,8 @@ class StressRunner {
     if (specs.empty()) {
       row["notes"] = fmt::format("built and validated; no configured layout traverses arity {}", bvh.arity);
       write(row);
-      log_ << fmt::format("  {} {}: build {:.1f} ms; {}\n", info->name, params.to_string(), built.value->ms, row["notes"]);
+      log_ << fmt::format("  {} {}: build {:.1f} ms; {}\n", info->name, params.to_string(), built.value->ms,
+                          row["notes"]);
       return;
     }
     for (const LayoutSpec& layout : specs) {
@@ -341,7 +358,8 @@ class StressRunner {
       r["layout"] = layout.text();
       try {
         std::unique_ptr<CompiledLayout> compiled;
-        r["layout_ms"] = fmt::format("{:.4f}", time_ms([&] { compiled = compile_layout(layout, bvh, *ctx.triangles); }));
+        r["layout_ms"] =
+            fmt::format("{:.4f}", time_ms([&] { compiled = compile_layout(layout, bvh, *ctx.triangles); }));
         r["isa"] = compiled->isa();
         r["mem_bytes"] = std::to_string(compiled->bytes());
         const ErrorMetrics m = put_trace(r, ctx, [&](std::span<const Ray> rays, std::span<Hit> hits) {
@@ -351,10 +369,12 @@ class StressRunner {
         const double n = static_cast<double>(std::max<uint64_t>(1, counts.rays));
         r["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / n);
         r["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / n);
-        log_ << fmt::format("  {} {}: {} Mrays/s; {}\n", info->name, r["layout"], r["trace_mrays_median"], metrics_summary(m));
+        log_ << fmt::format("  {} {}: {} Mrays/s; {}\n", info->name, r["layout"], r["trace_mrays_median"],
+                            metrics_summary(m));
         if (ctx.guaranteed && layout.variant == KernelVariant{} && (m.false_misses || m.leaks))
-          fail(fmt::format("{} layout {}: the default kernels have {} false misses and {} leaks on a closed case", label,
-                           r["layout"], m.false_misses, m.leaks));
+          fail(fmt::format(
+              "{} layout {}: the default kernels have {} false misses and {} leaks on a closed case", label,
+              r["layout"], m.false_misses, m.leaks));
       } catch (const Error& e) {
         r["notes"] = std::string("trace failed: ") + e.what();
         fail(label + " layout " + r["layout"] + ": " + r["notes"]);
@@ -368,7 +388,8 @@ class StressRunner {
     row["builder"] = "embree";
     row["builder_params"] = std::string("quality=medium;mode=") + (robust ? "robust" : "default");
     row["layout"] = "embree_1";
-    const std::string label = fmt::format("case {}: embree {}", ctx.c->spec.name, robust ? "robust" : "default");
+    const std::string label =
+        fmt::format("case {}: embree {}", ctx.c->spec.name, robust ? "robust" : "default");
     auto triangles = ctx.triangles;
     const int threads = cfg_.threads;
     const BoundedResult<std::shared_ptr<EmbreeBuilt>> built = run_bounded<std::shared_ptr<EmbreeBuilt>>(
@@ -377,14 +398,16 @@ class StressRunner {
           out->device = std::make_unique<EmbreeDevice>(threads);
           EmbreeSceneOptions options;
           options.robust = robust;
-          out->scene = std::make_unique<EmbreeScene>(*out->device, *triangles, EmbreeQuality::kMedium, options);
+          out->scene =
+              std::make_unique<EmbreeScene>(*out->device, *triangles, EmbreeQuality::kMedium, options);
           return out;
         },
         cfg_.build_time_limit_s);
     if (!built.value) {
       if (built.timed_out) ++summary_.abandoned_builds;
       row["build_failed"] = "1";
-      row["notes"] = built.timed_out ? "build still running after the time bound (abandoned)" : "build threw: " + built.error;
+      row["notes"] = built.timed_out ? "build still running after the time bound (abandoned)"
+                                     : "build threw: " + built.error;
       write(row);
       fail(label + ": " + row["notes"]);
       return;
@@ -403,8 +426,9 @@ class StressRunner {
       }
     const std::size_t rejected = ctx.c->rays.size() - valid_rays.size();
     if (rejected)
-      row["notes"] = fmt::format("{} rays beyond Embree's valid range (|org|, |dir| <= {:g}) counted as misses",
-                                 rejected, kEmbreeLargeFloat);
+      row["notes"] =
+          fmt::format("{} rays beyond Embree's valid range (|org|, |dir| <= {:g}) counted as misses",
+                      rejected, kEmbreeLargeFloat);
     std::vector<Hit> valid_hits(valid_rays.size());
     try {
       const ErrorMetrics m = put_trace(row, ctx, [&](std::span<const Ray>, std::span<Hit> hits) {
@@ -413,8 +437,8 @@ class StressRunner {
         std::fill(hits.begin(), hits.end(), Hit{});
         for (std::size_t k = 0; k < valid_index.size(); ++k) hits[valid_index[k]] = valid_hits[k];
       });
-      log_ << fmt::format("  embree {}: {} Mrays/s; {}\n", robust ? "robust" : "default", row["trace_mrays_median"],
-                          metrics_summary(m));
+      log_ << fmt::format("  embree {}: {} Mrays/s; {}\n", robust ? "robust" : "default",
+                          row["trace_mrays_median"], metrics_summary(m));
     } catch (const Error& e) {
       row["notes"] = std::string("trace failed: ") + e.what();
       fail(label + ": " + row["notes"]);
@@ -434,9 +458,9 @@ class StressRunner {
 }  // namespace
 
 const std::vector<std::string>& stress_metric_columns() {
-  static const std::vector<std::string> columns = {"false_misses", "false_hits", "wrong_prim", "wrong_prim_far", "ties",
-                                                   "t_err_ulps_max", "t_err_ulps_mean", "leaks", "build_failed",
-                                                   "nan_bounds"};
+  static const std::vector<std::string> columns = {
+      "false_misses",   "false_hits",      "wrong_prim", "wrong_prim_far", "ties",
+      "t_err_ulps_max", "t_err_ulps_mean", "leaks",      "build_failed",   "nan_bounds"};
   return columns;
 }
 

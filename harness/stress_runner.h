@@ -34,7 +34,7 @@ struct StressOptions {
 struct StressSummary {
   std::vector<std::string> failures;  ///< broken guarantees, one line each
   std::size_t rows = 0;
-  std::size_t abandoned_builds = 0;   ///< builds still running past the time bound (threads detached)
+  std::size_t abandoned_builds = 0;  ///< builds still running past the time bound (threads detached)
   int exit_code() const { return failures.empty() ? 0 : 1; }
 };
 

@@ -24,7 +24,9 @@ using Number = Kernel::FT;
 // makes the cull conservative with room to spare; it only lets a few more triangles reach the exact test.
 constexpr double kCullMargin = 1e-9;
 
-Point to_point(Vec3 p) { return {p.x, p.y, p.z}; }
+Point to_point(Vec3 p) {
+  return {p.x, p.y, p.z};
+}
 
 // A triangle's bounds in double, as min x y z, max x y z.
 using Box = std::array<double, 6>;
@@ -106,11 +108,15 @@ std::optional<Number> line_crossing(const Point& org, const Point& q, const Vect
   return (n * (a - org)) / (n * dir);
 }
 
-bool is_finite_ray(const Ray& ray) { return is_finite(ray.org) && is_finite(ray.dir) && ray.dir != Vec3{0.0f}; }
+bool is_finite_ray(const Ray& ray) {
+  return is_finite(ray.org) && is_finite(ray.dir) && ray.dir != Vec3{0.0f};
+}
 
 }  // namespace
 
-bool ExactHit::accepts(uint32_t prim) const { return std::binary_search(tied.begin(), tied.end(), prim); }
+bool ExactHit::accepts(uint32_t prim) const {
+  return std::binary_search(tied.begin(), tied.end(), prim);
+}
 
 struct ExactReference::Impl {
   std::span<const Triangle> triangles;
@@ -147,7 +153,9 @@ ExactReference::ExactReference(std::span<const Triangle> triangles) : impl_(std:
 
 ExactReference::~ExactReference() = default;
 
-std::size_t ExactReference::unique_triangles() const { return impl_->boxes.size(); }
+std::size_t ExactReference::unique_triangles() const {
+  return impl_->boxes.size();
+}
 
 ExactHit ExactReference::closest(const Ray& ray) const {
   const Impl& m = *impl_;
@@ -178,7 +186,8 @@ ExactHit ExactReference::closest(const Ray& ray) const {
   }
   if (!best) return hit;
   for (const uint32_t g : best_groups)
-    hit.tied.insert(hit.tied.end(), m.members.begin() + m.member_begin[g], m.members.begin() + m.member_begin[g + 1]);
+    hit.tied.insert(hit.tied.end(), m.members.begin() + m.member_begin[g],
+                    m.members.begin() + m.member_begin[g + 1]);
   std::sort(hit.tied.begin(), hit.tied.end());
   hit.t = round_to_float(*best);
   return hit;

@@ -50,9 +50,13 @@ TEST(HarnessStressMetrics, CountsEachKindOfErrorAgainstTheExactAnswers) {
       exact_hit({1}, 5.0f),     // 5: exact, to the ulp
       exact_hit({2}, 1.0f),     // 6: an infinite t on the right primitive: max saturates, mean skips it
   };
-  const std::vector<Hit> hits = {
-      Hit{}, Hit{0, 1.0f, 0, 0}, Hit{5, 2.0f, 0, 0}, Hit{7, std::nextafter(std::nextafter(3.0f, 4.0f), 4.0f), 0, 0},
-      Hit{9, 8.0f, 0, 0}, Hit{1, 5.0f, 0, 0}, Hit{2, kInf, 0, 0}};
+  const std::vector<Hit> hits = {Hit{},
+                                 Hit{0, 1.0f, 0, 0},
+                                 Hit{5, 2.0f, 0, 0},
+                                 Hit{7, std::nextafter(std::nextafter(3.0f, 4.0f), 4.0f), 0, 0},
+                                 Hit{9, 8.0f, 0, 0},
+                                 Hit{1, 5.0f, 0, 0},
+                                 Hit{2, kInf, 0, 0}};
   const std::vector<uint8_t> must_hit = {1, 0, 0, 0, 0, 0, 0};
   const ErrorMetrics m = measure_errors(hits, exact, must_hit);
   EXPECT_EQ(m.rays, 7u);
@@ -131,8 +135,10 @@ TEST(HarnessStressCases, AreDeterministicAndKeepTheirPromises) {
 }
 
 TEST(HarnessStressConfig, ChecksKindsParametersAndNames) {
-  const std::string head = "[stress]\nname = \"s\"\nbuilders = [\"binned_sah\"]\nlayouts = [\"bvh2\", \"bvh2:tri=mt\"]\n";
-  const StressConfig c = parse_stress_config(head + "[[case]]\nname = \"a\"\nkind = \"sphere\"\nscale = 1e-6\nrays = 10\n", "t.toml");
+  const std::string head =
+      "[stress]\nname = \"s\"\nbuilders = [\"binned_sah\"]\nlayouts = [\"bvh2\", \"bvh2:tri=mt\"]\n";
+  const StressConfig c = parse_stress_config(
+      head + "[[case]]\nname = \"a\"\nkind = \"sphere\"\nscale = 1e-6\nrays = 10\n", "t.toml");
   ASSERT_EQ(c.cases.size(), 1u);
   EXPECT_EQ(c.cases[0].scale, 1e-6);
   EXPECT_EQ(c.cases[0].rays, 10u);
@@ -146,18 +152,24 @@ TEST(HarnessStressConfig, ChecksKindsParametersAndNames) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(error_of(head + "[[case]]\nname = \"a\"\nkind = \"cube\"\n").find("t.toml:7: unknown stress case kind 'cube'"),
+  EXPECT_NE(error_of(head + "[[case]]\nname = \"a\"\nkind = \"cube\"\n")
+                .find("t.toml:7: unknown stress case kind 'cube'"),
             std::string::npos);
-  EXPECT_NE(error_of(head + "[[case]]\nname = \"a\"\nkind = \"grazing\"\nscale = 2\n").find("does not read 'scale'"),
+  EXPECT_NE(error_of(head + "[[case]]\nname = \"a\"\nkind = \"grazing\"\nscale = 2\n")
+                .find("does not read 'scale'"),
             std::string::npos);
-  EXPECT_NE(error_of(head + "[[case]]\nname = \"a\"\nkind = \"grazing\"\n[[case]]\nname = \"a\"\nkind = \"sphere\"\n")
-                .find("used twice"),
-            std::string::npos);
-  EXPECT_NE(error_of("[stress]\nname = \"s\"\nbuilders = [\"nope\"]\n[[case]]\nname = \"a\"\nkind = \"sphere\"\n")
-                .find("t.toml:3: stress.builders: unknown builder 'nope'"),
-            std::string::npos);
-  EXPECT_NE(error_of(head + "[[case]]\nname = \"a\"\nkind = \"sphere\"\nsize = 0\n").find("size = 0 is outside"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of(head +
+               "[[case]]\nname = \"a\"\nkind = \"grazing\"\n[[case]]\nname = \"a\"\nkind = \"sphere\"\n")
+          .find("used twice"),
+      std::string::npos);
+  EXPECT_NE(
+      error_of("[stress]\nname = \"s\"\nbuilders = [\"nope\"]\n[[case]]\nname = \"a\"\nkind = \"sphere\"\n")
+          .find("t.toml:3: stress.builders: unknown builder 'nope'"),
+      std::string::npos);
+  EXPECT_NE(
+      error_of(head + "[[case]]\nname = \"a\"\nkind = \"sphere\"\nsize = 0\n").find("size = 0 is outside"),
+      std::string::npos);
   EXPECT_NE(error_of(head).find("no [[case]] tables"), std::string::npos);
 }
 
@@ -170,7 +182,8 @@ TEST(HarnessStressConfig, DefaultsCoverEveryBuilderLayoutAndVariant) {
   EXPECT_EQ(variants.size(), layouts().size() * 6);
   for (const LayoutInfo& l : layouts()) {
     EXPECT_NE(std::find(variants.begin(), variants.end(), l.name), variants.end()) << l.name;
-    EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mt0,box=fast"), variants.end()) << l.name;
+    EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mt0,box=fast"), variants.end())
+        << l.name;
   }
 }
 
@@ -185,7 +198,8 @@ TEST(HarnessStress, ReducedSuiteKeepsItsGuarantees) {
   cfg.build_time_limit_s = 60;
   cfg.builders = all_builder_specs();
   cfg.layouts = all_layout_variants();
-  auto add = [&](std::string name, std::string kind, uint64_t size, uint32_t rays, double scale = 1, double offset = 0) {
+  auto add = [&](std::string name, std::string kind, uint64_t size, uint32_t rays, double scale = 1,
+                 double offset = 0) {
     StressCaseSpec s{std::move(name), std::move(kind), 1, size, rays};
     s.scale = scale;
     s.offset = offset;

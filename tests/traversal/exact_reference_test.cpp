@@ -3,6 +3,8 @@
 // coincident and zero-area triangles, huge coordinates; then agreement with the float watertight
 // brute force on random rays, where no ray is near an edge.
 
+#include "traversal/exact_reference.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,6 @@
 
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
-#include "traversal/exact_reference.h"
 #include "traversal/ulp_distance.h"
 
 namespace sahbench {
@@ -19,13 +20,17 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-Ray make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = kInf) { return {org, tmin, dir, tmax}; }
+Ray make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = kInf) {
+  return {org, tmin, dir, tmax};
+}
 
 // Two triangles in the plane z = 0 sharing the edge (1,0,0)-(0,1,0): the unit square split on its
 // anti-diagonal.
 const std::vector<Triangle> kSquare = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{1, 0, 0}, {1, 1, 0}, {0, 1, 0}}};
 
-ExactHit exact(const std::vector<Triangle>& tris, const Ray& ray) { return ExactReference(tris).closest(ray); }
+ExactHit exact(const std::vector<Triangle>& tris, const Ray& ray) {
+  return ExactReference(tris).closest(ray);
+}
 
 TEST(TravExactReference, RayThroughSharedEdgeIsATieOfBothTriangles) {
   const ExactHit hit = exact(kSquare, make_ray({0.5f, 0.5f, 2.0f}, {0, 0, -1}));
@@ -54,7 +59,8 @@ TEST(TravExactReference, RayMissingAnEdgeByOneUlpMisses) {
   // On the edge x = 0: a hit (edges count). One ulp outside it (the smallest negative float): a miss.
   EXPECT_TRUE(exact(tri, make_ray({0.0f, 0.25f, 1}, {0, 0, -1})).found());
   EXPECT_TRUE(exact(tri, make_ray({-0.0f, 0.25f, 1}, {0, 0, -1})).found());
-  EXPECT_FALSE(exact(tri, make_ray({-std::numeric_limits<float>::denorm_min(), 0.25f, 1}, {0, 0, -1})).found());
+  EXPECT_FALSE(
+      exact(tri, make_ray({-std::numeric_limits<float>::denorm_min(), 0.25f, 1}, {0, 0, -1})).found());
   // The hypotenuse x + y = 1: on it a hit, one ulp beyond a miss, one ulp before a hit.
   EXPECT_TRUE(exact(tri, make_ray({0.5f, 0.5f, 1}, {0, 0, -1})).found());
   EXPECT_FALSE(exact(tri, make_ray({0.5f, std::nextafter(0.5f, 1.0f), 1}, {0, 0, -1})).found());
@@ -74,15 +80,18 @@ TEST(TravExactReference, GrazingRaysHitAndCoplanarRaysMiss) {
   EXPECT_FALSE(exact(tri, make_ray({-1, 0.25f, 0}, {1, 0, 0})).found());
   EXPECT_FALSE(exact(tri, make_ray({-1, 0.25f, -0.0f}, {1, 0, -0.0f})).found());
   // Parallel just above the plane: a miss.
-  EXPECT_FALSE(exact(tri, make_ray({-1, 0.25f, std::numeric_limits<float>::denorm_min()}, {1, 0, 0})).found());
+  EXPECT_FALSE(
+      exact(tri, make_ray({-1, 0.25f, std::numeric_limits<float>::denorm_min()}, {1, 0, 0})).found());
 }
 
 TEST(TravExactReference, IntervalIsClosedAndTminEqualTmaxHitsOnlyAtThatDistance) {
   const std::vector<Triangle> tri = {kSquare[0]};
   const Vec3 org{0.25f, 0.25f, 2}, dir{0, 0, -1};
   EXPECT_TRUE(exact(tri, make_ray(org, dir, 2.0f, 2.0f)).found());
-  EXPECT_FALSE(exact(tri, make_ray(org, dir, std::nextafter(2.0f, 3.0f), std::nextafter(2.0f, 3.0f))).found());
-  EXPECT_FALSE(exact(tri, make_ray(org, dir, std::nextafter(2.0f, 0.0f), std::nextafter(2.0f, 0.0f))).found());
+  EXPECT_FALSE(
+      exact(tri, make_ray(org, dir, std::nextafter(2.0f, 3.0f), std::nextafter(2.0f, 3.0f))).found());
+  EXPECT_FALSE(
+      exact(tri, make_ray(org, dir, std::nextafter(2.0f, 0.0f), std::nextafter(2.0f, 0.0f))).found());
   EXPECT_TRUE(exact(tri, make_ray(org, dir, 0.0f, 2.0f)).found());
   EXPECT_TRUE(exact(tri, make_ray(org, dir, 2.0f, kInf)).found());
   // Behind the origin: t = -2 < tmin.
@@ -141,7 +150,8 @@ TEST(TravExactReference, UlpDistanceCountsRepresentableFloats) {
   EXPECT_EQ(ulp_distance(1.0f, 1.0f), 0u);
   EXPECT_EQ(ulp_distance(0.0f, -0.0f), 0u);
   EXPECT_EQ(ulp_distance(1.0f, std::nextafter(1.0f, 2.0f)), 1u);
-  EXPECT_EQ(ulp_distance(std::numeric_limits<float>::denorm_min(), -std::numeric_limits<float>::denorm_min()), 2u);
+  EXPECT_EQ(ulp_distance(std::numeric_limits<float>::denorm_min(), -std::numeric_limits<float>::denorm_min()),
+            2u);
   EXPECT_EQ(ulp_distance(1.0f, kInf), std::numeric_limits<uint32_t>::max());
 }
 

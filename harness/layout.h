@@ -34,8 +34,15 @@ class CompiledLayout {
   /// The same traversals with counters; not timed.
   virtual TraceCounts count_closest(std::span<const Ray> rays) const = 0;
   virtual TraceCounts count_any(std::span<const Ray> rays) const = 0;
+  /// The closest-hit counters of each ray on its own, into `counts` (same size), for per-pixel maps.
+  /// The default calls count_closest on each single-ray span, in parallel with TBB; not timed.
+  virtual void count_closest_per_ray(std::span<const Ray> rays, std::span<TraceCounts> counts) const;
   /// Exact bytes of the compiled structure (nodes, references, packed leaves).
   virtual std::size_t bytes() const = 0;
+  /// Refit: takes the new positions of the triangles it was compiled over (same count and indices) and
+  /// recomputes every box bottom up, keeping the topology. Layouts that borrow their tree (bvh2) throw
+  /// Error: refit the Bvh itself and compile again.
+  virtual void refit(std::span<const Triangle> triangles);
   /// The instruction set its kernels run with ("scalar", "sse", "avx2", "avx512"), for the CSV.
   virtual std::string isa() const { return "scalar"; }
 };

@@ -160,6 +160,10 @@ const LayoutInfo& find_layout(std::string_view name) {
   throw Error("unknown layout '" + std::string(name) + "' (known: " + known + ")");
 }
 
+void CompiledLayout::refit(std::span<const Triangle>) {
+  throw Error("this layout borrows its tree and does not refit: refit the Bvh and compile it again");
+}
+
 std::string LayoutSpec::text() const {
   std::string options;
   auto add = [&](std::string_view key, std::string_view value) {

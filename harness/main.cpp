@@ -11,6 +11,7 @@
 #include "harness/build_command.h"
 #include "harness/compare.h"
 #include "harness/embree_bvh_builder.h"
+#include "harness/image_command.h"
 #include "harness/list_command.h"
 #include "harness/report.h"
 #include "harness/runner.h"
@@ -55,9 +56,12 @@ int main(int argc, char** argv) {
   stress_cmd->add_option("--only", stress.only, "run only cases whose name contains this text");
 
   ReportOptions report;
-  auto* report_cmd = app.add_subcommand("report", "Markdown tables from result CSVs, with ratios to Embree medium");
+  std::string report_format = "markdown";
+  auto* report_cmd = app.add_subcommand("report", "Markdown or LaTeX tables from result CSVs, with ratios to Embree medium");
   report_cmd->add_option("csv", report.inputs, "result CSV files")->required();
   report_cmd->add_option("--run", report.run_id, "run_id to report (default: the latest)");
+  report_cmd->add_option("--format", report_format, "markdown | latex (booktabs)")->capture_default_str();
+  report_cmd->add_option("--output", report.output, "write the report to this file instead of stdout");
 
   TraceCommandOptions trace;
   auto* trace_cmd = app.add_subcommand("trace", "Trace rays from a file on one builder's tree; one output line per ray");
@@ -75,6 +79,22 @@ int main(int argc, char** argv) {
   compare_cmd->add_flag("--deterministic-only", compare.deterministic_only, "compare SAH, counts, bytes, mismatches; ignore timings");
   compare_cmd->add_option("--margin", compare.min_timing_margin, "smallest noise margin for timing ratios")->capture_default_str();
   compare_cmd->add_option("--json", compare_json, "write smaller-is-better metrics here and bigger-is-better ones to NAME-bigger.json");
+
+  ImageCommandOptions image;
+  auto* image_cmd = app.add_subcommand("image", "Per-pixel maps of primary rays: nodes visited, primitives tested, depth, normal (PNG + EXR)");
+  image_cmd->add_option("--scene", image.scene, "scene file, shared-scene name or procedural spec")->required();
+  image_cmd->add_option("--builder", image.builder, "NAME or NAME:key=value,...")->capture_default_str();
+  image_cmd->add_option("--layout", image.layout, "layout spec")->capture_default_str();
+  image_cmd->add_option("--width", image.width, "pixels")->capture_default_str();
+  image_cmd->add_option("--height", image.height, "pixels")->capture_default_str();
+  image_cmd->add_option("--ray-set", image.ray_set, "ray set (primary)")->capture_default_str();
+  image_cmd->add_option("--out", image.out, "prefix: PREFIX_nodes.png, PREFIX_nodes.exr, ...")->required();
+
+  ImageDiffOptions image_diff;
+  auto* image_diff_cmd = app.add_subcommand("image-diff", "B - A of two images (EXR signed, PNG diverging), max and mean |B - A|");
+  image_diff_cmd->add_option("a", image_diff.a, "image A (EXR)")->required();
+  image_diff_cmd->add_option("b", image_diff.b, "image B (EXR)")->required();
+  image_diff_cmd->add_option("--out", image_diff.out, "prefix: OUT.exr and OUT.png")->required();
 
   auto* list_cmd = app.add_subcommand("list", "Builders and their parameters, procedural scene kinds, shared scenes found");
   auto* list_scenes_cmd = app.add_subcommand("list-scenes", "Names of the shared scenes found, one per line");
@@ -101,12 +121,17 @@ int main(int argc, char** argv) {
       }
       return summary.exit_code();
     }
-    if (*report_cmd) print_report(report, std::cout);
+    if (*report_cmd) {
+      report.format = parse_report_format(report_format);
+      run_report_command(report, std::cout);
+    }
     if (*compare_cmd) {
       if (!compare_json.empty()) compare.json = compare_json;
       return compare_results(compare, std::cout).regressions > 0 ? 1 : 0;
     }
     if (*trace_cmd) run_trace_command(trace, std::cerr);
+    if (*image_cmd) run_image_command(image, std::cerr);
+    if (*image_diff_cmd) run_image_diff_command(image_diff, std::cerr);
     if (*list_cmd) print_catalogue(std::cout);
     if (*list_scenes_cmd) print_scene_names(std::cout);
   } catch (const Error& e) {

@@ -37,7 +37,7 @@ namespace {
 // Columns written after DESIGN.md's (never renamed; these may grow).
 const std::vector<std::string>& extra_columns() {
   static const std::vector<std::string> columns = {"config", "seed", "scene_source", "scene_removed", "query",
-                                                   "embree_version", "notes", "build_isa"};
+                                                   "embree_version", "notes", "build_isa", "bytes_per_tri"};
   return columns;
 }
 
@@ -95,6 +95,12 @@ class Progress {
 };
 
 // One builder run of the config, resolved against the registry.
+// mem_bytes per scene triangle, the figure papers quote for a layout's footprint.
+std::string bytes_per_triangle(std::size_t bytes, const Scene& scene) {
+  if (scene.triangles.empty()) return "";
+  return fmt::format("{:.2f}", static_cast<double>(bytes) / static_cast<double>(scene.triangles.size()));
+}
+
 struct ResolvedBuilder {
   BuilderRun run;
   const BuilderInfo* info = nullptr;  // null for Embree
@@ -444,6 +450,7 @@ class ExperimentRunner {
         put_timing(row, "build_ms", build_t);
         row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);
         row["mem_bytes"] = std::to_string(compiled->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene);
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
         row["nodes"] = std::to_string(stats.nodes);
         row["leaves"] = std::to_string(stats.leaves);
@@ -506,6 +513,7 @@ class ExperimentRunner {
         row["layout"] = layout.name;
         put_timing(row, "build_ms", build_t);
         row["mem_bytes"] = std::to_string(built->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(built->bytes(), scene);
         row["mem_peak_bytes"] = std::to_string(peak);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());

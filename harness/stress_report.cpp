@@ -12,6 +12,8 @@
 #include <string>
 #include <tuple>
 
+#include "harness/report_table.h"
+
 namespace sahbench {
 namespace {
 
@@ -71,7 +73,9 @@ struct Totals {
   }
 };
 
-void print_error_against_time(const std::vector<CsvRow>& rows, std::ostream& out) {
+// The error-against-time table, one row per (builder, layout), speed as a ratio to the first variant
+// traced (the first builder's default layout).
+ReportTable error_against_time(const std::vector<CsvRow>& rows) {
   std::vector<std::pair<std::string, std::string>> keys;
   std::map<std::pair<std::string, std::string>, Totals> totals;
   for (const CsvRow& r : rows) {
@@ -79,39 +83,68 @@ void print_error_against_time(const std::vector<CsvRow>& rows, std::ostream& out
     if (!totals.count(key)) keys.push_back(key);
     totals[key].add(r);
   }
-  // The anchor of the speed ratios: the first variant traced (the first builder's default layout).
   std::optional<double> anchor;
   std::string anchor_name;
   for (const auto& key : keys)
     if (!anchor && totals[key].mrays())
       anchor = totals[key].mrays(), anchor_name = key.first + " " + key.second;
-  fmt::print(
-      out,
-      "## Error against run time, all cases\n\n"
-      "| builder | layout | cases | Mrays/s | speed | false misses | false hits | wrong prim (far) | leaks | "
-      "t err max ulps | t err mean ulps | builds failed | NaN bounds |\n"
-      "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+
+  ReportTable table;
+  table.title = "Error against run time, all cases";
+  table.label = "tab:stress";
+  // Smaller is better everywhere but speed; counts print without decimals.
+  table.columns = {{"cases", "Cases", 0},
+                   {"Mrays/s", "Mrays/s", 2, true},
+                   {"false misses", "False misses", 0},
+                   {"false hits", "False hits", 0},
+                   {"wrong prim", "Wrong prim.", 0},
+                   {"(far)", "(far)", 0},
+                   {"leaks", "Leaks", 0},
+                   {"t err max ulps", "$t$ err. max (ulp)", 0},
+                   {"t err mean ulps", "$t$ err. mean (ulp)", 1},
+                   {"builds failed", "Builds failed", 0},
+                   {"NaN bounds", "NaN bounds", 0}};
   for (const auto& key : keys) {
     const Totals& t = totals[key];
     const auto mrays = t.mrays();
-    fmt::print(out,
-               "| {} | {} | {} | {} | {} | {:.0f} | {:.0f} | {:.0f} ({:.0f}) | {:.0f} | {} | {} | {:.0f} | "
-               "{:.0f} |\n",
-               key.first, key.second, t.cases, mrays ? fmt::format("{:.2f}", *mrays) : "-",
-               mrays && anchor ? fmt::format("{:.2f}x", *mrays / *anchor) : "-", t.false_misses, t.false_hits,
-               t.wrong_prim, t.wrong_prim_far, t.leaks, ulps(t.max_ulps),
-               t.hits > 0 ? fmt::format("{:.3g}", t.weighted_mean_ulps / t.hits) : "-", t.build_failed,
-               t.nan_bounds);
+    ReportRow row;
+    row.builder = row.builder_short = key.first;
+    row.layout = key.second;
+    auto cell = [](std::optional<double> v) { return ReportCell{v, std::nullopt, false}; };
+    const bool traced = t.traced > 0;
+    auto traced_cell = [&](double v) { return cell(traced ? std::optional<double>(v) : std::nullopt); };
+    row.cells = {
+        cell(t.cases),
+        ReportCell{mrays, mrays && anchor ? std::optional<double>(*mrays / *anchor) : std::nullopt, false},
+        traced_cell(t.false_misses), traced_cell(t.false_hits), traced_cell(t.wrong_prim),
+        traced_cell(t.wrong_prim_far), traced_cell(t.leaks),
+        // ulp_distance's saturation (an infinite t) prints as inf.
+        traced_cell(t.max_ulps >= kSaturatedUlps ? std::numeric_limits<double>::infinity() : t.max_ulps),
+        cell(t.hits > 0 ? std::optional<double>(t.weighted_mean_ulps / t.hits) : std::nullopt),
+        cell(t.build_failed), cell(t.nan_bounds)};
+    table.rows.push_back(std::move(row));
   }
-  fmt::print(
-      out,
-      "\nMrays/s: geometric mean over the cases of each case's median rays/second (one traversal pass over "
-      "its rays on the run's threads); speed: that mean over {}'s. Errors are against the exact "
-      "reference: a tie on a shared edge or vertex accepts any of its triangles; (far): wrong primitives "
-      "more than 1e-5 (relative) away in t. t errors are over hits on an accepted primitive; inf: an "
-      "infinite t where the exact one is finite; the mean leaves those out and is weighted by exact "
-      "hits.\n\n",
+  mark_best(table);
+  // A column where every variant has the same value (no build failed anywhere), or whose best is an
+  // infinite t error, names no winner: no bold there.
+  for (std::size_t c = 0; c < table.columns.size(); ++c) {
+    std::size_t marked = 0;
+    bool infinite = false;
+    for (const ReportRow& row : table.rows)
+      if (row.cells[c].best) ++marked, infinite |= std::isinf(*row.cells[c].value);
+    if (marked == table.rows.size() || infinite)
+      for (ReportRow& row : table.rows) row.cells[c].best = false;
+  }
+  table.caption = fmt::format(
+      "Mrays/s: geometric mean over the cases of each case's median rays/second (one traversal pass over its "
+      "rays), with its ratio to {}'s. Errors are against the exact reference: a tie on a shared edge or "
+      "vertex "
+      "accepts any of its triangles; (far): wrong primitives more than 1e-5 (relative) away in t. t errors "
+      "are "
+      "over hits on an accepted primitive; inf: an infinite t where the exact one is finite, which the mean "
+      "(weighted by exact hits) leaves out. The best value of each column is in bold.",
       anchor_name);
+  return table;
 }
 
 void print_wrong_cases(const std::vector<CsvRow>& rows, std::ostream& out) {
@@ -189,16 +222,26 @@ bool is_stress_result(const std::vector<CsvRow>& rows) {
   return !rows.empty() && rows.front().count("false_misses") && rows.front().count("leaks");
 }
 
-void print_stress_report(const std::vector<CsvRow>& rows, std::ostream& out) {
+void print_stress_report(const std::vector<CsvRow>& rows, ReportFormat format, std::ostream& out) {
   const CsvRow& first = rows.front();
-  fmt::print(out,
-             "# sahbench stress report: run {}\n\ncommit {}, {}, {}, {}; {} thread(s), trace reps {}, build "
-             "time bound {} s; "
-             "config {}\n\n",
-             first.at("run_id"), first.at("git_commit"), first.at("cpu"), first.at("compiler"),
-             first.at("embree_version"), first.at("threads"), first.at("trace_reps"),
-             first.at("build_time_limit_s"), first.at("config"));
-  print_error_against_time(rows, out);
+  const ReportTable table = error_against_time(rows);
+  if (format == ReportFormat::kLatex) {
+    fmt::print(out,
+               "% sahbench stress report: run {}, commit {}, {}, {}, {}; config {}\n% Needs "
+               "\\usepackage{{booktabs}}.\n\n",
+               first.at("run_id"), first.at("git_commit"), first.at("cpu"), first.at("compiler"),
+               first.at("embree_version"), first.at("config"));
+    render_latex(table, out);
+    return;
+  }
+  fmt::print(
+      out,
+      "# sahbench stress report: run {}\n\ncommit {}, {}, {}, {}; {} thread(s), trace reps {}, build time "
+      "bound {} s; config {}\n\n",
+      first.at("run_id"), first.at("git_commit"), first.at("cpu"), first.at("compiler"),
+      first.at("embree_version"), first.at("threads"), first.at("trace_reps"), first.at("build_time_limit_s"),
+      first.at("config"));
+  render_markdown(table, out);
   print_wrong_cases(rows, out);
   print_cases(rows, out);
 }

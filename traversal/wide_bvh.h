@@ -125,4 +125,14 @@ using WideKernel = void (*)(const WideBatch&);
 /// so the counts are the same. Null when that combination is not compiled in.
 WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit, bool counting);
 
+/// Micro-benchmark loops (bench/): `ray_count` rays each against `count` nodes (of the width asked) or
+/// triangle blocks in turn, returning a checksum.
+struct WideBenchLoops {
+  double (*nodes)(const void* nodes, std::size_t count, const WideRay* rays, std::size_t ray_count);
+  double (*blocks)(const TriangleBlock* blocks, std::size_t count, const WideRay* rays, std::size_t ray_count);
+};
+
+/// The loops compiled for `isa` (not kAuto); both null when that set is not compiled in.
+WideBenchLoops find_wide_bench_loops(KernelIsa isa, uint32_t width, const KernelVariant& variant);
+
 }  // namespace sahbench

@@ -316,8 +316,8 @@ inline uint32_t occupied_lanes(const TriangleBlock& b) {
 
 // ---------------------------------------------------------------------------------------------------
 // The traversal: depth first with an explicit stack of child slots (inner nodes and leaves alike), the
-// children a ray enters pushed so that the nearest is popped first (closest hit) or in storage order
-// (any hit), and entries entered beyond the closest hit so far skipped when popped. The same loop as
+// children a ray enters pushed so that the nearest is popped first, and (closest hit) entries entered
+// beyond the closest hit so far skipped when popped. The same loop as
 // bvh2_traversal.h, with a node's N box tests done at once.
 
 struct WideStackEntry {
@@ -352,15 +352,12 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
   Hit best;
   float t_root;
   if (!intersect_root<kRobust>(root_planes, r, t_root)) return best;
+  static_assert(kWideStackCapacity >= (N - 1) * kMaxDepth + 1, "wide traversal stack too small");
   WideStackEntry stack[kWideStackCapacity];
   uint32_t size = 0;
-  stack[size++] = {0, 0, t_root};
   float best_t = r.tmax;
-  while (size > 0) {
-    const WideStackEntry entry = stack[--size];
-    if constexpr (!kAnyHit) {
-      if (entry.t_entry > best_t) continue;
-    }
+  WideStackEntry entry{0, 0, t_root};
+  while (true) {
     if (entry.count != 0) {
       if constexpr (kCount) ++counts->leaf_visits;
       for (uint32_t b = entry.child; b < entry.child + entry.count; ++b) {
@@ -381,29 +378,38 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
           }
         }
       }
-      continue;
-    }
-
-    const WideNode<N>& node = nodes[entry.child];
-    if constexpr (kCount) ++counts->inner_visits;
-    alignas(32) float t_entry[N];
-    uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
-    const uint32_t base = size;
-    for (; mask; mask &= mask - 1) {
-      const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
-      const WideStackEntry child{node.child[i], node.count[i], t_entry[i]};
-      uint32_t slot = size++;
-      if constexpr (!kAnyHit) {
-        // Insertion sort into this node's part of the stack, nearest on top.
+    } else {
+      const WideNode<N>& node = nodes[entry.child];
+      if constexpr (kCount) ++counts->inner_visits;
+      alignas(32) float t_entry[N];
+      uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
+      if (mask != 0 && (mask & (mask - 1)) == 0) {
+        // One child entered, the most common case below the top levels: go straight to it.
+        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
+        entry = {node.child[i], node.count[i], t_entry[i]};
+        continue;
+      }
+      const uint32_t base = size;
+      for (; mask; mask &= mask - 1) {
+        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
+        const WideStackEntry child{node.child[i], node.count[i], t_entry[i]};
+        // Insertion sort into this node's part of the stack, nearest on top; for any hit too, since an
+        // occluder tends to be near (bvh2_traversal.h).
+        uint32_t slot = size++;
         while (slot > base && stack[slot - 1].t_entry < child.t_entry) {
           stack[slot] = stack[slot - 1];
           --slot;
         }
+        stack[slot] = child;
       }
-      stack[slot] = child;
     }
+    // The next entry, skipping those entered beyond the closest hit so far (nothing inside can be closer;
+    // equal is kept for the tie rule).
+    do {
+      if (size == 0) return best;
+      entry = stack[--size];
+    } while (!kAnyHit && entry.t_entry > best_t);
   }
-  return best;
 }
 
 template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>
@@ -437,4 +443,44 @@ WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, 
   if (width == 4) return by_tri.template operator()<4>();
   if (width == 8) return by_tri.template operator()<8>();
   return nullptr;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Loops for the micro-benchmarks (bench/): every ray against every node, or every block, in turn. The
+// sum of the hit masks and distances is returned so the work cannot be optimised away.
+
+template <uint32_t N, bool kRobust>
+double node_test_loop(const void* nodes, std::size_t node_count, const WideRay* rays, std::size_t ray_count) {
+  const auto* typed = static_cast<const WideNode<N>*>(nodes);
+  double sum = 0.0;
+  alignas(32) float t_entry[N];
+  for (std::size_t r = 0; r < ray_count; ++r)
+    for (std::size_t n = 0; n < node_count; ++n)
+      sum += intersect_children<N, kRobust>(typed[n], rays[r], rays[r].tmin, rays[r].tmax, t_entry) + t_entry[0];
+  return sum;
+}
+
+template <TriangleTestKind kTri>
+double block_test_loop(const TriangleBlock* blocks, std::size_t block_count, const WideRay* rays, std::size_t ray_count) {
+  double sum = 0.0;
+  alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
+  for (std::size_t r = 0; r < ray_count; ++r)
+    for (std::size_t b = 0; b < block_count; ++b)
+      sum += intersect_block<kTri>(blocks[b], rays[r], rays[r].tmin, rays[r].tmax, t, u, v) + t[0];
+  return sum;
+}
+
+inline WideBenchLoops select_bench_loops(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
+  WideBenchLoops loops{};
+  const bool robust = box == BoxTestKind::kRobust;
+  if (width == 4) loops.nodes = robust ? &node_test_loop<4, true> : &node_test_loop<4, false>;
+  if (width == 8) loops.nodes = robust ? &node_test_loop<8, true> : &node_test_loop<8, false>;
+  switch (tri) {
+    case TriangleTestKind::kWatertight: loops.blocks = &block_test_loop<TriangleTestKind::kWatertight>; break;
+    case TriangleTestKind::kMollerTrumbore: loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumbore>; break;
+    case TriangleTestKind::kMollerTrumboreNoEpsilon:
+      loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumboreNoEpsilon>;
+      break;
+  }
+  return loops;
 }

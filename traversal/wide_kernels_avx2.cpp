@@ -16,4 +16,8 @@ WideKernel wide_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind bo
   return wide_avx2::select_kernel<false>(width, tri, box, any_hit);
 }
 
+WideBenchLoops wide_bench_loops_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
+  return wide_avx2::select_bench_loops(width, tri, box);
+}
+
 }  // namespace sahbench::detail

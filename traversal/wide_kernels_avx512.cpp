@@ -16,4 +16,8 @@ WideKernel wide_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind 
   return wide_avx512::select_kernel<false>(width, tri, box, any_hit);
 }
 
+WideBenchLoops wide_bench_loops_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
+  return wide_avx512::select_bench_loops(width, tri, box);
+}
+
 }  // namespace sahbench::detail

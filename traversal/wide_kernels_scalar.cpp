@@ -15,4 +15,8 @@ WideKernel wide_kernel_scalar(uint32_t width, TriangleTestKind tri, BoxTestKind 
                   : wide_scalar::select_kernel<false>(width, tri, box, any_hit);
 }
 
+WideBenchLoops wide_bench_loops_scalar(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
+  return wide_scalar::select_bench_loops(width, tri, box);
+}
+
 }  // namespace sahbench::detail

@@ -16,4 +16,8 @@ WideKernel wide_kernel_sse(uint32_t width, TriangleTestKind tri, BoxTestKind box
   return wide_sse::select_kernel<false>(width, tri, box, any_hit);
 }
 
+WideBenchLoops wide_bench_loops_sse(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
+  return wide_sse::select_bench_loops(width, tri, box);
+}
+
 }  // namespace sahbench::detail

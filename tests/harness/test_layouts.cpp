@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -158,6 +159,56 @@ std::vector<std::string> layout_names() {
 
 INSTANTIATE_TEST_SUITE_P(AllLayouts, LayoutVsReference, ::testing::ValuesIn(layout_names()),
                          [](const auto& info) { return info.param; });
+
+// Moves every vertex by a smooth field (so neighbours stay neighbours, as in an animation) plus a
+// per-vertex jitter: boxes grow, shrink and move.
+std::vector<Triangle> deformed(std::vector<Triangle> tris, float time) {
+  auto move = [&](Vec3 p) {
+    return Vec3{p.x + std::sin(p.y * 0.7f + time) * 1.5f, p.y * (1.0f + 0.3f * time), p.z + std::cos(p.x * 0.5f) * time};
+  };
+  for (auto& t : tris) t = {move(t.v0), move(t.v1), move(t.v2)};
+  return tris;
+}
+
+TEST(Layouts, RefitWideLayoutsMatchBruteForceOnDeformedGeometry) {
+  const auto original = test::random_triangles(4000, 17);
+  for (uint32_t arity : {4u, 8u}) {
+    const BuilderInfo& info = find_builder("wide_binned_sah");
+    const Bvh bvh = info.build(BuildInput::from_triangles(original),
+                               resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
+    for (KernelIsa isa : {KernelIsa::kScalar, best_kernel_isa()}) {
+      const std::string spec = "bvh" + std::to_string(arity) + ":isa=" + std::string(to_string(isa));
+      SCOPED_TRACE(spec);
+      auto layout = compile_layout(spec, bvh, original);
+      for (float time : {0.5f, 2.0f, 0.0f}) {
+        const auto moved = deformed(original, time);
+        layout->refit(moved);
+        const auto rays = test::random_rays(moved, 600, 11);
+        std::vector<Hit> hits(rays.size());
+        std::vector<uint8_t> occluded(rays.size());
+        layout->trace_closest(rays, hits);
+        layout->trace_any(rays, occluded);
+        std::size_t found = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          const Hit ref = brute_force_closest(moved, rays[i]);
+          found += ref.found();
+          ASSERT_TRUE(test::same_closest_hit(hits[i], ref, moved, rays[i])) << "t=" << time << " ray " << i;
+          ASSERT_EQ(occluded[i] != 0, brute_force_any(moved, rays[i])) << "t=" << time << " ray " << i;
+        }
+        EXPECT_GT(found, rays.size() / 10);
+      }
+    }
+  }
+}
+
+TEST(Layouts, RefitRejectsADifferentTriangleCountAndBorrowedTrees) {
+  const auto tris = test::random_triangles(100, 2);
+  const Bvh binary = find_builder("binned_sah").build(BuildInput::from_triangles(tris),
+                                                      resolve_params("binned_sah", find_builder("binned_sah").params, {}));
+  EXPECT_THROW(compile_layout("bvh2", binary, tris)->refit(tris), Error);
+  auto wide = compile_layout("bvh8", binary, tris);  // a binary tree in 8-wide nodes is legal
+  EXPECT_THROW(wide->refit(std::span(tris).first(50)), Error);
+}
 
 TEST(Layouts, EmptyTreeMissesEverything) {
   const std::vector<Triangle> none;

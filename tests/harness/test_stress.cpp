@@ -264,6 +264,10 @@ TEST(HarnessStress, ReducedSuiteKeepsItsGuarantees) {
   EXPECT_NE(report.str().find("## Error against run time, all cases"), std::string::npos) << report.str();
   EXPECT_NE(report.str().find("| embree (robust) | embree_1 |"), std::string::npos) << report.str();
   EXPECT_NE(report.str().find("## Where a variant is wrong"), std::string::npos);
+  std::ostringstream latex;
+  print_report({{csv}, "", ReportFormat::kLatex}, latex);
+  EXPECT_NE(latex.str().find("\\label{tab:stress}"), std::string::npos) << latex.str();
+  EXPECT_NE(latex.str().find("embree (robust) & embree\\_1"), std::string::npos) << latex.str();
 }
 
 }  // namespace

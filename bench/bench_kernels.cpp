@@ -1,0 +1,136 @@
+// Ray/box and ray/triangle tests of each variant and width, and one node visit of each layout.
+// Each benchmark reports items/s = tests (or node visits) per second.
+
+#include <benchmark/benchmark.h>
+
+#include <string>
+
+#include "bench/bench_data.h"
+#include "builders/collapse.h"
+#include "traversal/ray_box.h"
+#include "traversal/triangle_tests.h"
+#include "traversal/wide_bvh.h"
+
+namespace sahbench::bench {
+namespace {
+
+constexpr std::size_t kRays = 256;
+constexpr std::size_t kPrims = 1024;
+
+// Scalar ray/box test (one box), as the bvh2 layouts run it on each child: one node visit of bvh2 is two.
+template <class BoxTest>
+void BM_ScalarRayBox(benchmark::State& state) {
+  const auto& tris = soup(kPrims);
+  const auto& rs = rays(kRays);
+  std::vector<Aabb> boxes;
+  for (const auto& t : tris) boxes.push_back(t.bounds());
+  for (auto _ : state) {
+    uint32_t hits = 0;
+    for (const Ray& ray : rs) {
+      const BoxTest test(ray);
+      float t;
+      for (const Aabb& box : boxes) hits += test.intersect(box, ray.tmin, ray.tmax, t);
+    }
+    benchmark::DoNotOptimize(hits);
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * kRays * boxes.size()));
+}
+BENCHMARK(BM_ScalarRayBox<RobustRayBox>)->Name("ray_box/scalar/robust");
+BENCHMARK(BM_ScalarRayBox<FastRayBox>)->Name("ray_box/scalar/fast");
+
+// Scalar ray/triangle tests.
+template <class TriangleTest>
+void BM_ScalarRayTriangle(benchmark::State& state) {
+  const auto& tris = soup(kPrims);
+  const auto& rs = rays(kRays);
+  for (auto _ : state) {
+    uint32_t hits = 0;
+    for (const Ray& ray : rs) {
+      const TriangleTest test(ray);
+      float t, u, v;
+      for (const Triangle& tri : tris) hits += test.intersect(tri, ray.tmin, ray.tmax, t, u, v);
+    }
+    benchmark::DoNotOptimize(hits);
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * kRays * tris.size()));
+}
+BENCHMARK(BM_ScalarRayTriangle<WatertightTriangleTest>)->Name("ray_triangle/scalar/watertight");
+BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreTest>)->Name("ray_triangle/scalar/mt");
+BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNoEpsilonTest>)->Name("ray_triangle/scalar/mt0");
+
+// The wide kernels' node test (N boxes at once, one node visit) and block test (4 triangles at once),
+// per instruction set available here. Items are node visits, or triangles.
+template <uint32_t N>
+const WideBvh<N>& wide_tree() {
+  static const WideBvh<N> tree = compile_wide<N>(collapse_greedy(binary_tree(kPrims * 16), N), soup(kPrims * 16));
+  return tree;
+}
+
+std::vector<WideRay> wide_rays() {
+  std::vector<WideRay> out;
+  for (const Ray& r : rays(kRays)) out.push_back(make_wide_ray(r));
+  return out;
+}
+
+template <uint32_t N>
+void BM_WideNodeVisit(benchmark::State& state, KernelIsa isa, BoxTestKind box) {
+  if (!kernel_isa_available(isa)) return state.SkipWithError("ISA not available on this CPU");
+  const auto loops = find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box});
+  const auto& tree = wide_tree<N>();
+  const std::size_t nodes = std::min<std::size_t>(tree.nodes.size(), 256);  // stays in L1/L2: the test, not memory
+  const auto rs = wide_rays();
+  for (auto _ : state) benchmark::DoNotOptimize(loops.nodes(tree.nodes.data(), nodes, rs.data(), rs.size()));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * nodes * rs.size()));
+}
+
+void BM_WideBlockTest(benchmark::State& state, KernelIsa isa, TriangleTestKind tri) {
+  if (!kernel_isa_available(isa)) return state.SkipWithError("ISA not available on this CPU");
+  const auto loops = find_wide_bench_loops(isa, 8, {tri, BoxTestKind::kRobust});
+  const auto& tree = wide_tree<8>();
+  const std::size_t blocks = std::min<std::size_t>(tree.blocks.size(), 256);
+  const auto rs = wide_rays();
+  for (auto _ : state) benchmark::DoNotOptimize(loops.blocks(tree.blocks.data(), blocks, rs.data(), rs.size()));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * blocks * kBlockWidth * rs.size()));
+}
+
+// Registers every width x box test x ISA, and every triangle test x ISA.
+const bool registered = [] {
+  for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
+    const std::string i(to_string(isa));
+    for (BoxTestKind box : {BoxTestKind::kRobust, BoxTestKind::kFast}) {
+      const std::string b(to_string(box));
+      benchmark::RegisterBenchmark(("node_visit/bvh4/" + i + "/" + b).c_str(), BM_WideNodeVisit<4>, isa, box);
+      benchmark::RegisterBenchmark(("node_visit/bvh8/" + i + "/" + b).c_str(), BM_WideNodeVisit<8>, isa, box);
+    }
+    for (TriangleTestKind tri :
+         {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore, TriangleTestKind::kMollerTrumboreNoEpsilon})
+      benchmark::RegisterBenchmark(("ray_triangle/block4/" + i + "/" + std::string(to_string(tri))).c_str(),
+                                   BM_WideBlockTest, isa, tri);
+  }
+  return true;
+}();
+
+// One bvh2 node visit: the two child boxes of a common-format node, as bvh2_traversal.h tests them.
+void BM_Bvh2NodeVisit(benchmark::State& state) {
+  const Bvh& tree = binary_tree(kPrims * 16);
+  std::vector<const Node*> inner;
+  for (const Node& n : tree.nodes)
+    if (!n.is_leaf() && inner.size() < 256) inner.push_back(&n);
+  const auto& rs = rays(kRays);
+  for (auto _ : state) {
+    uint32_t hits = 0;
+    for (const Ray& ray : rs) {
+      const RobustRayBox test(ray);
+      float t;
+      for (const Node* n : inner)
+        for (uint32_t c = n->first; c < n->first + n->child_count; ++c)
+          hits += test.intersect(tree.nodes[c].bounds, ray.tmin, ray.tmax, t);
+    }
+    benchmark::DoNotOptimize(hits);
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * rs.size() * inner.size()));
+}
+BENCHMARK(BM_Bvh2NodeVisit)->Name("node_visit/bvh2/scalar/robust");
+
+}  // namespace
+}  // namespace sahbench::bench

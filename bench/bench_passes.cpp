@@ -1,0 +1,78 @@
+// The builders' passes: one binning split search, one full-sweep split search, the collapse to 8-wide
+// (greedy and SAH-optimal), the wide layout compile and refit. Items are primitives per second.
+
+#include <benchmark/benchmark.h>
+
+#include <numeric>
+
+#include "bench/bench_data.h"
+#include "builders/binned_sah.h"
+#include "builders/collapse.h"
+#include "builders/sweep_sah.h"
+#include "traversal/wide_bvh.h"
+
+namespace sahbench::bench {
+namespace {
+
+std::vector<uint32_t> all_prims(std::size_t n) {
+  std::vector<uint32_t> ids(n);
+  std::iota(ids.begin(), ids.end(), 0u);
+  return ids;
+}
+
+// One root split search of binned SAH (bins per axis from the argument), on a 100k soup.
+void BM_BinningPass(benchmark::State& state) {
+  const std::size_t n = 100'000;
+  const BuildInput input = BuildInput::from_triangles(soup(n));
+  const auto prims = all_prims(n);
+  BinnedSahParams params;
+  params.bins = static_cast<uint32_t>(state.range(0));
+  params.adaptive_bins = false;
+  for (auto _ : state) benchmark::DoNotOptimize(find_binned_split(input, prims, params));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * n));
+}
+BENCHMARK(BM_BinningPass)->Name("binning_pass")->Arg(8)->Arg(32)->Unit(benchmark::kMicrosecond);
+
+// One root split search of the full sweep (sorts, then sweeps all n - 1 planes per axis).
+void BM_SweepPass(benchmark::State& state) {
+  const std::size_t n = 100'000;
+  const BuildInput input = BuildInput::from_triangles(soup(n));
+  const auto prims = all_prims(n);
+  for (auto _ : state) benchmark::DoNotOptimize(find_sweep_split(input, prims, {}));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * n));
+}
+BENCHMARK(BM_SweepPass)->Name("sweep_pass")->Unit(benchmark::kMillisecond);
+
+void BM_CollapseGreedy(benchmark::State& state) {
+  const Bvh& tree = binary_tree(100'000);
+  for (auto _ : state) benchmark::DoNotOptimize(collapse_greedy(tree, 8));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 100'000));
+}
+BENCHMARK(BM_CollapseGreedy)->Name("collapse/greedy/8")->Unit(benchmark::kMillisecond);
+
+void BM_CollapseSah(benchmark::State& state) {
+  const Bvh& tree = binary_tree(100'000);
+  for (auto _ : state) benchmark::DoNotOptimize(collapse_sah(tree, 8, {}, 8));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 100'000));
+}
+BENCHMARK(BM_CollapseSah)->Name("collapse/sah/8")->Unit(benchmark::kMillisecond);
+
+void BM_CompileWide8(benchmark::State& state) {
+  const Bvh wide = collapse_greedy(binary_tree(100'000), 8);
+  for (auto _ : state) benchmark::DoNotOptimize(compile_wide<8>(wide, soup(100'000)));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 100'000));
+}
+BENCHMARK(BM_CompileWide8)->Name("layout_compile/bvh8")->Unit(benchmark::kMillisecond);
+
+void BM_RefitWide8(benchmark::State& state) {
+  auto layout = compile_wide<8>(collapse_greedy(binary_tree(100'000), 8), soup(100'000));
+  for (auto _ : state) {
+    refit_wide(layout, soup(100'000));
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 100'000));
+}
+BENCHMARK(BM_RefitWide8)->Name("refit/bvh8")->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace sahbench::bench

@@ -1,0 +1,215 @@
+// `sahbench image` and `image-diff` on a small procedural sphere: every map is written at the asked
+// size, depth and normals agree with brute force pixel by pixel, the per-pixel counts add up to the
+// batch counts of every layout, a difference image is B - A (zero against itself), and bad input is
+// an error naming what is wrong.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "builders/params.h"
+#include "builders/registry.h"
+#include "core/build_input.h"
+#include "harness/config.h"
+#include "harness/image_command.h"
+#include "harness/image_io.h"
+#include "harness/layout.h"
+#include "harness/ray_sets.h"
+#include "scenes/load.h"
+#include "tests/scenes/temp_dir.h"
+#include "traversal/brute_force.h"
+
+namespace sahbench {
+namespace {
+
+using test::error_message;
+using test::TempDir;
+
+constexpr const char* kScene = "proc:sphere:tris=600";
+// Not square, so that swapped width and height would show.
+constexpr uint32_t kWidth = 24, kHeight = 16;
+
+std::vector<Ray> primary_rays(const Scene& scene, uint32_t width, uint32_t height) {
+  RaySetConfig cfg;
+  cfg.width = width;
+  cfg.height = height;
+  return generate_ray_sets(scene, std::span<const RaySetConfig>(&cfg, 1), 1).sets.at(0).rays;
+}
+
+ImageCommandOptions options(const std::filesystem::path& prefix, const std::string& builder = "binned_sah") {
+  ImageCommandOptions o;
+  o.scene = kScene;
+  o.builder = builder;
+  o.width = kWidth;
+  o.height = kHeight;
+  o.out = prefix;
+  return o;
+}
+
+TEST(HarnessImage, MapsHaveTheImageSizeAndMatchBruteForce) {
+  TempDir dir;
+  std::ostringstream log;
+  run_image_command(options(dir.path() / "sphere"), log);
+  EXPECT_NE(log.str().find("nodes visited per pixel: min"), std::string::npos) << log.str();
+
+  const auto files = image_files(dir.path() / "sphere");
+  ASSERT_EQ(files.size(), 8u);
+  const std::size_t channels[] = {3, 1, 3, 1, 3, 1, 3, 3};  // PNGs are RGB; EXR: nodes, prims, depth, normal
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    ASSERT_TRUE(std::filesystem::is_regular_file(files[i])) << files[i];
+    const FloatImage image = read_float_image(files[i]);
+    EXPECT_EQ(image.width, kWidth) << files[i];
+    EXPECT_EQ(image.height, kHeight) << files[i];
+    EXPECT_EQ(image.channel_count(), channels[i]) << files[i];
+  }
+  const FloatImage nodes = read_float_image(dir.path() / "sphere_nodes.exr");
+  const FloatImage prims = read_float_image(dir.path() / "sphere_prims.exr");
+  const FloatImage depth = read_float_image(dir.path() / "sphere_depth.exr");
+  const FloatImage normal = read_float_image(dir.path() / "sphere_normal.exr");
+
+  const Scene scene = load_scene(kScene);
+  const auto rays = primary_rays(scene, kWidth, kHeight);
+  int hits = 0, misses = 0;
+  for (uint32_t y = 0; y < kHeight; ++y)
+    for (uint32_t x = 0; x < kWidth; ++x) {
+      const Hit ref = brute_force_closest(scene.triangles, rays[std::size_t{y} * kWidth + x]);
+      if (!ref.found()) {
+        ++misses;
+        EXPECT_TRUE(std::isinf(depth.at(x, y))) << x << "," << y;
+        EXPECT_EQ(normal.at(x, y, 0), 0.0f);
+        continue;
+      }
+      ++hits;
+      EXPECT_NEAR(depth.at(x, y), ref.t, 1e-5f * ref.t) << x << "," << y;
+      EXPECT_GT(nodes.at(x, y), 0.0f) << x << "," << y;
+      EXPECT_GT(prims.at(x, y), 0.0f) << x << "," << y;
+      const Vec3 n = normalize(scene.triangles[ref.prim].normal());
+      const Vec3 got{normal.at(x, y, 0), normal.at(x, y, 1), normal.at(x, y, 2)};
+      // Another triangle at the same distance (a shared edge) is a tie, not an error.
+      if (length(got - n) > 1e-5f) {
+        EXPECT_EQ(depth.at(x, y), ref.t) << "normal differs at " << x << "," << y;
+      }
+      EXPECT_NEAR(length(got), 1.0f, 1e-5f);
+    }
+  // The automatic framing fits the sphere's bounding sphere in the view: the centre hits, corners miss.
+  EXPECT_GT(hits, 0);
+  EXPECT_GT(misses, 0);
+}
+
+TEST(HarnessImage, PerRayCountsAddUpToTheBatchCountsOfEveryLayout) {
+  const Scene scene = load_scene(kScene);
+  const auto rays = primary_rays(scene, kWidth, kHeight);
+  const BuildInput input = BuildInput::from_triangles(scene.triangles);
+  ASSERT_GE(layouts().size(), 2u);
+  for (const LayoutInfo& info : layouts()) {
+    SCOPED_TRACE(info.name);
+    const std::string builder = info.arity == 2 ? "binned_sah" : "wide_binned_sah";
+    const BuilderInfo& b = find_builder(builder);
+    ParamOverrides overrides;
+    if (info.arity != 2) overrides.push_back({"arity", std::to_string(info.arity)});
+    const Bvh bvh = b.build(input, resolve_params(b.name, b.params, overrides));
+    const auto layout = compile_layout(info.name, bvh, scene.triangles);
+    std::vector<TraceCounts> per_ray(rays.size());
+    layout->count_closest_per_ray(rays, per_ray);
+    const TraceCounts batch = layout->count_closest(rays);
+    TraceCounts sum;
+    for (const auto& c : per_ray) {
+      EXPECT_EQ(c.rays, 1u);
+      sum.rays += c.rays;
+      sum.nodes_visited += c.nodes_visited;
+      sum.prims_tested += c.prims_tested;
+    }
+    EXPECT_EQ(sum.rays, rays.size());
+    EXPECT_GT(sum.nodes_visited, sum.rays / 2);
+    EXPECT_EQ(sum.rays, batch.rays) << info.name;
+    EXPECT_EQ(sum.nodes_visited, batch.nodes_visited) << info.name;
+    EXPECT_EQ(sum.prims_tested, batch.prims_tested) << info.name;
+    std::vector<TraceCounts> wrong_size(rays.size() - 1);
+    EXPECT_THROW(layout->count_closest_per_ray(rays, wrong_size), Error);
+  }
+}
+
+TEST(HarnessImage, DiffIsBMinusAAndZeroAgainstItself) {
+  TempDir dir;
+  std::ostringstream log;
+  run_image_command(options(dir.path() / "a", "binned_sah:bins=8"), log);
+  run_image_command(options(dir.path() / "b", "sweep_sah"), log);
+  const auto a = dir.path() / "a_nodes.exr", b = dir.path() / "b_nodes.exr";
+
+  const ImageDiffResult self = run_image_diff_command({a, a, dir.path() / "self"}, log);
+  EXPECT_EQ(self.max_abs, 0.0);
+  EXPECT_EQ(self.mean_abs, 0.0);
+  EXPECT_EQ(self.differing_pixels, 0u);
+  EXPECT_EQ(self.compared, std::size_t{kWidth} * kHeight);
+  for (const float v : read_float_image(dir.path() / "self.exr").pixels) EXPECT_EQ(v, 0.0f);
+  EXPECT_TRUE(std::filesystem::is_regular_file(dir.path() / "self.png"));
+
+  const ImageDiffResult ab = run_image_diff_command({a, b, dir.path() / "ab.exr"}, log);
+  const FloatImage ia = read_float_image(a), ib = read_float_image(b), d = read_float_image(dir.path() / "ab.exr");
+  double max_abs = 0.0;
+  uint64_t differing = 0;
+  for (std::size_t i = 0; i < d.pixels.size(); ++i) {
+    EXPECT_EQ(d.pixels[i], ib.pixels[i] - ia.pixels[i]) << i;
+    max_abs = std::max(max_abs, std::fabs(double{ib.pixels[i]} - ia.pixels[i]));
+    differing += ia.pixels[i] != ib.pixels[i];
+  }
+  EXPECT_GT(max_abs, 0.0) << "two different trees should visit different node counts somewhere";
+  EXPECT_EQ(ab.max_abs, max_abs);
+  EXPECT_EQ(ab.differing_pixels, differing);
+
+  // Depth: the same hits (both exact against the same triangles), misses (+inf) in the same pixels.
+  const ImageDiffResult depth = run_image_diff_command({dir.path() / "a_depth.exr", dir.path() / "b_depth.exr",
+                                                        dir.path() / "depth"}, log);
+  EXPECT_EQ(depth.one_sided, 0u);
+  EXPECT_LE(depth.max_abs, 1e-5);
+  // The normal maps have three channels.
+  EXPECT_EQ(run_image_diff_command({dir.path() / "a_normal.exr", dir.path() / "a_normal.exr", dir.path() / "n"}, log)
+                .compared,
+            3u * kWidth * kHeight);
+}
+
+TEST(HarnessImage, BadInputIsAnErrorNamingIt) {
+  TempDir dir;
+  std::ostringstream log;
+  const auto missing_folder = dir.path() / "no_such_folder" / "img";
+  EXPECT_NE(error_message([&] { run_image_command(options(missing_folder), log); }).find("does not exist"),
+            std::string::npos);
+  auto shadow = options(dir.path() / "x");
+  shadow.ray_set = "shadow";
+  EXPECT_NE(error_message([&] { run_image_command(shadow, log); }).find("'shadow'"), std::string::npos);
+  EXPECT_NE(error_message([&] { run_image_command(options(dir.path() / "x", "embree_medium"), log); }).find("embree_bvh"),
+            std::string::npos);
+  auto empty = options(dir.path() / "x");
+  empty.width = 0;
+  EXPECT_NE(error_message([&] { run_image_command(empty, log); }).find("0x16"), std::string::npos);
+  auto bad_layout = options(dir.path() / "x");
+  bad_layout.layout = "bvh3";
+  EXPECT_NE(error_message([&] { run_image_command(bad_layout, log); }).find("bvh3"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "x_nodes.png"));
+
+  run_image_command(options(dir.path() / "small"), log);
+  auto square = options(dir.path() / "square");
+  square.width = kHeight;
+  run_image_command(square, log);
+  const auto missing = dir.path() / "missing.exr";
+  EXPECT_NE(error_message([&] { run_image_diff_command({missing, dir.path() / "small_nodes.exr", dir.path() / "d"}, log); })
+                .find("missing.exr"),
+            std::string::npos);
+  EXPECT_NE(error_message([&] {
+              run_image_diff_command({dir.path() / "small_nodes.exr", dir.path() / "square_nodes.exr", dir.path() / "d"}, log);
+            }).find("not comparable"),
+            std::string::npos);
+  EXPECT_NE(error_message([&] {
+              run_image_diff_command({dir.path() / "small_nodes.exr", dir.path() / "small_normal.exr", dir.path() / "d"}, log);
+            }).find("3 channels"),
+            std::string::npos);
+  EXPECT_NE(error_message([&] {
+              run_image_diff_command({dir.path() / "small_nodes.exr", dir.path() / "small_nodes.exr", missing_folder}, log);
+            }).find("does not exist"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace sahbench

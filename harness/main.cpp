@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cstdlib>
 #include <iostream>
 
 #include "builders/params.h"
@@ -14,6 +15,7 @@
 #include "harness/list_command.h"
 #include "harness/report.h"
 #include "harness/runner.h"
+#include "harness/stress_runner.h"
 #include "harness/trace_command.h"
 
 int main(int argc, char** argv) {
@@ -43,6 +45,15 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--resume", run.resume, "skip cells whose rows are already in the output CSV");
   run_cmd->add_option("--only", run.only, "run only cells whose key scene|builder|params|layout|threads|ray_set|frame contains this text");
   run_cmd->add_option("--output", run_output, "CSV path instead of the config's");
+
+  StressOptions stress;
+  stress.config = "configs/stress.toml";
+  std::string stress_output;
+  auto* stress_cmd = app.add_subcommand("stress", "Numerical stress suite: extreme generated cases, every builder, layout "
+                                                  "variant and Embree mode against an exact reference");
+  stress_cmd->add_option("config", stress.config, "stress config (TOML)")->capture_default_str();
+  stress_cmd->add_option("--output", stress_output, "CSV path instead of the config's");
+  stress_cmd->add_option("--only", stress.only, "run only cases whose name contains this text");
 
   ReportOptions report;
   std::string report_format = "markdown";
@@ -97,6 +108,18 @@ int main(int argc, char** argv) {
     if (*run_cmd) {
       if (!run_output.empty()) run.output = run_output;
       return run_experiment(run, std::cerr);
+    }
+    if (*stress_cmd) {
+      if (!stress_output.empty()) stress.output = stress_output;
+      const StressSummary summary = run_stress(stress, std::cerr);
+      // A build abandoned at its time bound still runs on a detached thread: end without waiting for it
+      // (and without running static destructors under it).
+      if (summary.abandoned_builds > 0) {
+        std::cout.flush();
+        std::cerr.flush();
+        std::quick_exit(summary.exit_code());
+      }
+      return summary.exit_code();
     }
     if (*report_cmd) {
       report.format = parse_report_format(report_format);

@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "harness/csv.h"
 #include "harness/report_table.h"
+#include "harness/stress_report.h"
 
 namespace sahbench {
 namespace {
@@ -191,6 +192,8 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   if (run.empty()) run = field(rows.back(), "run_id");
   std::erase_if(rows, [&](const CsvRow& r) { return field(r, "run_id") != run; });
   if (rows.empty()) throw Error("no rows with run_id '" + run + "'");
+  // Results of `sahbench stress` have tables of their own (harness/stress_report.h).
+  if (is_stress_result(rows)) return print_stress_report(rows, options.format, out);
 
   const CsvRow& first = rows.front();
   const bool latex = options.format == ReportFormat::kLatex;

@@ -1,0 +1,274 @@
+// The stress suite: its error metrics on hand-made answers, the time bound on builds, the generators'
+// promises, the config's checks, and a reduced suite end to end with its guarantees asserted: every
+// builder terminates with a valid tree and no NaN bounds, the default kernels (watertight triangle test,
+// conservative box test) neither miss nor leak on the closed cases, invalid triangles are removed and
+// counted, nothing crashes; and the report's stress tables.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "builders/registry.h"
+#include "core/error.h"
+#include "harness/bounded_run.h"
+#include "harness/csv.h"
+#include "harness/embree_bvh_builder.h"
+#include "harness/layout.h"
+#include "harness/report.h"
+#include "harness/stress_cases.h"
+#include "harness/stress_config.h"
+#include "harness/stress_metrics.h"
+#include "harness/stress_runner.h"
+#include "traversal/exact_reference.h"
+
+namespace sahbench {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+ExactHit exact_hit(std::vector<uint32_t> tied, float t) {
+  ExactHit e;
+  e.tied = std::move(tied);
+  e.t = t;
+  return e;
+}
+
+TEST(HarnessStressMetrics, CountsEachKindOfErrorAgainstTheExactAnswers) {
+  const std::vector<ExactHit> exact = {
+      exact_hit({3}, 1.0f),     // 0: the variant misses it (a must-hit ray: a leak too)
+      exact_hit({}, kInf),      // 1: the variant hits something that is not there
+      exact_hit({4}, 2.0f),     // 2: the variant hits prim 5 at the same t: wrong primitive, near
+      exact_hit({6, 7}, 3.0f),  // 3: a tie; the variant's prim 7 is accepted, 2 ulps off
+      exact_hit({8}, 4.0f),     // 4: the variant hits prim 9 far behind: wrong primitive, far
+      exact_hit({1}, 5.0f),     // 5: exact, to the ulp
+      exact_hit({2}, 1.0f),     // 6: an infinite t on the right primitive: max saturates, mean skips it
+  };
+  const std::vector<Hit> hits = {Hit{},
+                                 Hit{0, 1.0f, 0, 0},
+                                 Hit{5, 2.0f, 0, 0},
+                                 Hit{7, std::nextafter(std::nextafter(3.0f, 4.0f), 4.0f), 0, 0},
+                                 Hit{9, 8.0f, 0, 0},
+                                 Hit{1, 5.0f, 0, 0},
+                                 Hit{2, kInf, 0, 0}};
+  const std::vector<uint8_t> must_hit = {1, 0, 0, 0, 0, 0, 0};
+  const ErrorMetrics m = measure_errors(hits, exact, must_hit);
+  EXPECT_EQ(m.rays, 7u);
+  EXPECT_EQ(m.exact_hits, 6u);
+  EXPECT_EQ(m.false_misses, 1u);
+  EXPECT_EQ(m.leaks, 1u);
+  EXPECT_EQ(m.false_hits, 1u);
+  EXPECT_EQ(m.wrong_prim, 2u);
+  EXPECT_EQ(m.wrong_prim_far, 1u);
+  EXPECT_EQ(m.ties, 1u);
+  EXPECT_EQ(m.t_err_ulps_max, std::numeric_limits<uint32_t>::max());
+  EXPECT_DOUBLE_EQ(m.t_err_ulps_mean, 1.0);  // (2 + 0) / 2
+  EXPECT_THROW(measure_errors(std::span(hits).first(2), exact, {}), Error);
+}
+
+TEST(HarnessBoundedRun, ReturnsResultsAndErrorsAndAbandonsWorkPastTheBound) {
+  const auto done = run_bounded<int>([] { return 42; }, 10.0);
+  ASSERT_TRUE(done.value);
+  EXPECT_EQ(*done.value, 42);
+  const auto threw = run_bounded<int>([]() -> int { throw Error("bad input"); }, 10.0);
+  EXPECT_FALSE(threw.value);
+  EXPECT_FALSE(threw.timed_out);
+  EXPECT_EQ(threw.error, "bad input");
+  // Work that waits for a flag only the test sets after the bound: abandoned, then released.
+  auto release = std::make_shared<std::atomic<bool>>(false);
+  const auto slow = run_bounded<int>(
+      [release] {
+        while (!release->load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        return 1;
+      },
+      0.05);
+  EXPECT_TRUE(slow.timed_out);
+  EXPECT_FALSE(slow.value);
+  release->store(true);
+}
+
+TEST(HarnessStressCases, AreDeterministicAndKeepTheirPromises) {
+  for (const StressKindInfo& kind : stress_kinds()) {
+    StressCaseSpec spec;
+    spec.name = std::string(kind.name);
+    spec.kind = std::string(kind.name);
+    spec.size = 200;
+    spec.rays = 300;
+    const StressCase a = generate_stress_case(spec), b = generate_stress_case(spec);
+    SCOPED_TRACE(spec.kind);
+    EXPECT_EQ(a.scene.triangles, b.scene.triangles);
+    ASSERT_EQ(a.rays.size(), b.rays.size());
+    for (std::size_t i = 0; i < a.rays.size(); ++i) {
+      EXPECT_EQ(std::memcmp(&a.rays[i], &b.rays[i], sizeof(Ray)), 0) << "ray " << i;  // bitwise, -0 included
+    }
+    EXPECT_FALSE(a.scene.triangles.empty());
+    EXPECT_GT(a.rays.size(), 0u);
+    EXPECT_EQ(a.must_hit.size(), a.rays.size());
+    EXPECT_EQ(a.scene.removed.total(), a.invalid_made);
+    EXPECT_EQ(a.closed, kind.closed);
+    // Every ray flagged must-hit hits exactly; on closed kinds every ray is flagged but axis_rays'.
+    const std::vector<ExactHit> exact = ExactReference(a.scene.triangles).closest(a.rays);
+    std::size_t flagged = 0;
+    for (std::size_t i = 0; i < a.rays.size(); ++i) {
+      flagged += a.must_hit[i];
+      if (a.must_hit[i]) {
+        EXPECT_TRUE(exact[i].found()) << "ray " << i;
+      }
+    }
+    if (kind.closed && kind.name != "axis_rays") {
+      EXPECT_EQ(flagged, a.rays.size());
+    }
+  }
+  // The degenerate kind makes zero-area and non-finite triangles, and the filter counts both.
+  StressCaseSpec degenerate{"d", "degenerate", 1, 240, 10};
+  const StressCase d = generate_stress_case(degenerate);
+  EXPECT_EQ(d.invalid_made, 60u);
+  EXPECT_EQ(d.scene.removed.zero_area, 30u);
+  EXPECT_EQ(d.scene.removed.non_finite, 30u);
+  EXPECT_THROW(generate_stress_case({"x", "no_such_kind"}), Error);
+}
+
+TEST(HarnessStressConfig, ChecksKindsParametersAndNames) {
+  const std::string head =
+      "[stress]\nname = \"s\"\nbuilders = [\"binned_sah\"]\nlayouts = [\"bvh2\", \"bvh2:tri=mt\"]\n";
+  const StressConfig c = parse_stress_config(
+      head + "[[case]]\nname = \"a\"\nkind = \"sphere\"\nscale = 1e-6\nrays = 10\n", "t.toml");
+  ASSERT_EQ(c.cases.size(), 1u);
+  EXPECT_EQ(c.cases[0].scale, 1e-6);
+  EXPECT_EQ(c.cases[0].rays, 10u);
+  EXPECT_EQ(c.layouts, (std::vector<std::string>{"bvh2", "bvh2:tri=mt"}));
+  EXPECT_EQ(c.output, "results/s.csv");
+  auto error_of = [&](const std::string& text) {
+    try {
+      parse_stress_config(text, "t.toml");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error_of(head + "[[case]]\nname = \"a\"\nkind = \"cube\"\n")
+                .find("t.toml:7: unknown stress case kind 'cube'"),
+            std::string::npos);
+  EXPECT_NE(error_of(head + "[[case]]\nname = \"a\"\nkind = \"grazing\"\nscale = 2\n")
+                .find("does not read 'scale'"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of(head +
+               "[[case]]\nname = \"a\"\nkind = \"grazing\"\n[[case]]\nname = \"a\"\nkind = \"sphere\"\n")
+          .find("used twice"),
+      std::string::npos);
+  EXPECT_NE(
+      error_of("[stress]\nname = \"s\"\nbuilders = [\"nope\"]\n[[case]]\nname = \"a\"\nkind = \"sphere\"\n")
+          .find("t.toml:3: stress.builders: unknown builder 'nope'"),
+      std::string::npos);
+  EXPECT_NE(
+      error_of(head + "[[case]]\nname = \"a\"\nkind = \"sphere\"\nsize = 0\n").find("size = 0 is outside"),
+      std::string::npos);
+  EXPECT_NE(error_of(head).find("no [[case]] tables"), std::string::npos);
+}
+
+TEST(HarnessStressConfig, DefaultsCoverEveryBuilderLayoutAndVariant) {
+  register_embree_builders();
+  const std::vector<std::string> specs = all_builder_specs();
+  for (const BuilderInfo& b : builders())
+    EXPECT_NE(std::find(specs.begin(), specs.end(), b.name), specs.end()) << b.name;
+  const std::vector<std::string> variants = all_layout_variants();
+  EXPECT_EQ(variants.size(), layouts().size() * 6);
+  for (const LayoutInfo& l : layouts()) {
+    EXPECT_NE(std::find(variants.begin(), variants.end(), l.name), variants.end()) << l.name;
+    EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mt0,box=fast"), variants.end())
+        << l.name;
+  }
+}
+
+// The reduced suite: every kind at a small size, every builder, every layout variant, both Embree modes.
+TEST(HarnessStress, ReducedSuiteKeepsItsGuarantees) {
+  register_embree_builders();
+  StressConfig cfg;
+  cfg.path = "reduced";
+  cfg.name = "reduced";
+  cfg.trace_reps = 1;
+  cfg.trace_warmup = 0;
+  cfg.build_time_limit_s = 60;
+  cfg.builders = all_builder_specs();
+  cfg.layouts = all_layout_variants();
+  auto add = [&](std::string name, std::string kind, uint64_t size, uint32_t rays, double scale = 1,
+                 double offset = 0) {
+    StressCaseSpec s{std::move(name), std::move(kind), 1, size, rays};
+    s.scale = scale;
+    s.offset = offset;
+    cfg.cases.push_back(s);
+  };
+  add("sphere_far", "sphere", 80, 240, 1e3, 1e6);
+  add("cube_micro", "cube_grid", 108, 240, 1e-6);
+  add("axis_rays", "axis_rays", 96, 240);
+  add("tiny_in_huge", "tiny_in_huge", 172, 120);
+  add("grazing", "grazing", 8, 120);
+  add("huge_tiny", "huge_tiny", 40, 100);
+  add("degenerate", "degenerate", 200, 100);
+  add("same_centroid", "same_centroid", 200, 60);
+  add("coincident", "coincident", 3000, 16);
+  add("needles", "needles", 200, 100);
+  add("surface_origin", "surface_origin", 80, 120);
+  add("empty_interval", "empty_interval", 48, 120);
+  const auto csv = std::filesystem::temp_directory_path() / "sahbench_test_stress.csv";
+  std::filesystem::remove(csv);
+  std::ostringstream log;
+  const StressSummary summary = run_stress(cfg, {"", csv, ""}, log);
+  EXPECT_TRUE(summary.failures.empty()) << log.str();
+  EXPECT_EQ(summary.abandoned_builds, 0u);
+
+  const std::vector<CsvRow> rows = read_csv(csv);
+  EXPECT_EQ(rows.size(), summary.rows);
+  std::set<std::pair<std::string, std::string>> built;  // (case, builder params) of every build
+  for (const CsvRow& r : rows) {
+    SCOPED_TRACE(r.at("scene") + " " + r.at("builder") + " " + r.at("builder_params") + " " + r.at("layout"));
+    EXPECT_EQ(r.at("build_failed"), "0") << r.at("notes");
+    if (r.at("builder") != "embree") {
+      EXPECT_EQ(r.at("nan_bounds"), "0");
+      built.insert({r.at("scene"), r.at("builder") + r.at("builder_params")});
+    }
+    EXPECT_FALSE(r.at("trace_mrays_median").empty()) << r.at("notes");
+    const bool default_kernels = r.at("layout").find(':') == std::string::npos && r.at("builder") != "embree";
+    if (r.at("closed") == "1" && default_kernels) {
+      EXPECT_EQ(r.at("false_misses"), "0");
+      EXPECT_EQ(r.at("leaks"), "0");
+    }
+    // Rays through shared vertices and edges of the closed meshes are exact ties.
+    if (r.at("case_kind") == "sphere" || r.at("case_kind") == "cube_grid") {
+      EXPECT_NE(r.at("ties"), "0");
+    }
+  }
+  // Every builder ran on every case, and every layout variant was traced on each case.
+  EXPECT_EQ(built.size(), cfg.cases.size() * cfg.builders.size());
+  for (const std::string& variant : cfg.layouts) {
+    std::size_t traced = 0;
+    for (const CsvRow& r : rows) traced += r.at("layout") == variant;
+    EXPECT_GE(traced, cfg.cases.size()) << variant;
+  }
+  // Errors the suite must see, so that its zeros mean something: Embree's interval is open at tmin, so
+  // in its default mode it misses the exact hits of rays with tmin = tmax.
+  for (const CsvRow& r : rows)
+    if (r.at("scene") == "empty_interval" && r.at("builder_params") == "quality=medium;mode=default") {
+      EXPECT_NE(r.at("false_misses"), "0");
+    }
+
+  std::ostringstream report;
+  print_report({{csv}, ""}, report);
+  EXPECT_NE(report.str().find("## Error against run time, all cases"), std::string::npos) << report.str();
+  EXPECT_NE(report.str().find("| embree (robust) | embree_1 |"), std::string::npos) << report.str();
+  EXPECT_NE(report.str().find("## Where a variant is wrong"), std::string::npos);
+  std::ostringstream latex;
+  print_report({{csv}, "", ReportFormat::kLatex}, latex);
+  EXPECT_NE(latex.str().find("\\label{tab:stress}"), std::string::npos) << latex.str();
+  EXPECT_NE(latex.str().find("embree (robust) & embree\\_1"), std::string::npos) << latex.str();
+}
+
+}  // namespace
+}  // namespace sahbench

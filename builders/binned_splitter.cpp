@@ -5,6 +5,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <bit>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -174,12 +175,14 @@ struct SweepSide {
   // half_area() * count, with Aabb::half_area's operations in its order, bit for bit, and 0 for an empty
   // box. A box is empty exactly where some max - min is negative (subtraction of finite floats keeps
   // the sign of the comparison; infinities and NaN agree with is_empty too).
-  Vec4f weighted_areas() const {
+  Vec4f weighted_areas(uint32_t block_shift) const {
     Vec4f ex, ey, ez;
     simd::transpose3(extent(0), extent(1), extent(2), ex, ey, ez);
     const Vec4f zero = simd::splat(0.0f);
     const Vec4f empty = simd::less(ex, zero) | simd::less(ey, zero) | simd::less(ez, zero);
-    return simd::and_not(empty, ex * ey + ey * ez + ez * ex) * simd::to_float(count);
+    // SahCost::blocks: ceil(count / block) for a power-of-two block.
+    const Vec4i blocks = block_shift == 0 ? count : simd::shift_right(count + simd::splat((1u << block_shift) - 1), block_shift);
+    return simd::and_not(empty, ex * ey + ey * ez + ez * ex) * simd::to_float(blocks);
   }
 
  private:
@@ -219,13 +222,14 @@ Split pick_axis(Vec4f best_weighted, Vec4i best_position, float parent_area, con
 template <uint32_t kFixedBins>
 Split best_split(const BinSet& set, uint32_t prim_count, float parent_area, const SahCost& cost) {
   const uint32_t bins = kFixedBins ? kFixedBins : set.bin_count;
+  const auto block_shift = static_cast<uint32_t>(std::countr_zero(cost.block));
   std::array<Vec4f, kMaxBins> right_weighted;  // [plane]: weighted area of bins [plane, bins)
   std::array<Vec4i, kMaxBins> next_used;       // [plane]: first non-empty bin at or after the plane
   SweepSide right;
   Vec4i used = simd::splat(bins);
   for (uint32_t b = bins; b-- > 1;) {
     right.add_bin(set, b);
-    right_weighted[b] = right.weighted_areas();
+    right_weighted[b] = right.weighted_areas(block_shift);
     used = simd::select(simd::greater(set.counts_of(b), simd::splat(0u)), used, simd::splat(b));
     next_used[b] = used;
   }
@@ -235,7 +239,7 @@ Split best_split(const BinSet& set, uint32_t prim_count, float parent_area, cons
   Vec4i best_position = simd::splat(0u);
   for (uint32_t b = 1; b < bins; ++b) {
     left.add_bin(set, b - 1);
-    const Vec4f weighted = left.weighted_areas() + right_weighted[b];
+    const Vec4f weighted = left.weighted_areas(block_shift) + right_weighted[b];
     // Lane 3 counts nothing, so it is never a candidate.
     const Vec4f both_sides = simd::greater(left.count, simd::splat(0u)) & simd::greater(all, left.count);
     const Vec4f better = both_sides & simd::less(weighted, best_weighted);

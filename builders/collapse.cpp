@@ -152,7 +152,7 @@ Bvh collapse_sah(const Bvh& bvh, uint32_t arity, const SahCost& cost, uint32_t m
     if (node.is_leaf()) {
       // An input leaf stays one leaf, whatever its size.
       refs[n] = node.prim_count;
-      std::fill(c, c + arity, cost.c_isect * node.prim_count * area);
+      std::fill(c, c + arity, cost.leaf_cost(node.prim_count) * area);
       std::fill(ch, ch + arity, kAsLeaf);
       continue;
     }
@@ -168,7 +168,7 @@ Bvh collapse_sah(const Bvh& bvh, uint32_t arity, const SahCost& cost, uint32_t m
         if (v < distribute[j]) distribute[j] = v, split_at[j] = static_cast<uint8_t>(k);
       }
     }
-    const double as_leaf = refs[n] <= max_leaf ? cost.c_isect * refs[n] * area : kInf;
+    const double as_leaf = refs[n] <= max_leaf ? cost.leaf_cost(refs[n]) * area : kInf;
     const double as_node = cost.c_trav * area + distribute[arity];
     c[0] = as_leaf <= as_node ? as_leaf : as_node;
     ch[0] = as_leaf <= as_node ? kAsLeaf : kAsNode;

@@ -64,6 +64,12 @@ std::string ParamSet::to_string() const {
   return out;
 }
 
+bool ParamSet::has(std::string_view name) const {
+  for (const auto& [spec, value] : values_)
+    if (spec.name == name) return true;
+  return false;
+}
+
 const std::string& ParamSet::get_choice(std::string_view name) const {
   for (const auto& [spec, value] : values_)
     if (spec.name == name) {

@@ -39,6 +39,8 @@ class ParamSet {
   double get(std::string_view name) const;
   uint32_t get_uint(std::string_view name) const { return static_cast<uint32_t>(get(name)); }
   float get_float(std::string_view name) const { return static_cast<float>(get(name)); }
+  /// Whether a parameter of that name is declared.
+  bool has(std::string_view name) const;
   /// The name chosen for a kChoice parameter.
   const std::string& get_choice(std::string_view name) const;
 

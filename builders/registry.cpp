@@ -31,8 +31,15 @@ TopDownConfig top_down_config(const ParamSet& p) {
   return {p.get_uint("min_leaf"), p.get_uint("max_leaf"), sah_cost_of(p)};
 }
 
-std::vector<ParamSpec> binned_params() {
+// Wide trees are traced by the bvh4/bvh8 layouts, which test 4 triangles at once (traversal/wide_bvh.h).
+constexpr uint32_t kWideSahBlock = 4;
+
+// sah_block is declared by the wide builders only; the binary ones cost every primitive (block 1).
+std::vector<ParamSpec> binned_params(uint32_t default_block = 0) {
   auto params = top_down_params();
+  if (default_block != 0)
+    params.push_back({"sah_block", ParamType::kInt, double(default_block), 1, 16,
+                      "primitives per leaf block in the SAH: a leaf costs c_isect per started block (power of two)"});
   const BinnedSahParams defaults;
   params.insert(params.begin(), {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins,
                                   "centroid bins per axis"},
@@ -61,7 +68,7 @@ BuilderInfo binned_sah_info() {
 }
 
 BuilderInfo wide_binned_sah_info() {
-  auto params = binned_params();
+  auto params = binned_params(kWideSahBlock);
   params.insert(params.begin(), arity_param());
   auto config = [](const ParamSet& p) {
     BinnedSahParams c = binned_config(p);
@@ -76,7 +83,7 @@ BuilderInfo wide_binned_sah_info() {
 }
 
 BuilderInfo wide_collapse_info() {
-  auto params = binned_params();
+  auto params = binned_params(kWideSahBlock);
   params.insert(params.begin(),
                 {arity_param(),
                  choice_param("method", {"sah", "greedy"}, 0,
@@ -91,14 +98,18 @@ BuilderInfo wide_collapse_info() {
             const BinnedSahParams binary = binned_config(p);
             const std::string& source = p.get_choice("source");
             Bvh tree;
+            // The sweep and the SBVH count primitives, not blocks, in their split searches: they build
+            // with block 1, and the collapse applies sah_block.
+            TopDownConfig per_prim = binary.top_down;
+            per_prim.cost.block = 1;
             if (source == "sweep_sah") {
-              tree = build_sweep_sah(input, {binary.top_down});
+              tree = build_sweep_sah(input, {per_prim});
             } else if (source == "sbvh") {
               // Spatial splits with sbvh's defaults for its own parameters (alpha, max_dup, ...).
               SbvhParams sbvh;
               sbvh.bins = binary.bins;
               sbvh.adaptive_bins = binary.adaptive_bins;
-              sbvh.top_down = binary.top_down;
+              sbvh.top_down = per_prim;
               tree = build_sbvh(input, sbvh);
             } else {
               tree = build_binned_sah(input, binary);
@@ -190,6 +201,10 @@ const BuilderInfo& find_builder(std::string_view name) {
   throw Error("unknown builder '" + std::string(name) + "' (known: " + known + ")");
 }
 
-SahCost sah_cost_of(const ParamSet& params) { return {params.get_float("c_trav"), params.get_float("c_isect")}; }
+SahCost sah_cost_of(const ParamSet& params) {
+  SahCost cost{params.get_float("c_trav"), params.get_float("c_isect")};
+  if (params.has("sah_block")) cost.block = params.get_uint("sah_block");
+  return cost;
+}
 
 }  // namespace sahbench

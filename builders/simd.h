@@ -127,6 +127,10 @@ inline Vec4i select(Vec4f mask, Vec4i a, Vec4i b) {
 inline Vec4f to_float(Vec4i a) {
   return {_mm_cvtepi32_ps(a.v)};
 }
+/// Logical shift right of each lane by `n` bits (n < 32).
+inline Vec4i shift_right(Vec4i a, uint32_t n) {
+  return {_mm_srl_epi32(a.v, _mm_cvtsi32_si128(static_cast<int>(n)))};
+}
 /// Truncation toward zero; NaN and values outside the int32 range give INT32_MIN (cvttps2dq).
 inline Vec4i truncate(Vec4f a) {
   return {_mm_cvttps_epi32(a.v)};
@@ -270,6 +274,9 @@ inline Vec4i select(Vec4f mask, Vec4i a, Vec4i b) {
 
 inline Vec4f to_float(Vec4i a) {
   return per_lane([&](int i) { return static_cast<float>(static_cast<int32_t>(a.v[i])); });
+}
+inline Vec4i shift_right(Vec4i a, uint32_t n) {
+  return per_lane_i([&](int i) { return a.v[i] >> n; });
 }
 inline Vec4i truncate(Vec4f a) {
   // The int32 range as floats: -2^31 is exact, and 2^31 is the first value past the end.

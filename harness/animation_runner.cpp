@@ -540,6 +540,7 @@ class AnimationRunner {
         row["sah_cost"] = fmt::format("{:.6f}", stats.sah_cost);
         row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
         row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
+        row["sah_block"] = std::to_string(cost.block);
         put_timing(row, "trace_mrays", trace_t);
         row["nodes_per_ray"] = fmt::format(
             "{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));

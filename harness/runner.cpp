@@ -38,7 +38,7 @@ namespace {
 // Columns written after DESIGN.md's (never renamed; these may grow).
 const std::vector<std::string>& extra_columns() {
   static const std::vector<std::string> columns = {"config", "seed", "scene_source", "scene_removed", "query",
-                                                   "embree_version", "notes", "build_isa", "bytes_per_tri"};
+                                                   "embree_version", "notes", "build_isa", "bytes_per_tri", "sah_block"};
   return columns;
 }
 
@@ -461,6 +461,7 @@ class ExperimentRunner {
         row["sah_cost"] = fmt::format("{:.6f}", stats.sah_cost);
         row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
         row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
+        row["sah_block"] = std::to_string(cost.block);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());
         put_timing(row, "trace_mrays", trace_t);

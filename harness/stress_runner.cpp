@@ -36,7 +36,7 @@ const std::vector<std::string>& extra_columns() {
       "config",        "case_kind",     "case_seed",          "case_size",
       "closed",        "scene_removed", "invalid_made",       "exact_hits",
       "must_hit_rays", "reference_ms",  "build_time_limit_s", "embree_version",
-      "notes"};
+      "notes",         "sah_block"};
   return columns;
 }
 
@@ -344,6 +344,7 @@ class StressRunner {
     row["sah_cost"] = fmt::format("{:.6g}", stats.sah_cost);
     row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
     row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
+    row["sah_block"] = std::to_string(cost.block);
 
     const std::vector<LayoutSpec> specs = layouts_for(bvh.arity, arities_with_variants);
     if (specs.empty()) {

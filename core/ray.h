@@ -17,6 +17,15 @@ struct Ray {
   float tmax = std::numeric_limits<float>::infinity();
 };
 
+/// Whether every kernel traces `ray`: a finite origin and direction and a non-NaN interval. Kernels
+/// report any other ray as a miss without traversing (an infinite component makes every slab distance
+/// NaN, which the box tests read as "inside", and would take a wide kernel into its empty child slots).
+inline bool traceable(const Ray& ray) {
+  auto finite = [](float x) { return x - x == 0.0f; };  // false for +-inf and NaN
+  return finite(ray.org.x) && finite(ray.org.y) && finite(ray.org.z) && finite(ray.dir.x) && finite(ray.dir.y) &&
+         finite(ray.dir.z) && ray.tmin == ray.tmin && ray.tmax == ray.tmax;
+}
+
 inline constexpr uint32_t kInvalidPrim = 0xFFFFFFFFu;
 
 /// Closest-hit result. `prim` is the scene triangle index, or kInvalidPrim for a miss. (u, v) are the

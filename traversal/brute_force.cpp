@@ -6,6 +6,7 @@ namespace sahbench {
 
 template <class TriangleTest>
 Hit brute_force_closest(std::span<const Triangle> triangles, const Ray& ray) {
+  if (!traceable(ray)) return {};
   const TriangleTest test(ray);
   Hit best;
   float best_t = ray.tmax;
@@ -22,6 +23,7 @@ Hit brute_force_closest(std::span<const Triangle> triangles, const Ray& ray) {
 
 template <class TriangleTest>
 bool brute_force_any(std::span<const Triangle> triangles, const Ray& ray) {
+  if (!traceable(ray)) return false;
   const TriangleTest test(ray);
   for (const Triangle& tri : triangles) {
     float t, u, v;

@@ -74,7 +74,7 @@ template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
 Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
              [[maybe_unused]] TraversalCounters* counters) {
   if constexpr (kCount) ++counters->rays;
-  if (bvh.nodes.empty()) return {};
+  if (bvh.nodes.empty() || !traceable(ray)) return {};
   const BoxTest box_test(ray);
   const TriangleTest triangle_test(ray);
   if constexpr (kCount) ++counters->box_tests;

@@ -12,6 +12,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 
 #include "core/ray.h"
@@ -56,13 +57,51 @@ inline WatertightShear watertight_shear(Vec3 dir) {
   return s;
 }
 
+/// Whether the float edge functions of the watertight test can be trusted: all finite and non-zero. A
+/// zero may be a rounded non-zero (the ray passes within rounding of an edge; Woop et al. section 4), and
+/// an infinite or NaN one comes from coordinates beyond float's range for products.
+inline bool watertight_float_ok(float e0, float e1, float e2) {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  return std::abs(e0) < kInf && std::abs(e1) < kInf && std::abs(e2) < kInf && e0 != 0.0f && e1 != 0.0f &&
+         e2 != 0.0f;
+}
+
+/// Whether the float determinant and scaled distance can be trusted: det a normal float (not subnormal,
+/// so 1 / det is finite) and the scaled distance finite.
+inline bool watertight_det_ok(float det, float scaled_t) {
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const float abs_det = std::abs(det);
+  return abs_det >= std::numeric_limits<float>::min() && abs_det < kInf && std::abs(scaled_t) < kInf;
+}
+
+/// The rest of the watertight test in double, from the float sheared vertices (a, b, c), when the float
+/// path cannot be trusted. A product of two floats is exact in double and the difference of two is
+/// rounded once, so each edge function's sign is exact (section 4) and two triangles sharing an edge
+/// still get opposite values for it; the distance is computed in double and rounded once. Used by
+/// WatertightTriangleTest and by the SIMD kernels' lanes (wide_kernels.inl repeats it, see there).
+inline bool watertight_in_double(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
+                                 float cz, float tmin, float tmax, float& t, float& u, float& v) {
+  const double e0 = static_cast<double>(cx) * by - static_cast<double>(cy) * bx;
+  const double e1 = static_cast<double>(ax) * cy - static_cast<double>(ay) * cx;
+  const double e2 = static_cast<double>(bx) * ay - static_cast<double>(by) * ax;
+  if ((e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0)) return false;
+  const double det = e0 + e1 + e2;
+  if (det == 0.0 || !std::isfinite(det)) return false;
+  const double distance = (e0 * az + e1 * bz + e2 * cz) / det;
+  t = static_cast<float>(distance);
+  if (!(t >= tmin && t <= tmax)) return false;
+  u = static_cast<float>(e1 / det);
+  v = static_cast<float>(e2 / det);
+  return true;
+}
+
 /// Watertight ray/triangle intersection of Woop, Benthin and Wald 2013, "Watertight Ray/Triangle
 /// Intersection" (JCGT 2(1)). The ray is turned into the +z axis by a permutation and a shear computed
 /// once per ray (section 3); the vertices are transformed by the same float operations for every
 /// triangle, so two triangles sharing an edge evaluate that edge's 2D edge function from identical
-/// inputs and cannot both miss a ray through it. An edge function that comes out exactly 0 is
-/// recomputed in double (section 4, exact since a product of two floats fits a double), so its sign is
-/// exact. A ray through a shared edge or vertex hits at least one of the triangles sharing it (unless
+/// inputs and cannot both miss a ray through it. Where an edge function comes out exactly 0, or the
+/// products leave float's range, the test is finished in double (section 4: a product of two floats is
+/// exact in double), so the signs stay exact. A ray through a shared edge or vertex hits at least one of the triangles sharing it (unless
 /// the edge is a silhouette seen along the ray, where the surface itself folds away).
 ///
 /// The argument needs fl(a*b) - fl(c*d) with both products rounded, so that swapping the two vertices of
@@ -82,26 +121,25 @@ class WatertightTriangleTest {
     const float ax = a[kx] - sx * a[kz], ay = a[ky] - sy * a[kz];
     const float bx = b[kx] - sx * b[kz], by = b[ky] - sy * b[kz];
     const float cx = c[kx] - sx * c[kz], cy = c[ky] - sy * c[kz];
+    const float az = sz * a[kz], bz = sz * b[kz], cz = sz * c[kz];
 
     // Scaled barycentrics: e0 weights v0 (edge v1-v2), e1 weights v1 (edge v2-v0), e2 weights v2.
-    float e0 = cx * by - cy * bx;
-    float e1 = ax * cy - ay * cx;
-    float e2 = bx * ay - by * ax;
-    if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f) [[unlikely]] {
-      // The ray passes (to float precision) through an edge: decide its side exactly (section 4).
-      e0 = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
-      e1 = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
-      e2 = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
-    }
-    // Inside when no edge function has the wrong sign; zeros (on an edge) count as inside.
+    const float e0 = cx * by - cy * bx;
+    const float e1 = ax * cy - ay * cx;
+    const float e2 = bx * ay - by * ax;
+    // The ray passes (to float precision) through an edge, or the products left float's range
+    // (coordinates beyond about 1e12 overflow, edges below about 1e-19 underflow): decide in double.
+    if (!watertight_float_ok(e0, e1, e2)) [[unlikely]]
+      return watertight_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, tmin, tmax, t, u, v);
+    // Inside when no edge function has the wrong sign.
     if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) return false;
     const float det = e0 + e1 + e2;
-    if (det == 0.0f) return false;
+    const float scaled_t = e0 * az + e1 * bz + e2 * cz;
+    if (!watertight_det_ok(det, scaled_t)) [[unlikely]]
+      return watertight_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, tmin, tmax, t, u, v);
 
     // Scaled distance T = t * det. Compare it with [tmin, tmax] * |det| before dividing, so misses
     // never pay for the division (section 3); flipping both signs makes det positive.
-    const float az = sz * a[kz], bz = sz * b[kz], cz = sz * c[kz];
-    const float scaled_t = e0 * az + e1 * bz + e2 * cz;
     const float abs_det = std::abs(det);
     const float signed_t = det < 0.0f ? -scaled_t : scaled_t;
     if (!(signed_t >= tmin * abs_det && signed_t <= tmax * abs_det)) return false;

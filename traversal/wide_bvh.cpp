@@ -73,6 +73,8 @@ WideRay make_wide_ray(const Ray& ray) {
   }
   r.tmin = ray.tmin;
   r.tmax = ray.tmax;
+  // An untraceable ray (core/ray.h) gets an empty interval, which no box test can widen, NaN or not.
+  if (!traceable(ray)) r.tmin = 1.0f, r.tmax = 0.0f;
   const WatertightShear shear = watertight_shear(ray.dir);
   r.kx = shear.kx, r.ky = shear.ky, r.kz = shear.kz;
   r.sx = shear.sx, r.sy = shear.sy, r.sz = shear.sz;

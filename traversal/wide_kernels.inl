@@ -110,6 +110,37 @@ inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, fl
 
 #endif
 
+// The watertight test's double-precision finish, for lanes whose float edge functions are zero or out
+// of range (triangle_tests.h: watertight_in_double, repeated here because this file may call nothing
+// from shared headers; the layout tests check that both give the same answers bit for bit).
+inline bool lane_in_double(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy, float cz,
+                           float tmin, float tmax, float& t, float& u, float& v) {
+  const double e0 = static_cast<double>(cx) * by - static_cast<double>(cy) * bx;
+  const double e1 = static_cast<double>(ax) * cy - static_cast<double>(ay) * cx;
+  const double e2 = static_cast<double>(bx) * ay - static_cast<double>(by) * ax;
+  if ((e0 < 0.0 || e1 < 0.0 || e2 < 0.0) && (e0 > 0.0 || e1 > 0.0 || e2 > 0.0)) return false;
+  const double det = e0 + e1 + e2;
+  if (det == 0.0 || !(det - det == 0.0)) return false;  // zero, infinite or NaN
+  const double distance = (e0 * az + e1 * bz + e2 * cz) / det;
+  t = static_cast<float>(distance);
+  if (!(t >= tmin && t <= tmax)) return false;
+  u = static_cast<float>(e1 / det);
+  v = static_cast<float>(e2 / det);
+  return true;
+}
+
+// triangle_tests.h's watertight_float_ok and watertight_det_ok, for one lane.
+inline bool lane_float_ok(float e0, float e1, float e2) {
+  constexpr float kInf = __builtin_inff();
+  return __builtin_fabsf(e0) < kInf && __builtin_fabsf(e1) < kInf && __builtin_fabsf(e2) < kInf && e0 != 0.0f &&
+         e1 != 0.0f && e2 != 0.0f;
+}
+inline bool lane_det_ok(float det, float scaled_t) {
+  constexpr float kInf = __builtin_inff();
+  const float abs_det = __builtin_fabsf(det);
+  return abs_det >= __FLT_MIN__ && abs_det < kInf && __builtin_fabsf(scaled_t) < kInf;
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Ray against the four triangles of a block: bit i is set when lane i is hit within [tmin, tmax], with
 // its t, u, v in the arrays. Watertight: Woop et al. 2013 as WatertightTriangleTest; Möller–Trumbore as
@@ -130,19 +161,21 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
     const float ax = a_x - r.sx * a_z, ay = a_y - r.sy * a_z;
     const float bx = b_x - r.sx * b_z, by = b_y - r.sy * b_z;
     const float cx = c_x - r.sx * c_z, cy = c_y - r.sy * c_z;
-    float e0 = cx * by - cy * bx;
-    float e1 = ax * cy - ay * cx;
-    float e2 = bx * ay - by * ax;
-    if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f) {
-      e0 = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
-      e1 = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
-      e2 = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
+    const float az = r.sz * a_z, bz = r.sz * b_z, cz = r.sz * c_z;
+    const float e0 = cx * by - cy * bx;
+    const float e1 = ax * cy - ay * cx;
+    const float e2 = bx * ay - by * ax;
+    if (!lane_float_ok(e0, e1, e2)) {
+      if (lane_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, tmin, tmax, t_out[i], u_out[i], v_out[i])) mask |= 1u << i;
+      continue;
     }
     if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) continue;
     const float det = e0 + e1 + e2;
-    if (det == 0.0f) continue;
-    const float az = r.sz * a_z, bz = r.sz * b_z, cz = r.sz * c_z;
     const float scaled_t = e0 * az + e1 * bz + e2 * cz;
+    if (!lane_det_ok(det, scaled_t)) {
+      if (lane_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, tmin, tmax, t_out[i], u_out[i], v_out[i])) mask |= 1u << i;
+      continue;
+    }
     const float abs_det = det < 0.0f ? -det : det;
     const float signed_t = det < 0.0f ? -scaled_t : scaled_t;
     if (!(signed_t >= tmin * abs_det && signed_t <= tmax * abs_det)) continue;
@@ -200,7 +233,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
                                            float* t_out, float* u_out, float* v_out) {
   const __m128 valid = lanes_valid(b);
   const __m128 ox = _mm_set1_ps(r.org[r.kx]), oy = _mm_set1_ps(r.org[r.ky]), oz = _mm_set1_ps(r.org[r.kz]);
-  const __m128 sx = _mm_set1_ps(r.sx), sy = _mm_set1_ps(r.sy);
+  const __m128 sx = _mm_set1_ps(r.sx), sy = _mm_set1_ps(r.sy), sz = _mm_set1_ps(r.sz);
   // Vertices relative to the origin, in the ray's permuted axes, then sheared.
   const __m128 a_x = _mm_sub_ps(_mm_load_ps(b.v0[r.kx]), ox), a_y = _mm_sub_ps(_mm_load_ps(b.v0[r.ky]), oy),
                a_z = _mm_sub_ps(_mm_load_ps(b.v0[r.kz]), oz);
@@ -211,54 +244,64 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
   const __m128 ax = _mm_sub_ps(a_x, _mm_mul_ps(sx, a_z)), ay = _mm_sub_ps(a_y, _mm_mul_ps(sy, a_z));
   const __m128 bx = _mm_sub_ps(b_x, _mm_mul_ps(sx, b_z)), by = _mm_sub_ps(b_y, _mm_mul_ps(sy, b_z));
   const __m128 cx = _mm_sub_ps(c_x, _mm_mul_ps(sx, c_z)), cy = _mm_sub_ps(c_y, _mm_mul_ps(sy, c_z));
-  __m128 e0 = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
-  __m128 e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
-  __m128 e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+  const __m128 az = _mm_mul_ps(sz, a_z), bz = _mm_mul_ps(sz, b_z), cz = _mm_mul_ps(sz, c_z);
+  const __m128 e0 = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+  const __m128 e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+  const __m128 e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
 
   const __m128 zero = _mm_setzero_ps();
-  const __m128 on_edge = _mm_and_ps(
-      valid, _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)), _mm_cmpeq_ps(e2, zero)));
-  if (const int lanes = _mm_movemask_ps(on_edge)) [[unlikely]] {
-    // Through an edge to float precision: those lanes' edge functions again in double (section 4).
-    alignas(16) float axs[4], ays[4], bxs[4], bys[4], cxs[4], cys[4], f0[4], f1[4], f2[4];
-    _mm_store_ps(axs, ax), _mm_store_ps(ays, ay), _mm_store_ps(bxs, bx), _mm_store_ps(bys, by);
-    _mm_store_ps(cxs, cx), _mm_store_ps(cys, cy), _mm_store_ps(f0, e0), _mm_store_ps(f1, e1), _mm_store_ps(f2, e2);
-    for (int i = 0; i < 4; ++i) {
-      if (!(lanes & (1 << i))) continue;
-      f0[i] = static_cast<float>(static_cast<double>(cxs[i]) * bys[i] - static_cast<double>(cys[i]) * bxs[i]);
-      f1[i] = static_cast<float>(static_cast<double>(axs[i]) * cys[i] - static_cast<double>(ays[i]) * cxs[i]);
-      f2[i] = static_cast<float>(static_cast<double>(bxs[i]) * ays[i] - static_cast<double>(bys[i]) * axs[i]);
-    }
-    e0 = _mm_load_ps(f0), e1 = _mm_load_ps(f1), e2 = _mm_load_ps(f2);
-  }
+  const __m128 sign = _mm_set1_ps(-0.0f);
+  const __m128 inf = _mm_set1_ps(__builtin_inff());
+  auto finite = [&](__m128 x) { return _mm_cmplt_ps(_mm_andnot_ps(sign, x), inf); };
+  // Lanes the float path cannot decide (lane_float_ok): finished in double below.
+  const __m128 float_ok =
+      _mm_and_ps(_mm_and_ps(_mm_and_ps(finite(e0), finite(e1)), finite(e2)),
+                 _mm_and_ps(_mm_and_ps(_mm_cmpneq_ps(e0, zero), _mm_cmpneq_ps(e1, zero)), _mm_cmpneq_ps(e2, zero)));
+  int in_double = _mm_movemask_ps(_mm_andnot_ps(float_ok, valid));
   // Inside when no edge function has the wrong sign.
   const __m128 some_negative =
       _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
   const __m128 some_positive =
       _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
+  __m128 hit = _mm_andnot_ps(_mm_and_ps(some_negative, some_positive), _mm_and_ps(valid, float_ok));
   const __m128 det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-  // det == 0 misses; a NaN det passes here, as in the scalar test, and fails the distance test below.
-  __m128 hit = _mm_andnot_ps(_mm_and_ps(some_negative, some_positive), valid);
-  hit = _mm_andnot_ps(_mm_cmpeq_ps(det, zero), hit);
-  if (!_mm_movemask_ps(hit)) return 0;
-
-  const __m128 sz = _mm_set1_ps(r.sz);
-  const __m128 az = _mm_mul_ps(sz, a_z), bz = _mm_mul_ps(sz, b_z), cz = _mm_mul_ps(sz, c_z);
   const __m128 scaled_t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
-  const __m128 sign = _mm_set1_ps(-0.0f);
+  // lane_det_ok: det normal and the scaled distance finite, else the lane is finished in double.
   const __m128 abs_det = _mm_andnot_ps(sign, det);
-  const __m128 signed_t = _mm_xor_ps(scaled_t, _mm_and_ps(det, sign));
-  const __m128 lo = _mm_set1_ps(tmin), hi = _mm_set1_ps(tmax);
-  hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(signed_t, _mm_mul_ps(lo, abs_det)),
-                                   _mm_cmple_ps(signed_t, _mm_mul_ps(hi, abs_det))));
-  if (!_mm_movemask_ps(hit)) return 0;
-  const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
-  const __m128 t = _mm_mul_ps(scaled_t, inv_det);
-  hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(t, lo), _mm_cmple_ps(t, hi)));
-  _mm_storeu_ps(t_out, t);
-  _mm_storeu_ps(u_out, _mm_mul_ps(e1, inv_det));
-  _mm_storeu_ps(v_out, _mm_mul_ps(e2, inv_det));
-  return static_cast<uint32_t>(_mm_movemask_ps(hit));
+  const __m128 det_ok = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(abs_det, _mm_set1_ps(__FLT_MIN__)), _mm_cmplt_ps(abs_det, inf)),
+                                   finite(scaled_t));
+  in_double |= _mm_movemask_ps(_mm_andnot_ps(det_ok, hit));
+  hit = _mm_and_ps(hit, det_ok);
+
+  uint32_t mask = 0;
+  if (_mm_movemask_ps(hit)) {
+    // Scaled distance T = t * det, compared with [tmin, tmax] * |det| before dividing (section 3).
+    const __m128 signed_t = _mm_xor_ps(scaled_t, _mm_and_ps(det, sign));
+    const __m128 lo = _mm_set1_ps(tmin), hi = _mm_set1_ps(tmax);
+    hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(signed_t, _mm_mul_ps(lo, abs_det)),
+                                     _mm_cmple_ps(signed_t, _mm_mul_ps(hi, abs_det))));
+    if (_mm_movemask_ps(hit)) {
+      const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
+      const __m128 t = _mm_mul_ps(scaled_t, inv_det);
+      hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(t, lo), _mm_cmple_ps(t, hi)));
+      _mm_storeu_ps(t_out, t);
+      _mm_storeu_ps(u_out, _mm_mul_ps(e1, inv_det));
+      _mm_storeu_ps(v_out, _mm_mul_ps(e2, inv_det));
+      mask = static_cast<uint32_t>(_mm_movemask_ps(hit));
+    }
+  }
+  if (in_double) [[unlikely]] {
+    alignas(16) float lanes[9][4];
+    const __m128 regs[9] = {ax, ay, az, bx, by, bz, cx, cy, cz};
+    for (int k = 0; k < 9; ++k) _mm_store_ps(lanes[k], regs[k]);
+    for (int i = 0; i < 4; ++i) {
+      if (!(in_double & (1 << i))) continue;
+      if (lane_in_double(lanes[0][i], lanes[1][i], lanes[2][i], lanes[3][i], lanes[4][i], lanes[5][i], lanes[6][i],
+                         lanes[7][i], lanes[8][i], tmin, tmax, t_out[i], u_out[i], v_out[i]))
+        mask |= 1u << i;
+    }
+  }
+  return mask;
 }
 
 inline uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,

@@ -155,6 +155,32 @@ TEST(TravTriangleWatertight, SharedEdgeOfTwoTriangles) {
   EXPECT_TRUE(run<WatertightTriangleTest>(ray, quad[1]).hit);
 }
 
+TEST(TravTriangleWatertight, HugeAndTinyCoordinatesStayWatertightAndFinite) {
+  // Beyond about 1e12 from the origin the float edge functions overflow, below about 1e-19 their
+  // products underflow: the test finishes such triangles in double instead of leaking or returning inf.
+  // Powers of two keep every ray below exact: it passes through the shared edge at t = 1.
+  for (float scale : {0x1p66f, 0x1p100f, 0x1p-66f, 0x1p-83f}) {
+    SCOPED_TRACE(scale);
+    const Vec3 a{0.0f, 0.0f, scale}, b{scale, 0.0f, scale}, c{scale, scale, scale}, d{0.0f, scale, scale};
+    const std::vector<Triangle> quad{{a, b, c}, {a, c, d}};
+    // The unit quad's rays, scaled (rays_through's plane test wants unit-sized triangles).
+    const std::vector<Triangle> unit_quad{{{0, 0, 1}, {1, 0, 1}, {1, 1, 1}}, {{0, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
+    std::vector<Ray> rays;
+    for (float s : {0.5f, 0.25f, 0.375f})
+      for (const Ray& unit : rays_through({s, s, 1.0f}, unit_quad)) {
+        if (unit.dir.z == 0.0f) continue;  // in the quad's plane
+        rays.push_back(make_ray(unit.org * scale, unit.dir * scale));
+      }
+    EXPECT_EQ(leaks(quad, rays), 0);
+    // Straight down the shared edge's midpoint from the plane z = 0: t is the quad's height.
+    const auto hit = run<WatertightTriangleTest>(make_ray({0.5f * scale, 0.5f * scale, 0.0f}, {0.0f, 0.0f, 1.0f}), quad[0]);
+    ASSERT_TRUE(hit.hit);
+    EXPECT_EQ(hit.t, scale);
+    // A ray a whole triangle away still misses.
+    EXPECT_FALSE(run<WatertightTriangleTest>(make_ray({2.5f * scale, 0.5f * scale, 0.0f}, {0.0f, 0.0f, 1.0f}), quad[0]).hit);
+  }
+}
+
 TEST(TravTriangleWatertight, SharedVertexOfAFan) {
   // Eight triangles around the vertex (0, 0, 1), with both windings.
   const Vec3 center{0.0f, 0.0f, 1.0f};

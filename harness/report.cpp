@@ -9,6 +9,7 @@
 #include <map>
 #include <optional>
 #include <ostream>
+#include <set>
 #include <sstream>
 
 #include "core/error.h"
@@ -119,13 +120,22 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
 
   std::vector<std::string> shared;
   const auto short_label = short_labels(group, shared);
-  const std::string isa = field(first, "isa");
+  // The compile target of the run; each row's kernel ISA is in the CSV's isa column (the kernel-ISA note
+  // below lists them).
+  std::string isa = field(first, "build_isa");
+  if (isa.empty()) isa = field(first, "isa");
+  std::set<std::string> kernel_isas;
+  for (const auto* row : group)
+    if (const std::string k = field(*row, "isa"); !k.empty()) kernel_isas.insert(k);
+  std::string kernels;
+  for (const auto& k : kernel_isas) kernels += (kernels.empty() ? "" : ", ") + k;
   table.caption = fmt::format(
-      "{}; {}{}, commit {}; medians of {} builds and {} traces. In parentheses: ratio to Embree "
+      "{}; {}{}, commit {}; medians of {} builds and {} traces; kernels: {}. In parentheses: ratio to Embree "
       "(quality=medium, rtcIntersect1/rtcOccluded1) in the same run. Best of each column in bold: least build "
       "time, memory and SAH cost, most rays/s.",
-      table.title, field(first, "cpu", "unknown CPU"), isa.empty() ? "" : " (" + isa + ")",
-      field(first, "git_commit", "unknown"), field(first, "build_reps", "?"), field(first, "trace_reps", "?"));
+      table.title, field(first, "cpu", "unknown CPU"), isa.empty() ? "" : " (built for " + isa + ")",
+      field(first, "git_commit", "unknown"), field(first, "build_reps", "?"), field(first, "trace_reps", "?"),
+      kernels.empty() ? "unknown" : kernels);
   // The Markdown rows name every parameter; the LaTeX rows only the varying ones, so name the rest here.
   if (format == ReportFormat::kLatex && !shared.empty()) {
     table.caption += " Parameters common to a builder's rows:";

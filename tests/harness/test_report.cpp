@@ -29,7 +29,8 @@ CsvRow make_row(const std::string& builder, const std::string& params, const std
                 const std::string& ray_set, double build_ms, double mem_bytes, const std::string& sah, double mrays,
                 const std::string& frame = "0") {
   return {{"run_id", "r1"},          {"git_commit", "abc123"},       {"cpu", "Test CPU 9000"},
-          {"isa", "avx2"},           {"compiler", "gcc"},            {"threads", "2"},
+          {"isa", "avx2"},           {"build_isa", "avx512"},        {"compiler", "gcc"},
+          {"threads", "2"},
           {"scene", "proc:soup"},    {"scene_triangles", "100"},     {"frame", frame},
           {"builder", builder},      {"builder_params", params},     {"layout", layout},
           {"build_ms_median", std::to_string(build_ms)},             {"build_reps", "5"},
@@ -41,7 +42,9 @@ CsvRow make_row(const std::string& builder, const std::string& params, const std
 // Embree medium (the anchor), two binned runs (one faster, one smaller), a sweep run with the lowest SAH.
 std::filesystem::path write_results(const std::string& name) {
   const auto path = temp_csv(name);
-  CsvWriter w(path, design_columns());
+  std::vector<std::string> columns = design_columns();
+  columns.push_back("build_isa");
+  CsvWriter w(path, columns);
   for (const std::string rs : {"primary", "shadow"}) {
     w.append(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 4.0 * (1 << 20), "", rs == "primary" ? 8.0 : 4.0));
     w.append(make_row("binned_sah", "bins=8;max_leaf=8", "bvh2", rs, 5.0, 2.0 * (1 << 20), "40.5", 2.0));
@@ -66,8 +69,8 @@ TEST(Report, MarkdownMarksTheBestOfEachColumnWithRatiosAndCaption) {
       << md;
   EXPECT_NE(md.find("| embree [quality=medium] | embree_1 | 10.0 (1.00x) | 4.0 (1.00x) | - | 8.00 (1.00x) | 4.00 (1.00x) |"),
             std::string::npos) << md;
-  EXPECT_NE(md.find("Table: proc:soup (100 triangles), 2 threads; Test CPU 9000 (avx2), commit abc123; medians of 5 builds "
-                    "and 7 traces."),
+  EXPECT_NE(md.find("Table: proc:soup (100 triangles), 2 threads; Test CPU 9000 (built for avx512), commit abc123; "
+                    "medians of 5 builds and 7 traces; kernels: avx2."),
             std::string::npos) << md;
 }
 
@@ -86,7 +89,8 @@ TEST(Report, LatexIsABooktabsTableWithEscapedTextAndShortLabels) {
             std::string::npos) << tex;
   EXPECT_NE(tex.find("    sweep\\_sah & bvh2\\_packed & "), std::string::npos) << tex;
   EXPECT_NE(tex.find("binned\\_sah max\\_leaf=8"), std::string::npos) << tex;
-  EXPECT_NE(tex.find("\\caption{proc:soup (100 triangles), 2 threads; Test CPU 9000 (avx2), commit abc123"), std::string::npos)
+  EXPECT_NE(tex.find("\\caption{proc:soup (100 triangles), 2 threads; Test CPU 9000 (built for avx512), commit abc123"),
+            std::string::npos)
       << tex;
   EXPECT_EQ(tex.find("**"), std::string::npos) << tex;
   // Every row ends with \\ and has one & per column boundary (2 label columns + 5 numeric columns).

@@ -226,7 +226,8 @@ TEST(Layouts, EmptyTreeMissesEverything) {
   const std::vector<Triangle> none;
   const auto rays = test::random_rays(test::random_triangles(10, 1), 50, 2);
   for (const LayoutInfo& layout : layouts()) {
-    const auto compiled = compile_layout(layout.name, Bvh{{}, {}, layout.arity}, none);
+    const Bvh empty{{}, {}, layout.arity};  // bvh2 borrows the tree: it must outlive the layout
+    const auto compiled = compile_layout(layout.name, empty, none);
     std::vector<Hit> hits(rays.size(), Hit{7, 1.0f, 0, 0});
     std::vector<uint8_t> occluded(rays.size(), 1);
     compiled->trace_closest(rays, hits);

@@ -91,12 +91,7 @@ inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, fl
       t_far = _mm256_min_ps(t1, t_far);
     }
     _mm256_storeu_ps(t_entry, t_near);
-#if defined(SAHBENCH_WIDE_AVX512)
-    // AVX-512VL compares straight into a mask register.
-    return static_cast<uint32_t>(_mm256_cmp_ps_mask(t_near, t_far, _CMP_LE_OQ));
-#else
     return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(t_near, t_far, _CMP_LE_OQ)));
-#endif
 #else
     // SSE: the two halves of the eight children. planes[p] is 8 floats; as [4]-rows, plane p's first
     // half is row 2p and its second half row 2p + 1.
@@ -389,6 +384,84 @@ inline bool intersect_root(const float* planes, const WideRay& r, float& t_entry
   return t_near <= t_far;
 }
 
+// A float's bits as an unsigned integer with the same order (negative values flipped whole, positive
+// ones with the sign bit set), so distances sort as integers.
+inline uint32_t ordered_bits(float x) {
+  const uint32_t bits = __builtin_bit_cast(uint32_t, x);
+  return bits ^ ((bits >> 31) ? 0xffffffffu : 0x80000000u);
+}
+
+inline void compare_swap(uint64_t& a, uint64_t& b) {
+  const uint64_t lo = a < b ? a : b, hi = a < b ? b : a;
+  a = lo;
+  b = hi;
+}
+
+// Sorts keys[0, k) ascending, 2 <= k <= N, without branches on the keys: unused places are filled with
+// the largest key and the whole array goes through a sorting network, Knuth's (TAOCP vol. 3, 5.3.4)
+// optimal ones for 4 (5 comparators) and 8 (19 comparators) inputs. The next node's address waits for
+// this sort, so it is kept short and free of mispredicted branches.
+template <uint32_t N>
+inline void sort_keys(uint64_t* keys, uint32_t k) {
+  constexpr uint64_t kLast = ~uint64_t{0};
+  if (N == 4 || k <= 4) {
+    for (uint32_t j = k; j < 4; ++j) keys[j] = kLast;
+    compare_swap(keys[0], keys[1]);
+    compare_swap(keys[2], keys[3]);
+    compare_swap(keys[0], keys[2]);
+    compare_swap(keys[1], keys[3]);
+    compare_swap(keys[1], keys[2]);
+    return;
+  }
+  if constexpr (N == 8) {
+    for (uint32_t j = k; j < 8; ++j) keys[j] = kLast;
+    constexpr uint8_t kNetwork[19][2] = {{0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {0, 1}, {2, 3},
+                                         {4, 5}, {6, 7}, {2, 4}, {3, 5}, {1, 4}, {3, 6}, {1, 2}, {3, 4}, {5, 6}};
+    for (const auto& [a, b] : kNetwork) compare_swap(keys[a], keys[b]);
+  }
+}
+
+// A child's node, or its leaf's first block, fetched ahead of its visit.
+template <uint32_t N>
+inline void prefetch_slot(const WideNode<N>* nodes, const TriangleBlock* blocks, uint32_t child, uint32_t count) {
+  const char* p = count == 0 ? reinterpret_cast<const char*>(nodes + child)
+                             : reinterpret_cast<const char*>(blocks + child);
+  __builtin_prefetch(p);
+  __builtin_prefetch(p + 64);
+  __builtin_prefetch(p + 128);
+  if (N == 8 || count != 0) __builtin_prefetch(p + 192);
+}
+
+// The children of `node` that the ray enters (bit i of `mask`, entered at t_entry[i]): returns the one
+// to visit next and pushes the others. One child, the common case below the top levels, goes straight.
+// Two or more are sorted nearest first by a 64-bit key, the entry distance as an ordered integer above
+// and the slot below (ties go to the higher slot, as in bvh2_traversal.h, so both kernels visit the same
+// nodes); the rest are pushed farthest first and fetched ahead. Any-hit is sorted too: on Sponza's
+// shadow rays storage order is 1.7x slower (bvh2_traversal.h).
+template <uint32_t N>
+inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry, const WideNode<N>* nodes,
+                              const TriangleBlock* blocks, WideStackEntry* stack, uint32_t& size) {
+  if ((mask & (mask - 1)) == 0) {
+    const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
+    return {node.child[i], node.count[i], t_entry[i]};
+  }
+  uint64_t keys[N < 4 ? 4 : N];
+  uint32_t k = 0;
+  for (uint32_t m = mask; m; m &= m - 1) {
+    const uint32_t i = static_cast<uint32_t>(__builtin_ctz(m));
+    // + 0.0f turns -0 into +0, which compare equal as floats.
+    keys[k++] = (static_cast<uint64_t>(ordered_bits(t_entry[i] + 0.0f)) << 32) | (N - 1 - i);
+    prefetch_slot(nodes, blocks, node.child[i], node.count[i]);
+  }
+  sort_keys<N>(keys, k);
+  for (uint32_t j = k - 1; j > 0; --j) {
+    const uint32_t i = N - 1 - static_cast<uint32_t>(keys[j]);
+    stack[size++] = {node.child[i], node.count[i], t_entry[i]};
+  }
+  const uint32_t i = N - 1 - static_cast<uint32_t>(keys[0]);
+  return {node.child[i], node.count[i], t_entry[i]};
+}
+
 template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>
 inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const TriangleBlock* blocks, const WideRay& r,
                      WideCounts* counts) {
@@ -423,27 +496,16 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
       }
     } else {
       const WideNode<N>& node = nodes[entry.child];
+      // The child and count line is read only after the box test has picked a child: ask for it now, so
+      // that it arrives with the planes rather than one memory latency after them.
+      __builtin_prefetch(node.child);
       if constexpr (kCount) ++counts->inner_visits;
       alignas(32) float t_entry[N];
       uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
-      if (mask != 0 && (mask & (mask - 1)) == 0) {
-        // One child entered, the most common case below the top levels: go straight to it.
-        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
-        entry = {node.child[i], node.count[i], t_entry[i]};
+      if (mask != 0) {
+        // Continue with the nearest child entered; the others go on the stack, farthest deepest.
+        entry = descend<N>(node, mask, t_entry, nodes, blocks, stack, size);
         continue;
-      }
-      const uint32_t base = size;
-      for (; mask; mask &= mask - 1) {
-        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
-        const WideStackEntry child{node.child[i], node.count[i], t_entry[i]};
-        // Insertion sort into this node's part of the stack, nearest on top; for any hit too, since an
-        // occluder tends to be near (bvh2_traversal.h).
-        uint32_t slot = size++;
-        while (slot > base && stack[slot - 1].t_entry < child.t_entry) {
-          stack[slot] = stack[slot - 1];
-          --slot;
-        }
-        stack[slot] = child;
       }
     }
     // The next entry, skipping those entered beyond the closest hit so far (nothing inside can be closer;

@@ -98,18 +98,20 @@ BuilderInfo wide_collapse_info() {
             const BinnedSahParams binary = binned_config(p);
             const std::string& source = p.get_choice("source");
             Bvh tree;
-            // The sweep and the SBVH count primitives, not blocks, in their split searches: they build
-            // with block 1, and the collapse applies sah_block.
-            TopDownConfig per_prim = binary.top_down;
-            per_prim.cost.block = 1;
             if (source == "sweep_sah") {
+              // The sweep counts primitives, not blocks, in its split search: it builds with block 1, and
+              // the collapse applies sah_block.
+              TopDownConfig per_prim = binary.top_down;
+              per_prim.cost.block = 1;
               tree = build_sweep_sah(input, {per_prim});
             } else if (source == "sbvh") {
-              // Spatial splits with sbvh's defaults for its own parameters (alpha, max_dup, ...).
+              // Spatial splits with sbvh's defaults for its own parameters (alpha, max_dup, ...), costed
+              // per block like the binned source: built per primitive, the SBVH's small leaves collapsed
+              // to 60% more wide leaves than the binned tree's on the same scene, and traced 5-13% slower.
               SbvhParams sbvh;
               sbvh.bins = binary.bins;
               sbvh.adaptive_bins = binary.adaptive_bins;
-              sbvh.top_down = per_prim;
+              sbvh.top_down = binary.top_down;
               tree = build_sbvh(input, sbvh);
             } else {
               tree = build_binned_sah(input, binary);

@@ -484,6 +484,7 @@ class SbvhSplitter {
     std::array<Box4, kMaxBins> right_box;
     std::array<float, kMaxBins> right_area;
     std::array<uint32_t, kMaxBins> right_count;
+    const SahCost& cost = params_.top_down.cost;
     for (int a = 0; a < 3; ++a) {
       if (!grid.usable(a)) continue;
       const SlabBin* axis = bins.bin[a];
@@ -504,8 +505,10 @@ class SbvhSplitter {
         const uint32_t rc = right_count[j];
         // Every reference is counted on at least one side, so the duplicates are left + right - n.
         if (left_count == 0 || rc == 0 || uint64_t{left_count} + rc - n > range.spare) continue;
-        const float weighted =
-            left.aabb().half_area() * static_cast<float>(left_count) + right_area[j] * static_cast<float>(rc);
+        // Counted in leaf blocks (SahCost::block), as the object splits are, so that a source for the wide
+        // collapse fills its blocks.
+        const float weighted = left.aabb().half_area() * static_cast<float>(cost.blocks(left_count)) +
+                               right_area[j] * static_cast<float>(cost.blocks(rc));
         if (weighted < best_weighted) {
           best_weighted = weighted;
           best.axis = static_cast<uint32_t>(a);

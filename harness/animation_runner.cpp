@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
@@ -25,14 +24,14 @@
 #include "harness/layout.h"
 #include "harness/memory_tracker.h"
 #include "harness/ray_sets.h"
+#include "harness/reference.h"
+#include "harness/result_row.h"
 #include "harness/timing.h"
 #include "scenes/animation.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_path.h"
-#include "traversal/brute_force.h"
-#include "traversal/hit_compare.h"
 
 namespace sahbench {
 namespace {
@@ -104,13 +103,6 @@ std::vector<AnimatedBuilder> expand_builders(const ExperimentConfig& cfg) {
   return out;
 }
 
-// The reference answers for one ray set: closest hits, or occlusion flags for any-hit sets.
-struct Reference {
-  std::string name = "none";
-  std::vector<Hit> hits;
-  std::vector<uint8_t> occluded;
-};
-
 // One frame's triangles, rays and reference answers, shared by every cell of the frame.
 struct FrameData {
   uint32_t index = 0;
@@ -134,12 +126,6 @@ std::string now_stamp() {
 std::string format_duration(double seconds) {
   const auto s = static_cast<long>(std::lround(seconds));
   return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
-}
-
-// mem_bytes per scene triangle (as runner.cpp writes it).
-std::string bytes_per_triangle(std::size_t bytes, const Scene& scene) {
-  if (scene.triangles.empty()) return "";
-  return fmt::format("{:.2f}", static_cast<double>(bytes) / static_cast<double>(scene.triangles.size()));
 }
 
 Aabb bounds_of(std::span<const Triangle> triangles) {
@@ -331,72 +317,14 @@ class AnimationRunner {
     frame.scene = animated.scene;
     frame.scene.camera = camera;
     animated.positions_at(time, frame.scene.triangles);
-    const Aabb box = bounds_of(frame.scene.triangles);
-    frame.diagonal = box.is_empty() ? 1.0f : length(box.extent());
+    frame.diagonal = scene_diagonal(frame.scene.triangles);
     GeneratedRaySets generated = generate_ray_sets(frame.scene, cfg_.ray_sets, cfg_.seed);
     frame.sets = std::move(generated.sets);
     frame.skipped = std::move(generated.skipped);
-    for (const auto& rs : frame.sets) frame.references.push_back(make_reference(frame.scene, rs));
+    for (const auto& rs : frame.sets)
+      frame.references.push_back(
+          make_reference(frame.scene, rs, cfg_.reference, cfg_.brute_force_max_triangles));
     return frame;
-  }
-
-  Reference make_reference(const Scene& scene, const RaySet& rs) const {
-    ReferencePolicy policy = cfg_.reference;
-    if (policy == ReferencePolicy::kAuto)
-      policy = scene.triangles.size() <= cfg_.brute_force_max_triangles ? ReferencePolicy::kBruteForce
-                                                                        : ReferencePolicy::kEmbree;
-    Reference ref;
-    const std::size_t n = rs.rays.size();
-    if (policy == ReferencePolicy::kBruteForce) {
-      ref.name = "brute_force";
-      if (rs.occlusion) {
-        ref.occluded.resize(n);
-        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-          ref.occluded[i] = brute_force_any(scene.triangles, rs.rays[i]);
-        });
-      } else {
-        ref.hits.resize(n);
-        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-          ref.hits[i] = brute_force_closest(scene.triangles, rs.rays[i]);
-        });
-      }
-    } else if (policy == ReferencePolicy::kEmbree) {
-      // Embree in robust mode on a device of its own, released before any timed cell (see runner.cpp:
-      // a live device without a thread count would lift the timed cells' limit).
-      ref.name = "embree_robust";
-      EmbreeDevice device(0);
-      EmbreeSceneOptions options;
-      options.robust = true;
-      const EmbreeScene reference_scene(device, scene.triangles, EmbreeQuality::kMedium, options);
-      if (rs.occlusion) {
-        ref.occluded.resize(n);
-        embree_occluded1(reference_scene, rs.rays, ref.occluded);
-      } else {
-        ref.hits.resize(n);
-        embree_intersect1(reference_scene, rs.rays, ref.hits);
-      }
-    }
-    return ref;
-  }
-
-  static uint64_t count_mismatches(const Reference& ref, const RaySet& rs, float diagonal,
-                                   std::span<const Hit> hits, std::span<const uint8_t> occluded) {
-    uint64_t m = 0;
-    if (!ref.hits.empty())
-      for (std::size_t i = 0; i < hits.size(); ++i)
-        m += !same_hit(hits[i], ref.hits[i], diagonal / length(rs.rays[i].dir));
-    if (!ref.occluded.empty())
-      for (std::size_t i = 0; i < occluded.size(); ++i) m += (occluded[i] != 0) != (ref.occluded[i] != 0);
-    return m;
-  }
-
-  template <class Trace>
-  TimingSummary time_trace(std::size_t rays, Trace trace) const {
-    for (int w = 0; w < cfg_.reps.trace_warmup; ++w) trace();
-    std::vector<double> mrays;
-    for (int r = 0; r < cfg_.reps.trace; ++r)
-      mrays.push_back(static_cast<double>(rays) / (time_ms(trace) * 1e3));
-    return summarize(mrays);
   }
 
   // Warm-up, then timed repetitions of `step`, each after an untimed `reset`; the heap peak of the first
@@ -437,12 +365,6 @@ class AnimationRunner {
     row["scene_removed"] = std::to_string(frame.scene.removed.total());
     row["embree_version"] = env_.embree;
     return row;
-  }
-
-  static void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) {
-    row[prefix + "_median"] = fmt::format("{:.4f}", t.median);
-    row[prefix + "_min"] = fmt::format("{:.4f}", t.min);
-    row[prefix + "_max"] = fmt::format("{:.4f}", t.max);
   }
 
   void append(CsvWriter& csv, const CsvRow& row, const std::string& what) {
@@ -520,27 +442,22 @@ class AnimationRunner {
         }
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
-          if (rs.occlusion)
-            compiled->trace_any(rs.rays, occluded);
-          else
-            compiled->trace_closest(rs.rays, hits);
-        });
+        const TimingSummary trace_t =
+            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
+              if (rs.occlusion)
+                compiled->trace_any(rs.rays, occluded);
+              else
+                compiled->trace_closest(rs.rays, hits);
+            });
         const TraceCounts counts =
             rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
         const Reference& ref = frame.references[s];
         row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);
         row["isa"] = compiled->isa();
         row["mem_bytes"] = std::to_string(compiled->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene);
+        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene.triangles.size());
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
-        row["leaves"] = std::to_string(stats.leaves);
-        row["max_depth"] = std::to_string(stats.max_depth);
-        row["refs_per_prim"] = fmt::format("{:.4f}", stats.refs_per_prim);
-        row["sah_cost"] = fmt::format("{:.6f}", stats.sah_cost);
-        row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
-        row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
-        row["sah_block"] = std::to_string(cost.block);
+        put_tree_stats(row, stats, cost);
         put_timing(row, "trace_mrays", trace_t);
         row["nodes_per_ray"] = fmt::format(
             "{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
@@ -597,26 +514,28 @@ class AnimationRunner {
         if (!wanted(scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
-          if (layout.packet_width == 1) {
-            if (rs.occlusion)
-              embree_occluded1(*built, rs.rays, occluded);
-            else
-              embree_intersect1(*built, rs.rays, hits);
-          } else {
-            if (rs.occlusion)
-              embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
-            else
-              embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
-          }
-        });
+        const TimingSummary trace_t =
+            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
+              if (layout.packet_width == 1) {
+                if (rs.occlusion)
+                  embree_occluded1(*built, rs.rays, occluded);
+                else
+                  embree_intersect1(*built, rs.rays, hits);
+              } else {
+                if (rs.occlusion)
+                  embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
+                else
+                  embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
+              }
+            });
         const Reference& ref = frame.references[s];
         CsvRow row = base_row(frame, b, threads);
         row["isa"] = "embree:" + embree_isa(device);
         row["layout"] = layout.name;
         put_timing(row, "build_ms", build_t);
         row["mem_bytes"] = std::to_string(built->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene);
+        row["bytes_per_tri"] =
+            bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene.triangles.size());
         row["mem_peak_bytes"] = std::to_string(peak);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
@@ -25,14 +24,14 @@
 #include "harness/layout.h"
 #include "harness/memory_tracker.h"
 #include "harness/ray_sets.h"
+#include "harness/reference.h"
+#include "harness/result_row.h"
 #include "harness/timing.h"
 #include "scenes/animation.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_path.h"
-#include "traversal/brute_force.h"
-#include "traversal/hit_compare.h"
 
 namespace sahbench {
 namespace {
@@ -104,11 +103,13 @@ std::vector<AnimatedBuilder> expand_builders(const ExperimentConfig& cfg) {
   return out;
 }
 
-// The reference answers for one ray set: closest hits, or occlusion flags for any-hit sets.
-struct Reference {
-  std::string name = "none";
-  std::vector<Hit> hits;
-  std::vector<uint8_t> occluded;
+// One of our builders' refit cells in one scene: its tree of the first frame and that tree compiled into
+// each layout that traces it, both refitted in place to every frame (the tree for its SAH cost and the
+// build_ms column, each layout for tracing and layout_refit_ms). One per builder run serves every
+// thread count, since trees and layouts are the same for any.
+struct RefitState {
+  Bvh tree;
+  std::map<std::string, std::unique_ptr<CompiledLayout>> layouts;  // by the configured layout text
 };
 
 // One frame's triangles, rays and reference answers, shared by every cell of the frame.
@@ -134,12 +135,6 @@ std::string now_stamp() {
 std::string format_duration(double seconds) {
   const auto s = static_cast<long>(std::lround(seconds));
   return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
-}
-
-// mem_bytes per scene triangle (as runner.cpp writes it).
-std::string bytes_per_triangle(std::size_t bytes, const Scene& scene) {
-  if (scene.triangles.empty()) return "";
-  return fmt::format("{:.2f}", static_cast<double>(bytes) / static_cast<double>(scene.triangles.size()));
 }
 
 Aabb bounds_of(std::span<const Triangle> triangles) {
@@ -284,14 +279,14 @@ class AnimationRunner {
       camera = automatic_camera(all);
     }
 
-    // Our trees of the first frame, refitted in place to every later frame. Trees are the same for any
-    // thread count, so one per builder run serves all.
+    // Our trees of the first frame, refitted in place to every later frame (their layouts are compiled
+    // when first traced, see trace_ours).
     std::vector<Triangle> first;
     animated.positions_at(times.front(), first);
-    std::map<std::size_t, Bvh> refit_trees;
+    std::map<std::size_t, RefitState> refits;
     for (std::size_t i = 0; i < builders_.size(); ++i)
       if (builders_[i].variant == Variant::kRefit)
-        refit_trees[i] = builders_[i].info->build(BuildInput::from_triangles(first), builders_[i].params);
+        refits[i].tree = builders_[i].info->build(BuildInput::from_triangles(first), builders_[i].params);
 
     for (uint32_t f = 0; f < times.size(); ++f) {
       if (pending[f] == 0) continue;
@@ -312,7 +307,7 @@ class AnimationRunner {
               run_rebuild(frame, b, threads, csv);
               break;
             case Variant::kRefit:
-              run_refit(frame, b, threads, refit_trees.at(i), csv);
+              run_refit(frame, b, threads, refits.at(i), csv);
               break;
             case Variant::kEmbreeRebuild:
             case Variant::kEmbreeRefit:
@@ -331,72 +326,14 @@ class AnimationRunner {
     frame.scene = animated.scene;
     frame.scene.camera = camera;
     animated.positions_at(time, frame.scene.triangles);
-    const Aabb box = bounds_of(frame.scene.triangles);
-    frame.diagonal = box.is_empty() ? 1.0f : length(box.extent());
+    frame.diagonal = scene_diagonal(frame.scene.triangles);
     GeneratedRaySets generated = generate_ray_sets(frame.scene, cfg_.ray_sets, cfg_.seed);
     frame.sets = std::move(generated.sets);
     frame.skipped = std::move(generated.skipped);
-    for (const auto& rs : frame.sets) frame.references.push_back(make_reference(frame.scene, rs));
+    for (const auto& rs : frame.sets)
+      frame.references.push_back(
+          make_reference(frame.scene, rs, cfg_.reference, cfg_.brute_force_max_triangles));
     return frame;
-  }
-
-  Reference make_reference(const Scene& scene, const RaySet& rs) const {
-    ReferencePolicy policy = cfg_.reference;
-    if (policy == ReferencePolicy::kAuto)
-      policy = scene.triangles.size() <= cfg_.brute_force_max_triangles ? ReferencePolicy::kBruteForce
-                                                                        : ReferencePolicy::kEmbree;
-    Reference ref;
-    const std::size_t n = rs.rays.size();
-    if (policy == ReferencePolicy::kBruteForce) {
-      ref.name = "brute_force";
-      if (rs.occlusion) {
-        ref.occluded.resize(n);
-        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-          ref.occluded[i] = brute_force_any(scene.triangles, rs.rays[i]);
-        });
-      } else {
-        ref.hits.resize(n);
-        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-          ref.hits[i] = brute_force_closest(scene.triangles, rs.rays[i]);
-        });
-      }
-    } else if (policy == ReferencePolicy::kEmbree) {
-      // Embree in robust mode on a device of its own, released before any timed cell (see runner.cpp:
-      // a live device without a thread count would lift the timed cells' limit).
-      ref.name = "embree_robust";
-      EmbreeDevice device(0);
-      EmbreeSceneOptions options;
-      options.robust = true;
-      const EmbreeScene reference_scene(device, scene.triangles, EmbreeQuality::kMedium, options);
-      if (rs.occlusion) {
-        ref.occluded.resize(n);
-        embree_occluded1(reference_scene, rs.rays, ref.occluded);
-      } else {
-        ref.hits.resize(n);
-        embree_intersect1(reference_scene, rs.rays, ref.hits);
-      }
-    }
-    return ref;
-  }
-
-  static uint64_t count_mismatches(const Reference& ref, const RaySet& rs, float diagonal,
-                                   std::span<const Hit> hits, std::span<const uint8_t> occluded) {
-    uint64_t m = 0;
-    if (!ref.hits.empty())
-      for (std::size_t i = 0; i < hits.size(); ++i)
-        m += !same_hit(hits[i], ref.hits[i], diagonal / length(rs.rays[i].dir));
-    if (!ref.occluded.empty())
-      for (std::size_t i = 0; i < occluded.size(); ++i) m += (occluded[i] != 0) != (ref.occluded[i] != 0);
-    return m;
-  }
-
-  template <class Trace>
-  TimingSummary time_trace(std::size_t rays, Trace trace) const {
-    for (int w = 0; w < cfg_.reps.trace_warmup; ++w) trace();
-    std::vector<double> mrays;
-    for (int r = 0; r < cfg_.reps.trace; ++r)
-      mrays.push_back(static_cast<double>(rays) / (time_ms(trace) * 1e3));
-    return summarize(mrays);
   }
 
   // Warm-up, then timed repetitions of `step`, each after an untimed `reset`; the heap peak of the first
@@ -439,12 +376,6 @@ class AnimationRunner {
     return row;
   }
 
-  static void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) {
-    row[prefix + "_median"] = fmt::format("{:.4f}", t.median);
-    row[prefix + "_min"] = fmt::format("{:.4f}", t.min);
-    row[prefix + "_max"] = fmt::format("{:.4f}", t.max);
-  }
-
   void append(CsvWriter& csv, const CsvRow& row, const std::string& what) {
     csv.append(row);
     rows_.push_back(row);
@@ -463,17 +394,38 @@ class AnimationRunner {
     const auto [build_t, peak] =
         time_steps([&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
                    [&] { bvh = Bvh{}; });
-    trace_ours(frame, b, threads, bvh, build_t, peak, "", csv);
+    trace_ours(frame, b, threads, bvh, build_t, peak, nullptr, csv);
   }
 
-  void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, Bvh& tree, CsvWriter& csv) {
+  void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, RefitState& state,
+                 CsvWriter& csv) {
     // Every refit recomputes every box, so repeating it on the same frame times the same work.
-    const auto [refit_t, peak] = time_steps([&] { refit(tree, frame.scene.triangles); }, [] {});
-    trace_ours(frame, b, threads, tree, refit_t, peak, "tree of frame 0 refitted", csv);
+    const auto [refit_t, peak] = time_steps([&] { refit(state.tree, frame.scene.triangles); }, [] {});
+    trace_ours(frame, b, threads, state.tree, refit_t, peak, &state, csv);
   }
 
+  // The layout `layout_name` of a refit cell, compiled the first time it is traced and kept in `state`
+  // for the frames after: from the refitted tree, which has the first frame's topology, and at once
+  // refitted to the frame's triangles. Layouts depend only on the tree's topology and the triangles, so
+  // this is the first frame's layout refitted, whichever frame traces it first. The first refit also
+  // makes bvh2 copy the tree it borrows, so that refitting the tree no longer moves the layout's boxes:
+  // every later frame's layout_refit_ms is then the layout's own refit.
+  CompiledLayout& refit_layout(RefitState& state, const std::string& layout_name,
+                               std::span<const Triangle> triangles) {
+    std::unique_ptr<CompiledLayout>& compiled = state.layouts[layout_name];
+    if (!compiled) {
+      compiled = compile_layout(parse_layout_spec(layout_name), state.tree, triangles);
+      compiled->refit(triangles);
+    }
+    return *compiled;
+  }
+
+  // Traces a tree of ours in every wanted cell of `frame`. A rebuild (`refit_state` null) is compiled into
+  // each layout, timed into layout_ms; a refit's layouts are refitted in place (refit_layout), timed into
+  // layout_refit_ms, and layout_ms is left empty (their one compile, of the first frame's tree, is the
+  // rebuild's layout_ms on the first frame).
   void trace_ours(const FrameData& frame, const AnimatedBuilder& b, int threads, const Bvh& bvh,
-                  const TimingSummary& build_t, int64_t peak, const std::string& notes, CsvWriter& csv) {
+                  const TimingSummary& build_t, int64_t peak, RefitState* refit_state, CsvWriter& csv) {
     const Scene& scene = frame.scene;
     const SahCost cost = sah_cost_of(b.params);
     const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
@@ -490,14 +442,23 @@ class AnimationRunner {
       for (const auto& rs : frame.sets)
         any |= wanted(scene.name, b, layout_name, threads, rs.name, frame.index);
       if (!any) continue;
-      const LayoutSpec layout = parse_layout_spec(layout_name);
-      std::unique_ptr<CompiledLayout> compiled;
-      std::vector<double> compile_ms;
-      if (valid)
+      std::unique_ptr<CompiledLayout> fresh;  // a rebuild's
+      CompiledLayout* compiled = nullptr;
+      double layout_time = 0.0;  // median ms of the compile or of the layout refit
+      if (valid && refit_state) {
+        compiled = &refit_layout(*refit_state, layout_name, scene.triangles);
+        const TimingSummary t = time_steps([&] { compiled->refit(scene.triangles); }, [] {}).first;
+        layout_time = t.median;
+      } else if (valid) {
+        const LayoutSpec layout = parse_layout_spec(layout_name);
+        std::vector<double> compile_ms;
         for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
-          compiled.reset();
-          compile_ms.push_back(time_ms([&] { compiled = compile_layout(layout, bvh, scene.triangles); }));
+          fresh.reset();
+          compile_ms.push_back(time_ms([&] { fresh = compile_layout(layout, bvh, scene.triangles); }));
         }
+        compiled = fresh.get();
+        layout_time = summarize(compile_ms).median;
+      }
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
         if (!wanted(scene.name, b, layout_name, threads, rs.name, frame.index)) continue;
@@ -510,7 +471,7 @@ class AnimationRunner {
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());
         row["query"] = rs.occlusion ? "any" : "closest";
-        row["notes"] = notes;
+        if (refit_state) row["notes"] = "tree and layout of frame 0 refitted";
         if (!valid) {
           row["notes"] = "invalid tree, not traced: " + report.errors.front();
           append(csv, row,
@@ -520,27 +481,22 @@ class AnimationRunner {
         }
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
-          if (rs.occlusion)
-            compiled->trace_any(rs.rays, occluded);
-          else
-            compiled->trace_closest(rs.rays, hits);
-        });
+        const TimingSummary trace_t =
+            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
+              if (rs.occlusion)
+                compiled->trace_any(rs.rays, occluded);
+              else
+                compiled->trace_closest(rs.rays, hits);
+            });
         const TraceCounts counts =
             rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
         const Reference& ref = frame.references[s];
-        row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);
+        row[refit_state ? "layout_refit_ms" : "layout_ms"] = fmt::format("{:.4f}", layout_time);
         row["isa"] = compiled->isa();
         row["mem_bytes"] = std::to_string(compiled->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene);
+        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene.triangles.size());
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
-        row["leaves"] = std::to_string(stats.leaves);
-        row["max_depth"] = std::to_string(stats.max_depth);
-        row["refs_per_prim"] = fmt::format("{:.4f}", stats.refs_per_prim);
-        row["sah_cost"] = fmt::format("{:.6f}", stats.sah_cost);
-        row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
-        row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
-        row["sah_block"] = std::to_string(cost.block);
+        put_tree_stats(row, stats, cost);
         put_timing(row, "trace_mrays", trace_t);
         row["nodes_per_ray"] = fmt::format(
             "{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
@@ -551,9 +507,11 @@ class AnimationRunner {
                                 ? ""
                                 : std::to_string(count_mismatches(ref, rs, frame.diagonal, hits, occluded));
         append(csv, row,
-               fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms, SAH {:.2f}, {:.2f} Mrays/s, {} mismatches",
+               fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms + {} {:.3f} ms, SAH {:.2f}, {:.2f} Mrays/s, "
+                           "{} mismatches",
                            scene.name, frame.index, b.label, layout_name, threads, rs.name,
-                           b.variant == Variant::kRefit ? "refit" : "build", build_t.median, stats.sah_cost,
+                           refit_state ? "refit" : "build", build_t.median,
+                           refit_state ? "layout refit" : "compile", layout_time, stats.sah_cost,
                            trace_t.median, row["mismatches"]));
       }
     }
@@ -597,26 +555,28 @@ class AnimationRunner {
         if (!wanted(scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
-          if (layout.packet_width == 1) {
-            if (rs.occlusion)
-              embree_occluded1(*built, rs.rays, occluded);
-            else
-              embree_intersect1(*built, rs.rays, hits);
-          } else {
-            if (rs.occlusion)
-              embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
-            else
-              embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
-          }
-        });
+        const TimingSummary trace_t =
+            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
+              if (layout.packet_width == 1) {
+                if (rs.occlusion)
+                  embree_occluded1(*built, rs.rays, occluded);
+                else
+                  embree_intersect1(*built, rs.rays, hits);
+              } else {
+                if (rs.occlusion)
+                  embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
+                else
+                  embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
+              }
+            });
         const Reference& ref = frame.references[s];
         CsvRow row = base_row(frame, b, threads);
         row["isa"] = "embree:" + embree_isa(device);
         row["layout"] = layout.name;
         put_timing(row, "build_ms", build_t);
         row["mem_bytes"] = std::to_string(built->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene);
+        row["bytes_per_tri"] =
+            bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene.triangles.size());
         row["mem_peak_bytes"] = std::to_string(peak);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());
@@ -637,14 +597,16 @@ class AnimationRunner {
     }
   }
 
-  // Per scene and thread count, one line per frame: each of our builders' refit and rebuild times, their
-  // ratio and the refit tree's SAH cost relative to the rebuild's, and Embree's refit time.
+  // Per scene and thread count, one line per frame: for each of our builders and each of its layouts, the
+  // refit's cost (tree refit + layout refit) against the rebuild's (build + layout compile) and their
+  // ratio, the refit tree's SAH cost relative to the rebuild's, and Embree's refit time.
   void print_summary() const {
     struct Cell {
       std::optional<double> build_ms, sah;
+      std::map<std::string, double> layout_ms;  // by layout: the compile (rebuild) or the layout refit
     };
     // (scene, threads) -> frame -> builder name + params -> first row's figures (build time and SAH
-    // are the same in every layout and ray-set row of a tree).
+    // are the same in every layout and ray-set row of a tree, layout times in every ray-set row).
     std::map<std::pair<std::string, int>, std::map<int, std::map<std::string, Cell>>> table;
     std::map<std::pair<std::string, int>, std::map<int, std::string>> frame_times;
     std::vector<std::pair<std::string, int>> order;
@@ -656,10 +618,19 @@ class AnimationRunner {
       Cell& cell = table[key][frame][row.at("builder") + "|" + row.at("builder_params")];
       if (!cell.build_ms) cell.build_ms = csv_number(row, "build_ms_median");
       if (!cell.sah) cell.sah = csv_number(row, "sah_cost");
+      for (const char* column : {"layout_ms", "layout_refit_ms"})
+        if (const auto ms = csv_number(row, column)) cell.layout_ms.emplace(row.at("layout"), *ms);
     }
+    // "TREE+LAYOUT" (the layout part only where the tree was traced), and the total.
+    auto cost = [](const Cell& c, const std::string& layout) {
+      const auto it = c.layout_ms.find(layout);
+      if (it == c.layout_ms.end()) return std::make_pair(fmt::format("{:.3f}", *c.build_ms), *c.build_ms);
+      return std::make_pair(fmt::format("{:.3f}+{:.3f}", *c.build_ms, it->second), *c.build_ms + it->second);
+    };
     for (const auto& key : order) {
       log_ << fmt::format(
-          "\nsummary: {}, {} thread{} (median ms; speed-up = rebuild / refit; SAH = refit / rebuild)\n",
+          "\nsummary: {}, {} thread{} (median ms; refit = tree refit + layout refit, rebuild = build + "
+          "layout compile; speed-up = rebuild / refit; SAH = refit / rebuild)\n",
           key.first, key.second, key.second == 1 ? "" : "s");
       for (const auto& [frame, cells] : table.at(key)) {
         std::string line = fmt::format("  frame {:>3} t={:<8}", frame, frame_times.at(key).at(frame));
@@ -672,13 +643,21 @@ class AnimationRunner {
             line += fmt::format(" | embree refit {:.3f}", *r.build_ms);
             continue;
           }
-          line += fmt::format(" | {} refit {:.3f}", b.label, *r.build_ms);
           const auto rebuild_cell = cells.find(b.info->name + "|" + b.params_text);
-          if (rebuild_cell == cells.end() || !rebuild_cell->second.build_ms) continue;
-          const Cell& k = rebuild_cell->second;
-          line += fmt::format(" rebuild {:.3f} ({:.1f}x)", *k.build_ms,
-                              *k.build_ms / std::max(*r.build_ms, 1e-9));
-          if (r.sah && k.sah && *k.sah > 0) line += fmt::format(" SAH {:.3f}", *r.sah / *k.sah);
+          const Cell* k =
+              rebuild_cell != cells.end() && rebuild_cell->second.build_ms ? &rebuild_cell->second : nullptr;
+          line += " | " + b.label;
+          if (k && r.sah && k->sah && *k->sah > 0) line += fmt::format(" SAH {:.3f}", *r.sah / *k->sah);
+          // A tree not traced in any layout (invalid) has its refit time alone.
+          if (r.layout_ms.empty()) line += fmt::format(" refit {:.3f}", *r.build_ms);
+          for (const auto& layout : layouts_for(b)) {
+            if (!r.layout_ms.count(layout)) continue;  // not traced in this frame (--only, invalid tree)
+            const auto [refit_text, refit_ms] = cost(r, layout);
+            line += fmt::format(", {}: refit {}", layout, refit_text);
+            if (!k) continue;
+            const auto [rebuild_text, rebuild_ms] = cost(*k, layout);
+            line += fmt::format(" rebuild {} ({:.1f}x)", rebuild_text, rebuild_ms / std::max(refit_ms, 1e-9));
+          }
         }
         log_ << line << "\n";
       }
@@ -704,6 +683,7 @@ class AnimationRunner {
 
 std::vector<std::string> animation_columns() {
   std::vector<std::string> columns = result_columns();
+  columns.insert(std::find(columns.begin(), columns.end(), "layout_ms") + 1, "layout_refit_ms");
   columns.push_back("frame_time");
   return columns;
 }

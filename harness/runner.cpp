@@ -3,7 +3,6 @@
 #include <fmt/chrono.h>
 #include <fmt/format.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
 
 #include <chrono>
 #include <cmath>
@@ -25,12 +24,12 @@
 #include "harness/layout.h"
 #include "harness/memory_tracker.h"
 #include "harness/ray_sets.h"
+#include "harness/reference.h"
+#include "harness/result_row.h"
 #include "harness/timing.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
 #include "scenes/procedural.h"
-#include "traversal/brute_force.h"
-#include "traversal/hit_compare.h"
 
 namespace sahbench {
 namespace {
@@ -54,13 +53,6 @@ struct EmbreeLayout {
   int packet_width;  // 1: rtcIntersect1 / rtcOccluded1
 };
 constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 8}, {"embree_16", 16}};
-
-// The reference answers for one ray set: closest hits, or occlusion flags for any-hit sets.
-struct Reference {
-  std::string name = "none";
-  std::vector<Hit> hits;
-  std::vector<uint8_t> occluded;
-};
 
 std::string now_stamp() {
   const std::time_t t = std::time(nullptr);
@@ -96,12 +88,6 @@ class Progress {
 };
 
 // One builder run of the config, resolved against the registry.
-// mem_bytes per scene triangle, the figure papers quote for a layout's footprint.
-std::string bytes_per_triangle(std::size_t bytes, const Scene& scene) {
-  if (scene.triangles.empty()) return "";
-  return fmt::format("{:.2f}", static_cast<double>(bytes) / static_cast<double>(scene.triangles.size()));
-}
-
 struct ResolvedBuilder {
   BuilderRun run;
   const BuilderInfo* info = nullptr;  // null for Embree
@@ -247,7 +233,7 @@ class ExperimentRunner {
     Scene scene;
     const double load_ms = time_ms([&] { scene = load_scene(scene_name); });
     load_ms_ += load_ms;
-    diagonal_ = scene_diagonal(scene);
+    diagonal_ = scene_diagonal(scene.triangles);
     log_ << fmt::format("scene {}: {} triangles ({} removed), {}, from {} in {:.0f} ms\n", scene_name,
                         scene.triangles.size(), scene.removed.total(), scene.animated ? "animated" : "static",
                         scene.source, load_ms);
@@ -262,7 +248,8 @@ class ExperimentRunner {
     }
     std::vector<Reference> references(generated.sets.size());
     reference_ms_ += time_ms([&] {
-      for (std::size_t i = 0; i < generated.sets.size(); ++i) references[i] = make_reference(scene, generated.sets[i]);
+      for (std::size_t i = 0; i < generated.sets.size(); ++i)
+        references[i] = make_reference(scene, generated.sets[i], cfg_.reference, cfg_.brute_force_max_triangles);
     });
 
     for (int threads : cfg_.threads) {
@@ -282,64 +269,6 @@ class ExperimentRunner {
         }
       }
     }
-  }
-
-  Reference make_reference(const Scene& scene, const RaySet& rs) {
-    ReferencePolicy policy = cfg_.reference;
-    if (policy == ReferencePolicy::kAuto)
-      policy = scene.triangles.size() <= cfg_.brute_force_max_triangles ? ReferencePolicy::kBruteForce : ReferencePolicy::kEmbree;
-    Reference ref;
-    const std::size_t n = rs.rays.size();
-    if (policy == ReferencePolicy::kBruteForce) {
-      ref.name = "brute_force";
-      if (rs.occlusion) {
-        ref.occluded.resize(n);
-        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { ref.occluded[i] = brute_force_any(scene.triangles, rs.rays[i]); });
-      } else {
-        ref.hits.resize(n);
-        tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { ref.hits[i] = brute_force_closest(scene.triangles, rs.rays[i]); });
-      }
-    } else if (policy == ReferencePolicy::kEmbree) {
-      // Embree in robust mode, so that its own edge cases do not count as our mismatches.
-      ref.name = "embree_robust";
-      // A device of its own, released before any timed cell: Embree turns a device's thread count into
-      // a process-wide TBB limit, and a live unlimited device would lift the limit of the timed cells.
-      EmbreeDevice device(0);
-      EmbreeSceneOptions options;
-      options.robust = true;
-      const EmbreeScene reference_scene(device, scene.triangles, EmbreeQuality::kMedium, options);
-      if (rs.occlusion) {
-        ref.occluded.resize(n);
-        embree_occluded1(reference_scene, rs.rays, ref.occluded);
-      } else {
-        ref.hits.resize(n);
-        embree_intersect1(reference_scene, rs.rays, ref.hits);
-      }
-    }
-    return ref;
-  }
-
-  static uint64_t count_mismatches(const Reference& ref, const RaySet& rs, float scene_diagonal,
-                                   std::span<const Hit> hits, std::span<const uint8_t> occluded) {
-    uint64_t m = 0;
-    if (!ref.hits.empty())
-      for (std::size_t i = 0; i < hits.size(); ++i)
-        m += !same_hit(hits[i], ref.hits[i], scene_diagonal / length(rs.rays[i].dir));
-    if (!ref.occluded.empty())
-      for (std::size_t i = 0; i < occluded.size(); ++i) m += (occluded[i] != 0) != (ref.occluded[i] != 0);
-    return m;
-  }
-
-  // Times `trace` (one pass over all rays) with warm-up and repetitions; returns Mrays/s samples.
-  template <class Trace>
-  TimingSummary time_trace(std::size_t rays, Trace trace) const {
-    for (int w = 0; w < cfg_.reps.trace_warmup; ++w) trace();
-    std::vector<double> mrays;
-    for (int r = 0; r < cfg_.reps.trace; ++r) {
-      const double ms = time_ms(trace);
-      mrays.push_back(static_cast<double>(rays) / (ms * 1e3));
-    }
-    return summarize(mrays);
   }
 
   CsvRow base_row(const Scene& scene, const ResolvedBuilder& b, int threads) const {
@@ -362,18 +291,6 @@ class ExperimentRunner {
     row["scene_removed"] = std::to_string(scene.removed.total());
     row["embree_version"] = env_.embree;
     return row;
-  }
-
-  static float scene_diagonal(const Scene& scene) {
-    Aabb box;
-    for (const auto& t : scene.triangles) box.extend(t.bounds());
-    return box.is_empty() ? 1.0f : length(box.extent());
-  }
-
-  static void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) {
-    row[prefix + "_median"] = fmt::format("{:.4f}", t.median);
-    row[prefix + "_min"] = fmt::format("{:.4f}", t.min);
-    row[prefix + "_max"] = fmt::format("{:.4f}", t.max);
   }
 
   template <class Wanted>
@@ -439,7 +356,7 @@ class ExperimentRunner {
         if (!wanted(layout_name, rs)) continue;
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
+        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
           if (rs.occlusion) compiled->trace_any(rs.rays, occluded);
           else compiled->trace_closest(rs.rays, hits);
         });
@@ -451,17 +368,10 @@ class ExperimentRunner {
         put_timing(row, "build_ms", build_t);
         row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);
         row["mem_bytes"] = std::to_string(compiled->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene);
+        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene.triangles.size());
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
-        row["nodes"] = std::to_string(stats.nodes);
-        row["leaves"] = std::to_string(stats.leaves);
+        put_tree_stats(row, stats, cost);
         row["arity"] = std::to_string(bvh.arity);
-        row["max_depth"] = std::to_string(stats.max_depth);
-        row["refs_per_prim"] = fmt::format("{:.4f}", stats.refs_per_prim);
-        row["sah_cost"] = fmt::format("{:.6f}", stats.sah_cost);
-        row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
-        row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
-        row["sah_block"] = std::to_string(cost.block);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());
         put_timing(row, "trace_mrays", trace_t);
@@ -501,7 +411,7 @@ class ExperimentRunner {
         if (!wanted(layout.name, rs)) continue;
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t = time_trace(rs.rays.size(), [&] {
+        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
           if (layout.packet_width == 1) {
             if (rs.occlusion) embree_occluded1(*built, rs.rays, occluded);
             else embree_intersect1(*built, rs.rays, hits);
@@ -515,7 +425,7 @@ class ExperimentRunner {
         row["layout"] = layout.name;
         put_timing(row, "build_ms", build_t);
         row["mem_bytes"] = std::to_string(built->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(built->bytes(), scene);
+        row["bytes_per_tri"] = bytes_per_triangle(built->bytes(), scene.triangles.size());
         row["mem_peak_bytes"] = std::to_string(peak);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());

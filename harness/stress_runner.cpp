@@ -23,6 +23,7 @@
 #include "harness/embree_trace.h"
 #include "harness/environment.h"
 #include "harness/layout.h"
+#include "harness/result_row.h"
 #include "harness/stress_metrics.h"
 #include "harness/timing.h"
 #include "traversal/exact_reference.h"
@@ -255,9 +256,7 @@ class StressRunner {
       mrays.push_back(static_cast<double>(rays.size()) / (std::max(ms, 1e-6) * 1e3));
     }
     const TimingSummary t = summarize(mrays);
-    row["trace_mrays_median"] = fmt::format("{:.4f}", t.median);
-    row["trace_mrays_min"] = fmt::format("{:.4f}", t.min);
-    row["trace_mrays_max"] = fmt::format("{:.4f}", t.max);
+    put_timing(row, "trace_mrays", t);
     row["trace_reps"] = std::to_string(cfg_.trace_reps);
     const ErrorMetrics m = measure_errors(hits, ctx.exact, ctx.c->must_hit);
     row["mismatches"] = std::to_string(m.errors());
@@ -337,14 +336,7 @@ class StressRunner {
     }
     const SahCost cost = sah_cost_of(params);
     const BvhStats stats = compute_stats(bvh, ctx.triangles->size(), cost);
-    row["nodes"] = std::to_string(stats.nodes);
-    row["leaves"] = std::to_string(stats.leaves);
-    row["max_depth"] = std::to_string(stats.max_depth);
-    row["refs_per_prim"] = fmt::format("{:.4f}", stats.refs_per_prim);
-    row["sah_cost"] = fmt::format("{:.6g}", stats.sah_cost);
-    row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
-    row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
-    row["sah_block"] = std::to_string(cost.block);
+    put_tree_stats(row, stats, cost);
 
     const std::vector<LayoutSpec> specs = layouts_for(bvh.arity, arities_with_variants);
     if (specs.empty()) {

@@ -32,4 +32,14 @@ double time_ms(F&& f) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
+/// Times `trace` (one pass of a kernel over `rays` rays): `warmup` untimed passes, then `reps` timed
+/// ones; the summary is of Mrays/s, one sample per pass.
+template <class Trace>
+TimingSummary time_trace(int warmup, int reps, std::size_t rays, Trace&& trace) {
+  for (int w = 0; w < warmup; ++w) trace();
+  std::vector<double> mrays;
+  for (int r = 0; r < reps; ++r) mrays.push_back(static_cast<double>(rays) / (time_ms(trace) * 1e3));
+  return summarize(mrays);
+}
+
 }  // namespace sahbench

@@ -203,6 +203,65 @@ TEST(HarnessAnimationRun, RowsPerFrameForRefitAndRebuildWithoutMismatches) {
   EXPECT_EQ(read_csv(csv).size(), rows.size());
 }
 
+// The refit cells trace their layouts refitted in place (bvh2: the common format's copy; bvh8: wide
+// nodes and triangle blocks), timed into layout_refit_ms; the rebuild cells compile theirs (layout_ms).
+TEST(HarnessAnimationRun, RefitCellsRefitTheirLayoutsInPlace) {
+  const auto dir = temp_dir();
+  const auto csv = dir / "animation_layout_refit.csv";
+  std::filesystem::remove(csv);
+  const auto config = dir / "animation_layout_refit.toml";
+  std::ofstream(config) << "[experiment]\nname = \"layout_refit\"\noutput = \"" << csv.string() << "\"\n"
+                        << "scenes = [\"proc:wave:tris=1500,amplitude=0.3\"]\n"
+                        << "layouts = [\"bvh2\", \"bvh8\"]\nreference = \"brute_force\"\n"
+                        << "[repetitions]\nbuild = 3\nbuild_warmup = 1\ntrace = 1\ntrace_warmup = 0\n"
+                        << "[animation]\nframes = 4\n"
+                        << "[[builder]]\nname = \"binned_sah\"\n"
+                        << "[[builder]]\nname = \"wide_binned_sah\"\narity = 8\n"
+                        << "[[ray_set]]\nkind = \"primary\"\nwidth = 24\nheight = 24\n"
+                        << "[[ray_set]]\nkind = \"shadow\"\nwidth = 16\nheight = 16\n";
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+
+  std::set<std::string> refit_cells, rebuild_cells;  // layout|frame|ray set
+  std::map<std::string, double> rebuild_sah, refit_sah;  // layout|frame
+  for (const auto& row : read_csv(csv)) {
+    const std::string cell = row.at("layout") + "|" + row.at("frame") + "|" + row.at("ray_set");
+    const std::string what = row.at("builder") + " " + cell;
+    EXPECT_EQ(row.at("mismatches"), "0") << what;
+    EXPECT_EQ(row.at("reference"), "brute_force") << what;
+    const bool refit = row.at("builder").starts_with("refit(");
+    if (refit) {
+      refit_cells.insert(cell);
+      ASSERT_NE(row.at("layout_refit_ms"), "") << what;
+      EXPECT_GT(std::stod(row.at("layout_refit_ms")), 0.0) << what;
+      EXPECT_EQ(row.at("layout_ms"), "") << what << ": compiled once, on the first frame";
+      refit_sah[row.at("layout") + "|" + row.at("frame")] = std::stod(row.at("sah_cost"));
+    } else {
+      rebuild_cells.insert(cell);
+      EXPECT_NE(row.at("layout_ms"), "") << what;
+      EXPECT_EQ(row.at("layout_refit_ms"), "") << what;
+      rebuild_sah[row.at("layout") + "|" + row.at("frame")] = std::stod(row.at("sah_cost"));
+    }
+  }
+  // Every frame, both layouts, both ray sets: refits and rebuilds alike.
+  std::set<std::string> expected;
+  for (const char* layout : {"bvh2", "bvh8"})
+    for (int frame = 0; frame < 4; ++frame)
+      for (const char* set : {"primary", "shadow"})
+        expected.insert(std::string(layout) + "|" + std::to_string(frame) + "|" + set);
+  EXPECT_EQ(refit_cells, expected);
+  EXPECT_EQ(rebuild_cells, expected);
+  // The wave moves: the refitted trees drift from fresh builds, so stale layout boxes would be wrong boxes.
+  for (const char* layout : {"bvh2", "bvh8"}) {
+    EXPECT_EQ(refit_sah[std::string(layout) + "|0"], rebuild_sah[std::string(layout) + "|0"]) << layout;
+    EXPECT_NE(refit_sah[std::string(layout) + "|2"], rebuild_sah[std::string(layout) + "|2"]) << layout;
+  }
+  // The summary adds the layout's refit to the tree's, and the compile to the build.
+  EXPECT_NE(log.str().find("refit = tree refit + layout refit"), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find(", bvh2: refit "), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find(", bvh8: refit "), std::string::npos) << log.str();
+}
+
 TEST(HarnessAnimationRun, OnlyFiltersByBuilderAndFrame) {
   const auto config = write_config("animation_only");
   std::ostringstream log;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "builders/refit.h"
 #include "builders/registry.h"
 #include "core/error.h"
 #include "harness/layout.h"
@@ -209,6 +210,69 @@ TEST(Layouts, RefitLayoutsMatchBruteForceOnDeformedGeometry) {
           ASSERT_EQ(occluded[i] != 0, brute_force_any(moved, rays[i])) << "t=" << time << " ray " << i;
         }
         EXPECT_GT(found, rays.size() / 10);
+      }
+    }
+  }
+}
+
+// A layout refitted in place is the layout compiled afresh from the refitted tree: layouts depend only on
+// the tree's topology and the triangles, and both refits recompute every box from the triangles (min and
+// max are exact, so the order of the unions does not matter). So the hits must be bit-identical and the
+// counting kernels must visit the same nodes and test the same primitives, whatever frames came before
+// (the animation runner refits each layout once per frame, repeating it on one frame for its timings).
+TEST(Layouts, RefitEqualsAFreshCompileOfTheRefittedTree) {
+  const auto original = test::random_triangles(3000, 23);
+  struct TreeCase {
+    std::string builder;
+    ParamOverrides overrides;
+    std::vector<std::string> specs;
+  };
+  const std::vector<TreeCase> trees = {
+      {"binned_sah", {}, {"bvh2", "bvh2_packed"}},
+      {"sbvh", {}, {"bvh2"}},  // repeated references: a leaf's refitted box covers whole triangles
+      {"wide_binned_sah", {{"arity", "4"}}, {"bvh4"}},
+      {"wide_binned_sah", {{"arity", "8"}}, {"bvh8", "bvh8:isa=scalar"}},
+  };
+  for (const TreeCase& tree_case : trees) {
+    const BuilderInfo& info = find_builder(tree_case.builder);
+    const Bvh built =
+        info.build(BuildInput::from_triangles(original), resolve_params(info.name, info.params, tree_case.overrides));
+    for (const std::string& spec : tree_case.specs) {
+      SCOPED_TRACE(tree_case.builder + " " + spec);
+      auto refitted = compile_layout(spec, built, original);
+      std::vector<std::vector<Triangle>> frames;  // bvh2 borrows each frame's triangles
+      // A frame twice in a row (the timing repetitions), and a return to an earlier pose.
+      for (float time : {1.5f, 1.5f, 0.25f, 1.5f}) {
+        const auto& moved = frames.emplace_back(deformed(original, time));
+        refitted->refit(moved);
+        Bvh tree = built;
+        refit(tree, moved);
+        const auto fresh = compile_layout(spec, tree, moved);
+        EXPECT_EQ(refitted->bytes(), fresh->bytes());
+
+        const auto rays = test::random_rays(moved, 500, 7);
+        std::vector<Hit> got(rays.size()), want(rays.size());
+        std::vector<uint8_t> got_any(rays.size()), want_any(rays.size());
+        refitted->trace_closest(rays, got);
+        fresh->trace_closest(rays, want);
+        refitted->trace_any(rays, got_any);
+        fresh->trace_any(rays, want_any);
+        std::size_t found = 0;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          found += want[i].found();
+          ASSERT_EQ(got[i].prim, want[i].prim) << "t=" << time << " ray " << i;
+          ASSERT_EQ(got[i].t, want[i].t) << "t=" << time << " ray " << i;
+          ASSERT_EQ(got[i].u, want[i].u) << "t=" << time << " ray " << i;
+          ASSERT_EQ(got[i].v, want[i].v) << "t=" << time << " ray " << i;
+          ASSERT_EQ(got_any[i], want_any[i]) << "t=" << time << " ray " << i;
+        }
+        EXPECT_GT(found, rays.size() / 10) << "rays must hit for the check to mean anything";
+        for (bool any : {false, true}) {
+          const TraceCounts a = any ? refitted->count_any(rays) : refitted->count_closest(rays);
+          const TraceCounts b = any ? fresh->count_any(rays) : fresh->count_closest(rays);
+          EXPECT_EQ(a.nodes_visited, b.nodes_visited) << "t=" << time << (any ? " any" : " closest");
+          EXPECT_EQ(a.prims_tested, b.prims_tested) << "t=" << time << (any ? " any" : " closest");
+        }
       }
     }
   }

@@ -1,0 +1,29 @@
+#include "harness/result_row.h"
+
+#include <fmt/format.h>
+
+namespace sahbench {
+
+void put_tree_stats(CsvRow& row, const BvhStats& stats, const SahCost& cost) {
+  row["nodes"] = std::to_string(stats.nodes);
+  row["leaves"] = std::to_string(stats.leaves);
+  row["max_depth"] = std::to_string(stats.max_depth);
+  row["refs_per_prim"] = fmt::format("{:.4f}", stats.refs_per_prim);
+  row["sah_cost"] = fmt::format("{:.6f}", stats.sah_cost);
+  row["sah_c_trav"] = fmt::format("{}", cost.c_trav);
+  row["sah_c_isect"] = fmt::format("{}", cost.c_isect);
+  row["sah_block"] = std::to_string(cost.block);
+}
+
+void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) {
+  row[prefix + "_median"] = fmt::format("{:.4f}", t.median);
+  row[prefix + "_min"] = fmt::format("{:.4f}", t.min);
+  row[prefix + "_max"] = fmt::format("{:.4f}", t.max);
+}
+
+std::string bytes_per_triangle(std::size_t bytes, std::size_t triangles) {
+  if (triangles == 0) return "";
+  return fmt::format("{:.2f}", static_cast<double>(bytes) / static_cast<double>(triangles));
+}
+
+}  // namespace sahbench

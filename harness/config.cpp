@@ -277,7 +277,7 @@ void read_experiment(const Source& src, const toml::table& root, ExperimentConfi
 
 void read_repetitions(const Source& src, const toml::node& node, Repetitions& reps) {
   const auto& table = as_table(src, node, "[repetitions]");
-  check_keys(src, table, "[repetitions]", {"build", "build_warmup", "trace", "trace_warmup"});
+  check_keys(src, table, "[repetitions]", {"build", "build_warmup", "trace", "trace_warmup", "interleave"});
   const auto read = [&](const char* key, int64_t min, int& out) {
     if (const auto* n = table.get(key))
       out = static_cast<int>(read_int(src, *n, std::string("repetitions.") + key, min, kMaxInt));
@@ -286,6 +286,11 @@ void read_repetitions(const Source& src, const toml::node& node, Repetitions& re
   read("build_warmup", 0, reps.build_warmup);
   read("trace", 1, reps.trace);
   read("trace_warmup", 0, reps.trace_warmup);
+  if (const auto* n = table.get("interleave")) {
+    const auto* value = n->as_boolean();
+    if (value == nullptr) src.fail(*n, "repetitions.interleave must be true or false");
+    reps.interleave = value->get();
+  }
 }
 
 // [animation]: the frames of an animation experiment, as a count or as explicit times.

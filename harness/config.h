@@ -22,6 +22,7 @@
 //   build_warmup = 1
 //   trace = 5
 //   trace_warmup = 1
+//   interleave = true                 # static runs: trace repetitions of a scene's cells taken in turns
 //
 //   [animation]                       # optional: makes this an animation experiment (see below)
 //   frames = 10                       # frames evenly spaced over each scene's animation (default 10)
@@ -144,6 +145,11 @@ struct AnimationConfig {
 /// Timed repetitions (at least 1) and untimed warm-up runs before them (at least 0).
 struct Repetitions {
   int build = 5, build_warmup = 1, trace = 5, trace_warmup = 1;
+  /// Static runs: every cell of a scene and thread count (Embree's included) is built and compiled
+  /// first, then traced one repetition at a time in turns, so that a slow spell of a noisy machine falls
+  /// on every cell alike and ratios between cells hold; rows are written once the scene's cells are
+  /// timed. false: each cell's repetitions back to back, its row written at once, one tree in memory.
+  bool interleave = true;
   bool operator==(const Repetitions&) const = default;
 };
 

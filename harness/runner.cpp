@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <functional>
 #include <memory>
 #include <ostream>
 #include <set>
@@ -254,6 +255,7 @@ class ExperimentRunner {
 
     for (int threads : cfg_.threads) {
       const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+      std::vector<TraceCell> cells;
       for (const auto& b : builders_) {
         auto wanted = [&](const std::string& layout, const RaySet& rs) {
           return pending.count(cell_key(scene_name, b.run.name, b.params_text, layout, threads, rs.name, 0)) > 0;
@@ -263,11 +265,80 @@ class ExperimentRunner {
           for (const auto& rs : generated.sets) any |= wanted(layout, rs);
         if (!any) continue;
         if (b.is_embree()) {
-          run_embree(scene, b, threads, generated.sets, references, wanted, csv, progress);
+          prepare_embree(scene, b, threads, generated.sets, wanted, cells);
         } else {
-          run_ours(scene, b, threads, generated.sets, references, wanted, csv, progress);
+          prepare_ours(scene, b, threads, generated.sets, wanted, csv, progress, cells);
+        }
+        if (!cfg_.reps.interleave) {
+          time_cells(cells, scene_name, threads);
+          finish_cells(cells, generated.sets, references, csv, progress);
+          cells.clear();
         }
       }
+      time_cells(cells, scene_name, threads);
+      finish_cells(cells, generated.sets, references, csv, progress);
+    }
+  }
+
+  // A cell built and compiled, waiting for its trace timing: its row so far, one pass of its kernel over
+  // its ray set (writing `hits` or `occluded`), the counting pass, and what keeps its structures alive.
+  struct TraceCell {
+    CsvRow row;
+    std::string label;  // builder, layout, threads and ray set, for the log
+    double build_ms = 0.0;
+    std::size_t set = 0, rays = 0;
+    std::function<void()> trace;
+    std::function<TraceCounts()> count;  // empty for Embree, which has no counting kernel
+    // Where the passes write: the mismatch count reads the last one's. Shared with `trace`.
+    std::shared_ptr<std::vector<Hit>> hits;
+    std::shared_ptr<std::vector<uint8_t>> occluded;
+    std::shared_ptr<const void> keep_alive;
+    std::vector<double> mrays;
+  };
+
+  // Trace repetitions. Interleaved: every cell's warm-ups, then repetition r of every cell in turn, each
+  // round starting one cell later so that no cell always follows the same one. Otherwise each cell's
+  // warm-ups and repetitions back to back.
+  void time_cells(std::vector<TraceCell>& cells, const std::string& scene_name, int threads) {
+    auto time_once = [](TraceCell& cell) {
+      cell.mrays.push_back(static_cast<double>(cell.rays) / (time_ms(cell.trace) * 1e3));
+    };
+    if (!cfg_.reps.interleave) {
+      for (auto& cell : cells) {
+        for (int w = 0; w < cfg_.reps.trace_warmup; ++w) cell.trace();
+        for (int r = 0; r < cfg_.reps.trace; ++r) time_once(cell);
+      }
+      return;
+    }
+    for (auto& cell : cells)
+      for (int w = 0; w < cfg_.reps.trace_warmup; ++w) cell.trace();
+    const std::size_t n = cells.size();
+    for (int r = 0; r < cfg_.reps.trace && n > 0; ++r) {
+      log_ << fmt::format("{} t={}: trace repetition {} of {}, {} cells in turn\n", scene_name, threads, r + 1,
+                          cfg_.reps.trace, n);
+      for (std::size_t k = 0; k < n; ++k) time_once(cells[(k + static_cast<std::size_t>(r)) % n]);
+    }
+  }
+
+  // Completes each timed cell's row (timings, counts, mismatches from its last pass) and writes it.
+  void finish_cells(std::vector<TraceCell>& cells, const std::vector<RaySet>& sets, const std::vector<Reference>& refs,
+                    CsvWriter& csv, Progress& progress) {
+    for (auto& cell : cells) {
+      const RaySet& rs = sets[cell.set];
+      const Reference& ref = refs[cell.set];
+      CsvRow& row = cell.row;
+      const TimingSummary trace_t = summarize(cell.mrays);
+      put_timing(row, "trace_mrays", trace_t);
+      if (cell.count) {
+        const TraceCounts counts = cell.count();
+        row["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
+        row["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
+      }
+      row["reference"] = ref.name;
+      row["mismatches"] = ref.name == "none" ? "" : std::to_string(count_mismatches(ref, rs, diagonal_, *cell.hits, *cell.occluded));
+      csv_ms_ += time_ms([&] { csv.append(row); });
+      progress.cell_done(fmt::format("{}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", cell.label, cell.build_ms,
+                                     trace_t.median, row["mismatches"]));
     }
   }
 
@@ -294,10 +365,13 @@ class ExperimentRunner {
   }
 
   template <class Wanted>
-  void run_ours(const Scene& scene, const ResolvedBuilder& b, int threads, const std::vector<RaySet>& sets,
-                const std::vector<Reference>& refs, Wanted wanted, CsvWriter& csv, Progress& progress) {
+  // Builds (timed), checks and compiles one of our builder runs, and queues a cell per wanted layout and
+  // ray set; an invalid tree's cells are written at once, untraced.
+  void prepare_ours(const Scene& scene, const ResolvedBuilder& b, int threads, const std::vector<RaySet>& sets,
+                    Wanted wanted, CsvWriter& csv, Progress& progress, std::vector<TraceCell>& cells) {
     // Build: warm-up, then timed repetitions. The peak heap is taken over the first timed build.
-    Bvh bvh;
+    auto tree = std::make_shared<Bvh>();
+    Bvh& bvh = *tree;
     auto build = [&] {
       const BuildInput input = BuildInput::from_triangles(scene.triangles);
       bvh = b.info->build(input, b.params);
@@ -351,48 +425,63 @@ class ExperimentRunner {
         compiled.reset();
         compile_ms.push_back(time_ms([&] { compiled = compile_layout(layout, bvh, scene.triangles); }));
       }
+      // The layout borrows the tree (bvh2 as built): both stay alive with the cells.
+      std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled));
+      auto keep = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::shared_ptr<const CompiledLayout>>>(tree, shared_layout);
+      const double compile_median = summarize(compile_ms).median;
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
         if (!wanted(layout_name, rs)) continue;
-        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
-        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
-          if (rs.occlusion) compiled->trace_any(rs.rays, occluded);
-          else compiled->trace_closest(rs.rays, hits);
-        });
-        const TraceCounts counts = rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
-
-        CsvRow row = base_row(scene, b, threads);
-        row["isa"] = compiled->isa();
+        TraceCell cell;
+        CsvRow& row = cell.row;
+        row = base_row(scene, b, threads);
+        row["isa"] = shared_layout->isa();
         row["layout"] = layout_name;
         put_timing(row, "build_ms", build_t);
-        row["layout_ms"] = fmt::format("{:.4f}", summarize(compile_ms).median);
-        row["mem_bytes"] = std::to_string(compiled->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene.triangles.size());
+        row["layout_ms"] = fmt::format("{:.4f}", compile_median);
+        row["mem_bytes"] = std::to_string(shared_layout->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(shared_layout->bytes(), scene.triangles.size());
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
         put_tree_stats(row, stats, cost);
         row["arity"] = std::to_string(bvh.arity);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());
-        put_timing(row, "trace_mrays", trace_t);
-        row["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
-        row["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
-        row["reference"] = refs[s].name;
-        row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], rs, diagonal_, hits, occluded));
         row["query"] = rs.occlusion ? "any" : "closest";
-        csv_ms_ += time_ms([&] { csv.append(row); });
-        progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
-                                       b.run.label(), layout_name, threads, rs.name, build_t.median, trace_t.median,
-                                       row["mismatches"]));
+        cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout_name, threads, rs.name);
+        cell.build_ms = build_t.median;
+        cell.set = s;
+        cell.rays = rs.rays.size();
+        cell.keep_alive = keep;
+        cell.hits = std::make_shared<std::vector<Hit>>(rs.occlusion ? 0 : rs.rays.size());
+        cell.occluded = std::make_shared<std::vector<uint8_t>>(rs.occlusion ? rs.rays.size() : 0);
+        const CompiledLayout* layout_ptr = shared_layout.get();
+        const RaySet* set_ptr = &rs;
+        cell.trace = [layout_ptr, set_ptr, hits = cell.hits, occluded = cell.occluded] {
+          if (set_ptr->occlusion) layout_ptr->trace_any(set_ptr->rays, *occluded);
+          else layout_ptr->trace_closest(set_ptr->rays, *hits);
+        };
+        cell.count = [layout_ptr, set_ptr] {
+          return set_ptr->occlusion ? layout_ptr->count_any(set_ptr->rays) : layout_ptr->count_closest(set_ptr->rays);
+        };
+        cells.push_back(std::move(cell));
       }
     }
   }
 
+  // An Embree build and the device it lives in, kept together for its cells.
+  struct EmbreeBuild {
+    explicit EmbreeBuild(int threads) : device(threads) {}
+    EmbreeDevice device;
+    std::unique_ptr<EmbreeScene> scene;
+  };
+
+  // Builds (timed) an Embree scene and queues a cell per supported Embree layout and wanted ray set.
   template <class Wanted>
-  void run_embree(const Scene& scene, const ResolvedBuilder& b, int threads, const std::vector<RaySet>& sets,
-                  const std::vector<Reference>& refs, Wanted wanted, CsvWriter& csv, Progress& progress) {
-    EmbreeDevice device(threads);
-    std::unique_ptr<EmbreeScene> built;
+  void prepare_embree(const Scene& scene, const ResolvedBuilder& b, int threads, const std::vector<RaySet>& sets,
+                      Wanted wanted, std::vector<TraceCell>& cells) {
+    auto held = std::make_shared<EmbreeBuild>(threads);
+    EmbreeDevice& device = held->device;
+    std::unique_ptr<EmbreeScene>& built = held->scene;
     for (int w = 0; w < cfg_.reps.build_warmup; ++w) built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
     std::vector<double> build_ms;
     int64_t peak = 0;
@@ -409,18 +498,9 @@ class ExperimentRunner {
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
         if (!wanted(layout.name, rs)) continue;
-        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
-        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
-          if (layout.packet_width == 1) {
-            if (rs.occlusion) embree_occluded1(*built, rs.rays, occluded);
-            else embree_intersect1(*built, rs.rays, hits);
-          } else {
-            if (rs.occlusion) embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
-            else embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
-          }
-        });
-        CsvRow row = base_row(scene, b, threads);
+        TraceCell cell;
+        CsvRow& row = cell.row;
+        row = base_row(scene, b, threads);
         row["isa"] = "embree:" + embree_isa(device);
         row["layout"] = layout.name;
         put_timing(row, "build_ms", build_t);
@@ -429,14 +509,27 @@ class ExperimentRunner {
         row["mem_peak_bytes"] = std::to_string(peak);
         row["ray_set"] = rs.name;
         row["ray_count"] = std::to_string(rs.rays.size());
-        put_timing(row, "trace_mrays", trace_t);
-        row["reference"] = refs[s].name;
-        row["mismatches"] = refs[s].name == "none" ? "" : std::to_string(count_mismatches(refs[s], rs, diagonal_, hits, occluded));
         row["query"] = rs.occlusion ? "any" : "closest";
-        csv_ms_ += time_ms([&] { csv.append(row); });
-        progress.cell_done(fmt::format("{} {} {} t={} {}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
-                                       b.run.label(), layout.name, threads, rs.name, build_t.median, trace_t.median,
-                                       row["mismatches"]));
+        cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout.name, threads, rs.name);
+        cell.build_ms = build_t.median;
+        cell.set = s;
+        cell.rays = rs.rays.size();
+        cell.keep_alive = held;
+        cell.hits = std::make_shared<std::vector<Hit>>(rs.occlusion ? 0 : rs.rays.size());
+        cell.occluded = std::make_shared<std::vector<uint8_t>>(rs.occlusion ? rs.rays.size() : 0);
+        const EmbreeScene* embree = built.get();
+        const RaySet* set_ptr = &rs;
+        const int width = layout.packet_width;
+        cell.trace = [embree, set_ptr, width, hits = cell.hits, occluded = cell.occluded] {
+          if (width == 1) {
+            if (set_ptr->occlusion) embree_occluded1(*embree, set_ptr->rays, *occluded);
+            else embree_intersect1(*embree, set_ptr->rays, *hits);
+          } else {
+            if (set_ptr->occlusion) embree_occluded_packets(*embree, set_ptr->rays, *occluded, width);
+            else embree_intersect_packets(*embree, set_ptr->rays, *hits, width);
+          }
+        };
+        cells.push_back(std::move(cell));
       }
     }
   }

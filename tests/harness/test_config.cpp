@@ -71,6 +71,7 @@ build = 7
 build_warmup = 0
 trace = 3
 trace_warmup = 2
+interleave = false
 
 [[builder]]
 name = "binned_sah"
@@ -124,7 +125,7 @@ count = 99
   expected.layouts = {"bvh2"};
   expected.reference = ReferencePolicy::kAuto;
   expected.brute_force_max_triangles = 5000;
-  expected.reps = {7, 0, 3, 2};
+  expected.reps = {7, 0, 3, 2, false};
   expected.builders = {{"binned_sah", {{"bins", "8"}, {"max_leaf", "4"}}},
                        {"binned_sah", {{"bins", "16"}, {"max_leaf", "4"}}},
                        {"sweep_sah", {}},
@@ -193,7 +194,7 @@ TEST(HarnessConfigDefaults, OptionalKeysMissing) {
   EXPECT_TRUE(config.optional_scenes.empty());
   EXPECT_EQ(config.layouts, std::vector<std::string>{"bvh2"});
   EXPECT_EQ(config.reps, Repetitions{});
-  EXPECT_EQ(config.reps, (Repetitions{5, 1, 5, 1}));
+  EXPECT_EQ(config.reps, (Repetitions{5, 1, 5, 1, true}));
   EXPECT_EQ(config.reference, ReferencePolicy::kAuto);
   EXPECT_EQ(config.brute_force_max_triangles, 20000u);
   ASSERT_EQ(config.builders.size(), 1u);
@@ -488,6 +489,8 @@ TEST(HarnessConfigErrors, CountsBelowMinimum) {
   expect_error(std::string(kBase) + "[repetitions]\ntrace = 0\n", 11, {"repetitions.trace = 0"});
   expect_error(std::string(kBase) + "[repetitions]\ntrace_warmup = -1\n", 11,
                {"repetitions.trace_warmup = -1"});
+  expect_error(std::string(kBase) + "[repetitions]\ninterleave = 1\n", 11,
+               {"repetitions.interleave must be true or false"});
   const auto ok = parse_with("[repetitions]\nbuild_warmup = 0\ntrace_warmup = 0\n");
   EXPECT_EQ(ok.reps, (Repetitions{5, 0, 5, 0}));
 }

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "core/error.h"
@@ -65,6 +66,42 @@ TEST(HarnessRun, EveryCellWritesARowWithNoMismatchesAndResumeSkipsThem) {
   ASSERT_EQ(run_experiment({config, true, "", std::nullopt}, again), 0);
   EXPECT_EQ(read_csv(csv).size(), 32u);
   EXPECT_NE(again.str().find("0 cells to run"), std::string::npos) << again.str();
+}
+
+TEST(HarnessRun, InterleavedAndBackToBackRepetitionsGiveTheSameCellsAndCounts) {
+  // Interleaving changes only when each repetition runs: the same cells, each timed `trace` times, with
+  // the same counts and reference checks, and (Embree's cells included) every structure alive until its
+  // cells are written.
+  const std::string embree = "[[builder]]\nname = \"embree\"\nquality = \"medium\"\n";
+  std::map<std::string, std::map<std::string, std::string>> by_mode[2];
+  for (int interleave = 0; interleave < 2; ++interleave) {
+    const std::string name = interleave ? "run_interleaved" : "run_back_to_back";
+    const auto config = write_config(name, embree);
+    std::stringstream text;
+    text << std::ifstream(config).rdbuf();
+    std::string toml = text.str();
+    const auto reps = toml.find("trace_warmup = 0\n");
+    ASSERT_NE(reps, std::string::npos);
+    toml.insert(reps, std::string("interleave = ") + (interleave ? "true" : "false") + "\n");
+    std::ofstream(config) << toml;
+
+    std::ostringstream log;
+    ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+    EXPECT_EQ(log.str().find("trace repetition") != std::string::npos, interleave == 1) << log.str();
+    for (const auto& row : read_csv(temp_dir() / (name + ".csv"))) {
+      const std::string key = row.at("scene") + "|" + row.at("builder") + "|" + row.at("builder_params") + "|" +
+                              row.at("layout") + "|" + row.at("threads") + "|" + row.at("ray_set");
+      EXPECT_EQ(row.at("trace_reps"), "2");
+      EXPECT_GT(std::stod(row.at("trace_mrays_min")), 0.0) << key;
+      by_mode[interleave][key] = {{"nodes_per_ray", row.at("nodes_per_ray")},
+                                  {"prims_per_ray", row.at("prims_per_ray")},
+                                  {"mismatches", row.at("mismatches")},
+                                  {"sah_cost", row.at("sah_cost")}};
+    }
+  }
+  // 2 scenes x 2 thread counts x 2 ray sets x (2 binned runs x 2 layouts + Embree's layouts).
+  EXPECT_GE(by_mode[0].size(), 2u * 2u * 2u * (4u + 1u));
+  EXPECT_EQ(by_mode[0], by_mode[1]);
 }
 
 TEST(HarnessRun, ResumeAfterAnInterruptedRunCompletesOnlyTheMissingCells) {

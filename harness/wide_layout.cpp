@@ -22,7 +22,10 @@ template <uint32_t N>
 class WideLayout final : public CompiledLayout {
  public:
   WideLayout(WideBvh<N> bvh, std::size_t triangle_count, KernelIsa isa, const KernelVariant& variant)
-      : bvh_(std::move(bvh)), triangle_count_(triangle_count), isa_(isa) {
+      : bvh_(std::move(bvh)),
+        triangle_count_(triangle_count),
+        isa_(isa),
+        shear_(variant.triangle == TriangleTestKind::kWatertight) {
     closest_ = find_wide_kernel(isa, N, variant, false, false);
     any_ = find_wide_kernel(isa, N, variant, true, false);
     count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
@@ -67,7 +70,7 @@ class WideLayout final : public CompiledLayout {
                         WideRay setup[kWideChunk];
                         for (std::size_t i = r.begin(); i < r.end(); i += kWideChunk) {
                           const std::size_t n = std::min(kWideChunk, r.end() - i);
-                          for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k]);
+                          for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
                           kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr}, i);
                         }
                       });
@@ -83,7 +86,7 @@ class WideLayout final : public CompiledLayout {
           std::vector<uint8_t> occluded(kWideChunk);
           for (std::size_t i = r.begin(); i < r.end(); i += kWideChunk) {
             const std::size_t n = std::min(kWideChunk, r.end() - i);
-            for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k]);
+            for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
             WideCounts c;
             kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c});
             acc.rays += c.rays;
@@ -103,6 +106,7 @@ class WideLayout final : public CompiledLayout {
   WideBvh<N> bvh_;
   std::size_t triangle_count_;
   KernelIsa isa_;
+  bool shear_;  // the rays need the watertight shear (make_wide_ray)
   WideKernel closest_ = nullptr, any_ = nullptr, count_closest_ = nullptr, count_any_ = nullptr;
 };
 

@@ -60,7 +60,7 @@ uint32_t blocks_for(uint32_t prims) { return (prims + kBlockWidth - 1) / kBlockW
 
 }  // namespace
 
-WideRay make_wide_ray(const Ray& ray) {
+WideRay make_wide_ray(const Ray& ray, bool shear) {
   WideRay r;
   for (uint32_t axis = 0; axis < 3; ++axis) {
     r.org[axis] = ray.org[axis];
@@ -75,9 +75,24 @@ WideRay make_wide_ray(const Ray& ray) {
   r.tmax = ray.tmax;
   // An untraceable ray (core/ray.h) gets an empty interval, which no box test can widen, NaN or not.
   if (!traceable(ray)) r.tmin = 1.0f, r.tmax = 0.0f;
-  const WatertightShear shear = watertight_shear(ray.dir);
-  r.kx = shear.kx, r.ky = shear.ky, r.kz = shear.kz;
-  r.sx = shear.sx, r.sy = shear.sy, r.sz = shear.sz;
+  if (!shear) {
+    r.kx = 0, r.ky = 1, r.kz = 2;
+    r.sx = r.sy = r.sz = 0.0f;
+    return r;
+  }
+  // watertight_shear's axes and factors, with selects in place of its branches: the axis of largest |dir|
+  // is as good as random for diffuse rays, and a mispredicted branch per ray cost more than the test.
+  const float ax = std::abs(ray.dir.x), ay = std::abs(ray.dir.y), az = std::abs(ray.dir.z);
+  const bool x_largest = ax >= ay && ax >= az;
+  const uint32_t kz = x_largest ? 0u : (ay >= az ? 1u : 2u);
+  const uint32_t next = kz == 2 ? 0u : kz + 1, after = next == 2 ? 0u : next + 1;
+  const bool swap = ray.dir[kz] < 0.0f;
+  r.kz = kz;
+  r.kx = swap ? after : next;
+  r.ky = swap ? next : after;
+  r.sx = ray.dir[r.kx] / ray.dir[kz];
+  r.sy = ray.dir[r.ky] / ray.dir[kz];
+  r.sz = 1.0f / ray.dir[kz];
   return r;
 }
 

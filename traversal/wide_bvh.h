@@ -64,7 +64,9 @@ struct WideRay {
   float sx, sy, sz;
 };
 
-WideRay make_wide_ray(const Ray& ray);
+/// `shear`: also the watertight test's shear; the Möller–Trumbore kernels do not read it, and leaving it
+/// out takes 3 divisions and a branchy axis choice off every ray.
+WideRay make_wide_ray(const Ray& ray, bool shear = true);
 
 /// A compiled wide tree. Node 0 is the root (always an inner node: a tree that is a single leaf gets a
 /// root with one leaf slot); children have larger indices than their parents.

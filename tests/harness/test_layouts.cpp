@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -18,7 +19,9 @@
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
 #include "traversal/bvh2_traversal.h"
+#include "traversal/triangle_tests.h"
 #include "traversal/variant_dispatch.h"
+#include "traversal/wide_bvh.h"
 
 namespace sahbench {
 namespace {
@@ -334,6 +337,32 @@ TEST(Layouts, WideLayoutsRejectWiderTreesAndReportTheirIsa) {
   EXPECT_EQ(compiled->isa(), std::string(to_string(best_kernel_isa())));
   EXPECT_EQ(compile_layout("bvh8:isa=scalar", wide8, tris)->isa(), "scalar");
   EXPECT_GT(compiled->bytes(), 0u);
+}
+
+TEST(Layouts, WideRaySetupHasTheScalarWatertightShear) {
+  // make_wide_ray picks the shear axes without branches; it must agree with watertight_shear bit for bit
+  // (the kernels' hits are compared with the scalar test's), ties and signed zeros included.
+  const float values[] = {-2.0f, -1.0f, -0.5f, -0.0f, 0.0f, 0.5f, 1.0f, 2.0f, 1e-30f, -3e30f};
+  int checked = 0;
+  for (float x : values)
+    for (float y : values)
+      for (float z : values) {
+        if (x == 0.0f && y == 0.0f && z == 0.0f) continue;
+        Ray ray;
+        ray.org = {0.0f, 0.0f, 0.0f};
+        ray.dir = {x, y, z};
+        const WideRay wide = make_wide_ray(ray);
+        const WatertightShear shear = watertight_shear(ray.dir);
+        SCOPED_TRACE(std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z));
+        EXPECT_EQ(wide.kx, shear.kx);
+        EXPECT_EQ(wide.ky, shear.ky);
+        EXPECT_EQ(wide.kz, shear.kz);
+        EXPECT_EQ(std::bit_cast<uint32_t>(wide.sx), std::bit_cast<uint32_t>(shear.sx));
+        EXPECT_EQ(std::bit_cast<uint32_t>(wide.sy), std::bit_cast<uint32_t>(shear.sy));
+        EXPECT_EQ(std::bit_cast<uint32_t>(wide.sz), std::bit_cast<uint32_t>(shear.sz));
+        ++checked;
+      }
+  EXPECT_EQ(checked, 1000 - 8);  // all but the eight zero vectors (+-0 per component)
 }
 
 }  // namespace

@@ -37,7 +37,7 @@ void print_catalogue(std::ostream& out) {
   fmt::print(out, "  kernel ISAs available here:");
   for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
     if (kernel_isa_available(isa)) fmt::print(out, " {}", to_string(isa));
-  fmt::print(out, " (auto = {})\n", to_string(best_kernel_isa()));
+  fmt::print(out, " (auto = {})\n", to_string(preferred_kernel_isa()));
   fmt::print(out, "  {:<14} {}\n", "embree_1/8/16", "Embree's own BVH, rtcIntersect1/Occluded1 and 8/16-wide packets (builder embree)");
 
   fmt::print(out, "\nray sets (config: [[ray_set]] kind = ...):\n");

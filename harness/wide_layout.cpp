@@ -114,11 +114,11 @@ class WideLayout final : public CompiledLayout {
 
 std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh, std::span<const Triangle> triangles,
                                                     const LayoutSpec& spec) {
-  KernelIsa isa = spec.isa == KernelIsa::kAuto ? best_kernel_isa() : spec.isa;
+  KernelIsa isa = spec.isa == KernelIsa::kAuto ? preferred_kernel_isa() : spec.isa;
   if (!kernel_isa_available(isa))
     throw Error("layout '" + spec.text() + "': isa " + std::string(to_string(isa)) +
                 " is not available on this CPU or build (auto would pick " +
-                std::string(to_string(best_kernel_isa())) + ")");
+                std::string(to_string(preferred_kernel_isa())) + ")");
   if (width == 4) return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles), triangles.size(), isa, spec.variant);
   if (width == 8) return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles), triangles.size(), isa, spec.variant);
   throw Error("no " + std::to_string(width) + "-wide layout");

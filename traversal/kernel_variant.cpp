@@ -95,4 +95,6 @@ KernelIsa best_kernel_isa(KernelIsa widest) {
   return KernelIsa::kScalar;
 }
 
+KernelIsa preferred_kernel_isa() { return best_kernel_isa(KernelIsa::kAvx2); }
+
 }  // namespace sahbench

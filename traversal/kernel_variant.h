@@ -44,5 +44,9 @@ std::optional<KernelIsa> parse_kernel_isa(std::string_view name);
 bool kernel_isa_available(KernelIsa isa);
 /// The widest available of kAvx512, kAvx2, kSse, kScalar, never above `widest` (kAuto: no limit).
 KernelIsa best_kernel_isa(KernelIsa widest = KernelIsa::kAuto);
+/// What isa=auto runs: the best available up to AVX2. The wide kernels use 128- and 256-bit vectors only,
+/// and their AVX-512 build (the same code in EVEX encodings) traced 0-5% slower than the AVX2 one on the
+/// AMD EPYC (Zen 4) these benchmarks run on (configs/wide.toml, interleaved); isa=avx512 still selects it.
+KernelIsa preferred_kernel_isa();
 
 }  // namespace sahbench

@@ -72,10 +72,14 @@ std::string format_duration(double seconds) {
 class Progress {
  public:
   Progress(std::size_t total, std::ostream& log) : total_(total), log_(log), start_(std::chrono::steady_clock::now()) {}
+  /// Interleaved cells finish together: announcing the batch first makes the time left reckon with all
+  /// of it from its first line on, rather than with one cell for the whole batch's time.
+  void batch(std::size_t cells) { batch_end_ = std::min(total_, done_ + cells); }
   void cell_done(const std::string& what) {
     ++done_;
     const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const double left = done_ ? elapsed / static_cast<double>(done_) * static_cast<double>(total_ - done_) : 0.0;
+    const std::size_t counted = std::max(done_, batch_end_);
+    const double left = elapsed / static_cast<double>(counted) * static_cast<double>(total_ - counted);
     log_ << fmt::format("[{}/{}] {} | elapsed {}, left ~{}\n", done_, total_, what, format_duration(elapsed),
                         format_duration(left));
   }
@@ -83,7 +87,7 @@ class Progress {
   double elapsed_s() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
 
  private:
-  std::size_t total_, done_ = 0;
+  std::size_t total_, done_ = 0, batch_end_ = 0;
   std::ostream& log_;
   std::chrono::steady_clock::time_point start_;
 };
@@ -323,6 +327,7 @@ class ExperimentRunner {
   // Completes each timed cell's row (timings, counts, mismatches from its last pass) and writes it.
   void finish_cells(std::vector<TraceCell>& cells, const std::vector<RaySet>& sets, const std::vector<Reference>& refs,
                     CsvWriter& csv, Progress& progress) {
+    progress.batch(cells.size());
     for (auto& cell : cells) {
       const RaySet& rs = sets[cell.set];
       const Reference& ref = refs[cell.set];

@@ -1,5 +1,7 @@
 #include "harness/build_command.h"
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 #include <fmt/ostream.h>
 #include <tbb/global_control.h>
@@ -110,11 +112,14 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
     };
     for (int w = 0; w < options.warmup; ++w)
       for (auto& c : candidates) build_once(c);
+    // On a terminal the progress line is rewritten in place; in a log file each repetition gets a line.
+    const bool terminal = isatty(STDERR_FILENO) != 0;
     for (int rep = 0; rep < options.reps; ++rep) {
       for (auto& c : candidates) c.samples_ms.push_back(build_once(c));
-      log << "\rthreads " << threads << ": rep " << rep + 1 << " of " << options.reps << std::flush;
+      log << (terminal ? "\r" : "") << "threads " << threads << ": rep " << rep + 1 << " of " << options.reps
+          << (terminal ? "" : "\n") << std::flush;
     }
-    log << "\r" << std::string(40, ' ') << "\r" << std::flush;
+    if (terminal) log << "\r" << std::string(40, ' ') << "\r" << std::flush;
 
     std::optional<double> embree_medium_ms;
     for (const auto& c : candidates)

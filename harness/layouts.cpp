@@ -57,18 +57,17 @@ class Bvh2Layout final : public CompiledLayout {
   Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles)
       : bvh_(&bvh), triangles_(triangles), triangle_count_(triangles.size()) {}
 
-  /// Packed: owns a copy of the nodes and the triangles in leaf order.
+  /// Packed: owns a copy of the nodes in depth-first order and the triangles in leaf order.
   static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles) {
     auto layout = std::unique_ptr<Bvh2Layout>(new Bvh2Layout());
-    layout->owned_.nodes = bvh.nodes;
-    layout->owned_.arity = bvh.arity;
-    const std::size_t refs = bvh.prim_refs.size();
-    layout->owned_.prim_refs.resize(refs);
+    layout->owned_ = depth_first(bvh);
+    const std::size_t refs = layout->owned_.prim_refs.size();
     layout->packed_.resize(refs);
-    layout->ids_ = bvh.prim_refs;
+    layout->ids_ = std::move(layout->owned_.prim_refs);
+    layout->owned_.prim_refs.resize(refs);
     tbb::parallel_for(std::size_t{0}, refs, [&](std::size_t i) {
       layout->owned_.prim_refs[i] = static_cast<uint32_t>(i);
-      layout->packed_[i] = triangles[bvh.prim_refs[i]];
+      layout->packed_[i] = triangles[layout->ids_[i]];
     });
     layout->bvh_ = &layout->owned_;
     layout->triangles_ = layout->packed_;
@@ -123,6 +122,37 @@ class Bvh2Layout final : public CompiledLayout {
 
  private:
   Bvh2Layout() = default;
+
+  // The same tree with its nodes in depth-first order, each node's children kept together and placed just
+  // before the first child's own children, and its references in the order the leaves are met: a ray
+  // descending to the nearest leaf then reads nodes that are close in memory, whatever order the builder
+  // wrote them in (the top-down builders fill per-subtree regions, the SBVH another way), so layouts of
+  // the same tree from different builders also trace alike.
+  static Bvh depth_first(const Bvh& bvh) {
+    Bvh out;
+    out.arity = bvh.arity;
+    out.nodes.reserve(bvh.nodes.size());
+    out.prim_refs.reserve(bvh.prim_refs.size());
+    if (bvh.nodes.empty()) return out;
+    out.nodes.push_back(bvh.nodes[0]);
+    std::vector<std::pair<uint32_t, uint32_t>> stack = {{0, 0}};  // (index in bvh, index in out)
+    while (!stack.empty()) {
+      const auto [from, to] = stack.back();
+      stack.pop_back();
+      const Node& node = bvh.nodes[from];
+      if (node.is_leaf()) {
+        out.nodes[to].first = static_cast<uint32_t>(out.prim_refs.size());
+        out.prim_refs.insert(out.prim_refs.end(), bvh.prim_refs.begin() + node.first,
+                             bvh.prim_refs.begin() + node.first + node.prim_count);
+        continue;
+      }
+      const auto first = static_cast<uint32_t>(out.nodes.size());
+      out.nodes[to].first = first;
+      for (uint32_t c = 0; c < node.child_count; ++c) out.nodes.push_back(bvh.nodes[node.first + c]);
+      for (uint32_t c = node.child_count; c-- > 0;) stack.push_back({node.first + c, first + c});
+    }
+    return out;
+  }
 
   const Bvh* bvh_ = nullptr;
   std::span<const Triangle> triangles_;

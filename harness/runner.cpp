@@ -300,6 +300,22 @@ class ExperimentRunner {
     std::vector<double> mrays;
   };
 
+  // The ray set's columns of a cell's row, its log label, and the buffers its passes write.
+  static void set_up_cell(TraceCell& cell, const Scene& scene, const ResolvedBuilder& b, const std::string& layout,
+                          int threads, const RaySet& rs, std::size_t set, double build_ms,
+                          std::shared_ptr<const void> keep_alive) {
+    cell.row["ray_set"] = rs.name;
+    cell.row["ray_count"] = std::to_string(rs.rays.size());
+    cell.row["query"] = rs.occlusion ? "any" : "closest";
+    cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout, threads, rs.name);
+    cell.build_ms = build_ms;
+    cell.set = set;
+    cell.rays = rs.rays.size();
+    cell.keep_alive = std::move(keep_alive);
+    cell.hits = std::make_shared<std::vector<Hit>>(rs.occlusion ? 0 : rs.rays.size());
+    cell.occluded = std::make_shared<std::vector<uint8_t>>(rs.occlusion ? rs.rays.size() : 0);
+  }
+
   // Trace repetitions. Interleaved: every cell's warm-ups, then repetition r of every cell in turn, each
   // round starting one cell later so that no cell always follows the same one. Otherwise each cell's
   // warm-ups and repetitions back to back.
@@ -449,16 +465,7 @@ class ExperimentRunner {
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
         put_tree_stats(row, stats, cost);
         row["arity"] = std::to_string(bvh.arity);
-        row["ray_set"] = rs.name;
-        row["ray_count"] = std::to_string(rs.rays.size());
-        row["query"] = rs.occlusion ? "any" : "closest";
-        cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout_name, threads, rs.name);
-        cell.build_ms = build_t.median;
-        cell.set = s;
-        cell.rays = rs.rays.size();
-        cell.keep_alive = keep;
-        cell.hits = std::make_shared<std::vector<Hit>>(rs.occlusion ? 0 : rs.rays.size());
-        cell.occluded = std::make_shared<std::vector<uint8_t>>(rs.occlusion ? rs.rays.size() : 0);
+        set_up_cell(cell, scene, b, layout_name, threads, rs, s, build_t.median, keep);
         const CompiledLayout* layout_ptr = shared_layout.get();
         const RaySet* set_ptr = &rs;
         cell.trace = [layout_ptr, set_ptr, hits = cell.hits, occluded = cell.occluded] {
@@ -512,16 +519,7 @@ class ExperimentRunner {
         row["mem_bytes"] = std::to_string(built->bytes());
         row["bytes_per_tri"] = bytes_per_triangle(built->bytes(), scene.triangles.size());
         row["mem_peak_bytes"] = std::to_string(peak);
-        row["ray_set"] = rs.name;
-        row["ray_count"] = std::to_string(rs.rays.size());
-        row["query"] = rs.occlusion ? "any" : "closest";
-        cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout.name, threads, rs.name);
-        cell.build_ms = build_t.median;
-        cell.set = s;
-        cell.rays = rs.rays.size();
-        cell.keep_alive = held;
-        cell.hits = std::make_shared<std::vector<Hit>>(rs.occlusion ? 0 : rs.rays.size());
-        cell.occluded = std::make_shared<std::vector<uint8_t>>(rs.occlusion ? rs.rays.size() : 0);
+        set_up_cell(cell, scene, b, layout.name, threads, rs, s, build_t.median, held);
         const EmbreeScene* embree = built.get();
         const RaySet* set_ptr = &rs;
         const int width = layout.packet_width;

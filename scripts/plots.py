@@ -41,7 +41,8 @@ except ImportError as e:  # the script is useless without them; say which one is
 NUMERIC = [
     "threads", "scene_triangles", "frame", "build_ms_median", "build_ms_min", "build_ms_max", "mem_bytes",
     "sah_cost", "ray_count", "trace_mrays_median", "trace_mrays_min", "trace_mrays_max",
-    "false_misses", "false_hits", "wrong_prim", "leaks", "t_err_ulps_max", "t_err_ulps_mean",
+    "false_misses", "false_hits", "wrong_prim", "leaks", "t_err_ulps_max", "t_err_ulps_mean", "layout_ms",
+    "layout_refit_ms",
 ]
 ERROR_COLUMNS = ["false_misses", "false_hits", "wrong_prim", "leaks"]
 TEXT = ["run_id", "scene", "builder", "builder_params", "layout", "ray_set", "cpu", "git_commit"]
@@ -292,6 +293,13 @@ def refit_base(builder, params):
     return None
 
 
+def short_series(builder, params):
+    """A legend label: the builder with only its arity or quality (the full parameters are in the CSV)."""
+    keep = [kv for kv in str(params if isinstance(params, str) else "").split(";")
+            if kv.split("=")[0] in ("arity", "quality")]
+    return f"{builder} {','.join(keep)}".strip()
+
+
 def plot_refit_vs_rebuild(data, out_dir, stem):
     need = ["scene", "frame", "builder", "build_ms_median"]
     if not has(data, need) or not (data["frame"].fillna(0) > 0).any():
@@ -312,11 +320,15 @@ def plot_refit_vs_rebuild(data, out_dir, stem):
         b = b.iloc[0] if isinstance(b, pd.DataFrame) else b
         pairs.append({
             "scene": r["scene"], "threads": r.get("threads", 1), "frame": r["frame"],
-            "series": f"{r['builder']} {r['builder_params']}".strip(),
+            "series": short_series(r["builder"], r["builder_params"]),
             "layout": r.get("layout", ""), "ray_set": r.get("ray_set", ""),
             "sah": r.get("sah_cost", float("nan")) / b.get("sah_cost", float("nan")) if "sah_cost" in rows.columns
             else float("nan"),
             "time": r["build_ms_median"] / b["build_ms_median"],
+            # With the layout: tree refit + layout refit against build + layout compile.
+            "time_total": (r["build_ms_median"] + r.get("layout_refit_ms", float("nan")))
+            / (b["build_ms_median"] + b.get("layout_ms", float("nan"))) if "layout_refit_ms" in rows.columns
+            else float("nan"),
             "trace": b.get("trace_mrays_median", float("nan")) / r.get("trace_mrays_median", float("nan"))
             if "trace_mrays_median" in rows.columns else float("nan"),
         })
@@ -325,11 +337,15 @@ def plot_refit_vs_rebuild(data, out_dir, stem):
     pairs = pd.DataFrame(pairs)
     written = []
     for (scene, nthreads), group in pairs.groupby(["scene", "threads"], sort=False):
-        fig, (ax_q, ax_t) = plt.subplots(2, 1, figsize=(7.0, 6.5), sharex=True)
+        fig, (ax_q, ax_t) = plt.subplots(2, 1, figsize=(11.0, 6.5), sharex=True)
         for series, s in group.groupby("series", sort=False):
             # SAH and build time do not depend on the layout or ray set: one line per series.
             per_frame = s.groupby("frame").first().sort_index()
             color = ax_t.plot(per_frame.index, per_frame["time"], marker="o", label=series)[0].get_color()
+            for layout, per_layout in s.dropna(subset=["time_total"]).groupby("layout", sort=False):
+                totals = per_layout.groupby("frame")["time_total"].first().sort_index()
+                ax_t.plot(totals.index, totals.values, linestyle=":", marker=".", color=color,
+                          label=f"{series}: with the {layout} layout's refit / compile")
             if per_frame["sah"].notna().any():  # Embree's own trees have no SAH cost of ours
                 ax_q.plot(per_frame.index, per_frame["sah"], marker="o", color=color, label=f"{series}: SAH cost")
             traced = s.dropna(subset=["trace"])
@@ -348,7 +364,7 @@ def plot_refit_vs_rebuild(data, out_dir, stem):
         ax_t.xaxis.set_major_locator(ticker.MaxNLocator(integer=True))
         for ax in (ax_q, ax_t):
             ax.grid(True, which="both", alpha=0.3)
-            ax.legend(fontsize=7)
+            ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
         fig.suptitle(f"{scene}, {nthreads} thread{'s' if nthreads != 1 else ''}: refit vs rebuild per frame\n"
                      f"{caption(data[data['scene'] == scene])}", fontsize=10)
         fig.tight_layout()

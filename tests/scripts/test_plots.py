@@ -82,9 +82,10 @@ def animation_rows():
     for frame in range(4):
         common = dict(scene="proc:wave", frame=frame, layout="bvh2", ray_set="primary")
         rows.append(base_row(builder="binned_sah", builder_params="bins=16", build_ms_median=10, sah_cost=30,
-                             trace_mrays_median=5, **common))
+                             trace_mrays_median=5, layout_ms=2, **common))
         rows.append(base_row(builder="refit(binned_sah)", builder_params="bins=16", build_ms_median=1,
-                             sah_cost=30 * (1 + frame / 10), trace_mrays_median=5 / (1 + frame / 20), **common))
+                             sah_cost=30 * (1 + frame / 10), trace_mrays_median=5 / (1 + frame / 20),
+                             layout_refit_ms=0.5, **common))
         common["layout"] = "embree_1"
         rows.append(base_row(builder="embree", builder_params="quality=medium", build_ms_median=8,
                              trace_mrays_median=9, **common))
@@ -128,6 +129,9 @@ def main():
     check(plots.refit_base("refit(binned_sah)", "bins=8") == ("binned_sah", "bins=8"), "refit_base refit(NAME)")
     check(plots.refit_base("embree", "quality=refit") == ("embree", "quality=medium"), "refit_base embree")
     check(plots.refit_base("binned_sah", "bins=8") is None, "refit_base of a build")
+    check(plots.short_series("refit(wide_binned_sah)", "arity=8;bins=32;max_leaf=8") == "refit(wide_binned_sah) arity=8",
+          "short_series keeps the arity only")
+    check(plots.short_series("embree", "quality=refit") == "embree quality=refit", "short_series keeps the quality")
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "bench/bench_data.h"
+#include "builders/refit.h"
 #include "builders/binned_sah.h"
 #include "builders/collapse.h"
 #include "builders/sweep_sah.h"
@@ -73,6 +74,17 @@ void BM_RefitWide8(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 100'000));
 }
 BENCHMARK(BM_RefitWide8)->Name("refit/bvh8")->Unit(benchmark::kMillisecond);
+
+// The common-format refit of the same 8-wide tree, which the bvh8 layout refit above follows in a run.
+void BM_RefitTree8(benchmark::State& state) {
+  Bvh tree = collapse_greedy(binary_tree(100'000), 8);
+  for (auto _ : state) {
+    refit(tree, soup(100'000));
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 100'000));
+}
+BENCHMARK(BM_RefitTree8)->Name("refit/tree8")->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace sahbench::bench

@@ -1,8 +1,10 @@
 #include "traversal/wide_bvh.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -141,8 +143,6 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
       }
     }
     out.nodes[w] = node;
-    if (out.levels.size() <= depth) out.levels.resize(depth + 1);
-    out.levels[depth].push_back(w);
   };
 
   for (uint32_t axis = 0; axis < 3; ++axis) {
@@ -176,51 +176,82 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
   return out;
 }
 
+namespace {
+
+// Parallel tasks per thread at the top of the tree, as in builders/refit.cpp: enough that a lopsided
+// tree still balances, few enough that spawning stays small next to the refit.
+constexpr int kRefitTasksPerThread = 16;
+
+// Post-order over the wide nodes, as refit() walks the common format: a slot's box is the union of its
+// leaf's triangles (rewritten into the leaf's blocks on the way) or of its child node's slots, refitted
+// first. Slots below `spawn_depth` are refitted on the calling thread, so each task is a whole subtree
+// and a single thread pays nothing for the parallel path (the level-by-level pass this replaces ran one
+// parallel_for per level and kept a list of nodes per level). Most of the time goes into rewriting the
+// blocks' vertices, which the common format's refit does not have.
 template <uint32_t N>
-void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles) {
-  // A slot's new box: a leaf's is the union of its triangles (rewritten into its blocks first), an inner
-  // child's the union of that child's slots, which a deeper level has already refitted.
-  auto union_of_slots = [](const WideNode<N>& node) {
+class WideRefitter {
+ public:
+  WideRefitter(WideBvh<N>& wide, std::span<const Triangle> triangles, uint32_t spawn_depth)
+      : nodes_(wide.nodes.data()), blocks_(wide.blocks.data()), triangles_(triangles.data()), spawn_depth_(spawn_depth) {}
+
+  Aabb refit(uint32_t index, uint32_t depth) const {
+    WideNode<N>& node = nodes_[index];
+    std::array<Aabb, N> boxes;
+    auto refit_slot = [&](uint32_t i) {
+      if (node.count[i] != 0) boxes[i] = refit_leaf(node.child[i], node.count[i]);
+      else if (node.child[i] != 0) boxes[i] = refit(node.child[i], depth + 1);  // 0: empty (no child is the root)
+    };
+    if (depth < spawn_depth_) {
+      tbb::parallel_for(uint32_t{0}, N, refit_slot);
+    } else {
+      for (uint32_t i = 0; i < N; ++i) refit_slot(i);
+    }
     Aabb box = Aabb::empty();
     for (uint32_t i = 0; i < N; ++i) {
-      if (node.count[i] == 0 && node.child[i] == 0) continue;  // empty slot (no child is the root)
-      box.extend(Aabb{{node.planes[0][i], node.planes[2][i], node.planes[4][i]},
-                            {node.planes[1][i], node.planes[3][i], node.planes[5][i]}});
+      if (node.count[i] == 0 && node.child[i] == 0) continue;
+      set_box(node, i, boxes[i]);
+      box.extend(boxes[i]);
     }
     return box;
-  };
-  for (auto level = wide.levels.rbegin(); level != wide.levels.rend(); ++level) {
-    tbb::parallel_for(std::size_t{0}, level->size(), [&](std::size_t k) {
-      WideNode<N>& node = wide.nodes[(*level)[k]];
-      for (uint32_t i = 0; i < N; ++i) {
-        if (node.count[i] != 0) {
-          Aabb box = Aabb::empty();
-          for (uint32_t b = node.child[i]; b < node.child[i] + node.count[i]; ++b) {
-            TriangleBlock& block = wide.blocks[b];
-            for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
-              if (block.prim[lane] == kInvalidPrim) continue;
-              const Triangle& t = triangles[block.prim[lane]];
-              for (uint32_t axis = 0; axis < 3; ++axis) {
-                block.v0[axis][lane] = t.v0[axis];
-                block.v1[axis][lane] = t.v1[axis];
-                block.v2[axis][lane] = t.v2[axis];
-              }
-              box.extend(t.bounds());
-            }
-          }
-          set_box(node, i, box);
-        } else if (node.child[i] != 0) {
-          set_box(node, i, union_of_slots(wide.nodes[node.child[i]]));
-        }
-      }
-    });
   }
-  if (!wide.nodes.empty()) {
-    const Aabb root = union_of_slots(wide.nodes[0]);
-    for (uint32_t axis = 0; axis < 3; ++axis) {
-      wide.root_planes[2 * axis] = root.min[axis];
-      wide.root_planes[2 * axis + 1] = root.max[axis];
+
+ private:
+  Aabb refit_leaf(uint32_t first, uint32_t count) const {
+    Aabb box = Aabb::empty();
+    for (TriangleBlock* block = blocks_ + first; block != blocks_ + first + count; ++block) {
+      for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
+        if (block->prim[lane] == kInvalidPrim) continue;
+        const Triangle& t = triangles_[block->prim[lane]];
+        for (uint32_t axis = 0; axis < 3; ++axis) {
+          block->v0[axis][lane] = t.v0[axis];
+          block->v1[axis][lane] = t.v1[axis];
+          block->v2[axis][lane] = t.v2[axis];
+        }
+        box.extend(t.bounds());
+      }
     }
+    return box;
+  }
+
+  WideNode<N>* nodes_;
+  TriangleBlock* blocks_;
+  const Triangle* triangles_;
+  uint32_t spawn_depth_;
+};
+
+}  // namespace
+
+template <uint32_t N>
+void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles) {
+  if (wide.nodes.empty()) return;
+  const int threads = tbb::this_task_arena::max_concurrency();
+  uint32_t spawn_depth = 0;
+  if (threads > 1)
+    spawn_depth = static_cast<uint32_t>(std::ceil(std::log(double(threads) * kRefitTasksPerThread) / std::log(double(N))));
+  const Aabb root = WideRefitter<N>(wide, triangles, spawn_depth).refit(0, 0);
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    wide.root_planes[2 * axis] = root.min[axis];
+    wide.root_planes[2 * axis + 1] = root.max[axis];
   }
 }
 

@@ -77,8 +77,6 @@ struct WideBvh {
   float root_planes[6] = {};
   std::vector<WideNode<N>> nodes;
   std::vector<TriangleBlock> blocks;
-  /// Node indices grouped by depth, deepest level last: levels[d] are the nodes at depth d (for refit).
-  std::vector<std::vector<uint32_t>> levels;
 
   std::size_t bytes() const { return nodes.size() * sizeof(WideNode<N>) + blocks.size() * sizeof(TriangleBlock); }
 };

@@ -137,11 +137,16 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
           });
           if (HasFatalFailure()) return;
           EXPECT_EQ(closest_counts.rays, rays.size());
-          if (!tie_broken_differently) EXPECT_EQ(closest_counts.prims_tested, scalar_closest.prim_tests);
+          if (!tie_broken_differently) {
+            EXPECT_EQ(closest_counts.prims_tested, scalar_closest.prim_tests);
+          }
           // Any hit: the scalar kernel counts a leaf's whole size when it enters it, a SIMD layout only
           // the blocks it tests before the first hit; so only the binary layouts count exactly as many.
-          if (layout.arity == 2) EXPECT_EQ(any_counts.prims_tested, scalar_any.prim_tests);
-          else EXPECT_LE(any_counts.prims_tested, scalar_any.prim_tests);
+          if (layout.arity == 2) {
+            EXPECT_EQ(any_counts.prims_tested, scalar_any.prim_tests);
+          } else {
+            EXPECT_LE(any_counts.prims_tested, scalar_any.prim_tests);
+          }
           // A tree that is one leaf has no inner node in the common format but one root node in a wide
           // layout; otherwise both visit exactly the same nodes.
           if (!(layout.arity > 2 && bvh.root().is_leaf()) && !tie_broken_differently) {
@@ -278,6 +283,32 @@ TEST(Layouts, RefitEqualsAFreshCompileOfTheRefittedTree) {
         }
       }
     }
+  }
+}
+
+// A tree that is one leaf compiles to a wide root with a single leaf slot: its refit must move that slot
+// and the root's box (the kernels test the root box first), or the moved triangles are missed.
+TEST(Layouts, RefitMovesATreeThatIsOneLeaf) {
+  const auto original = test::random_triangles(1, 9);
+  const BuilderInfo& info = find_builder("binned_sah");
+  const Bvh bvh = info.build(BuildInput::from_triangles(original), resolve_params(info.name, info.params, {}));
+  ASSERT_TRUE(bvh.root().is_leaf());
+  std::vector<Triangle> moved = original;
+  for (Triangle& t : moved) t = {t.v0 + Vec3{40.0f, -25.0f, 7.0f}, t.v1 + Vec3{40.0f, -25.0f, 7.0f}, t.v2 + Vec3{40.0f, -25.0f, 7.0f}};
+  for (const char* spec : {"bvh4", "bvh8", "bvh8:isa=scalar"}) {
+    SCOPED_TRACE(spec);
+    auto layout = compile_layout(spec, bvh, original);
+    layout->refit(moved);
+    const auto rays = test::random_rays(moved, 200, 3);
+    std::vector<Hit> hits(rays.size());
+    layout->trace_closest(rays, hits);
+    std::size_t found = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      const Hit ref = brute_force_closest(moved, rays[i]);
+      found += ref.found();
+      ASSERT_TRUE(test::same_closest_hit(hits[i], ref, moved, rays[i])) << "ray " << i;
+    }
+    EXPECT_GT(found, 0u) << "rays must hit the moved triangles for the check to mean anything";
   }
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "builders/binned_sah.h"
+#include "builders/child_order.h"
 #include "builders/collapse.h"
 #include "builders/sbvh.h"
 #include "builders/sweep_sah.h"
@@ -171,13 +172,24 @@ BuilderInfo sbvh_info() {
           [](const ParamSet& p) { check_sbvh_params(sbvh_params(p)); }};
 }
 
+// The wide builders' trees come out with their children largest area first, the order in which the
+// any-hit kernels visit the children of wide nodes (child_order.h).
+BuilderInfo with_children_by_area(BuilderInfo info) {
+  info.build = [build = std::move(info.build)](const BuildInput& input, const ParamSet& p) {
+    Bvh bvh = build(input, p);
+    order_children_by_area(bvh);
+    return bvh;
+  };
+  return info;
+}
+
 std::vector<BuilderInfo>& registry() {
   // One line per builder.
   static std::vector<BuilderInfo> all = {
       binned_sah_info(),
       sweep_sah_info(),
-      wide_binned_sah_info(),
-      wide_collapse_info(),
+      with_children_by_area(wide_binned_sah_info()),
+      with_children_by_area(wide_collapse_info()),
       sbvh_info(),
   };
   return all;

@@ -71,7 +71,7 @@ class WideLayout final : public CompiledLayout {
                         for (std::size_t i = r.begin(); i < r.end(); i += kWideChunk) {
                           const std::size_t n = std::min(kWideChunk, r.end() - i);
                           for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
-                          kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr}, i);
+                          kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr, bvh_.any_hit_in_storage_order}, i);
                         }
                       });
   }
@@ -88,7 +88,7 @@ class WideLayout final : public CompiledLayout {
             const std::size_t n = std::min(kWideChunk, r.end() - i);
             for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
             WideCounts c;
-            kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c});
+            kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c, bvh_.any_hit_in_storage_order});
             acc.rays += c.rays;
             acc.nodes_visited += c.inner_visits + c.leaf_visits;
             acc.prims_tested += c.prim_tests;

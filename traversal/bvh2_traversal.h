@@ -37,6 +37,13 @@ struct TraversalCounters {
   friend bool operator==(const TraversalCounters&, const TraversalCounters&) = default;
 };
 
+/// Whether any hit visits a node's children in storage order rather than nearest first: on wide trees
+/// (arity above 2), whose builders store the children largest area first (builders/child_order.h), and
+/// where the 8-wide kernels' shadow rays were 2 to 8% faster that way than nearest first (no sort, and
+/// the larger box the likelier occluder). Binary trees stay nearest first: storage order cost their
+/// shadow rays 10 to 16% (both measured against Embree in one run; notes of issue 4).
+inline bool any_hit_in_storage_order(const Bvh& bvh) { return bvh.arity > 2; }
+
 namespace detail {
 
 /// Widest node any kernel here traverses (the common format allows 2..8 children).
@@ -64,9 +71,9 @@ struct StackEntry {
 // shrinks to the closest hit so far. kCount adds the statistics, compiled out of the timed kernels.
 //
 // Order: the children hit are pushed sorted so that the nearest entry is popped first (for two children
-// one compare and swap). Closest hit skips a popped node entered beyond the current closest hit. Any hit
-// sorts too: occluders tend to lie near the ray's origin (a shadow ray leaves a surface among others),
-// and on Sponza's shadow rays nearest-first made the 8-wide kernel 1.7x faster than storage order.
+// one compare and swap), and closest hit skips a popped node entered beyond the current closest hit.
+// Any hit sorts too on binary trees, but visits the children of wide trees in storage order
+// (any_hit_in_storage_order), as the wide kernels do.
 //
 // Ties: a hit at exactly the current closest t replaces it only when its primitive index is lower, so
 // among hits at the same float t the lowest index wins, as in the brute-force reference.
@@ -87,6 +94,7 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
 
   Hit best;
   float best_t = ray.tmax;
+  const bool wide = any_hit_in_storage_order(bvh);
   while (size > 0) {
     const StackEntry entry = stack[--size];
     if constexpr (!kAnyHit) {
@@ -124,8 +132,14 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
     }
     if (size + node.child_count > kStackCapacity) [[unlikely]]
       throw_stack_overflow(entry.node, node.child_count);
-    const uint32_t base = size;
     const uint32_t end = node.first + node.child_count;
+    const uint32_t base = size;
+    if (kAnyHit && wide) {
+      // Storage order: pushed last child first, so the first child entered is popped first.
+      for (uint32_t child = end; child-- > node.first;)
+        if (box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) stack[size++] = {child, t_entry};
+      continue;
+    }
     for (uint32_t child = node.first; child < end; ++child) {
       if (!box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) continue;
       uint32_t slot = size++;

@@ -77,6 +77,9 @@ struct WideBvh {
   float root_planes[6] = {};
   std::vector<WideNode<N>> nodes;
   std::vector<TriangleBlock> blocks;
+  /// Any hit visits children in slot order rather than nearest first: set for trees of arity above 2,
+  /// as the scalar kernel decides (bvh2_traversal.h: any_hit_in_storage_order).
+  bool any_hit_in_storage_order = false;
 
   std::size_t bytes() const { return nodes.size() * sizeof(WideNode<N>) + blocks.size() * sizeof(TriangleBlock); }
 };
@@ -116,6 +119,7 @@ struct WideBatch {
   Hit* hits;
   uint8_t* occluded;
   WideCounts* counts;
+  bool any_hit_in_storage_order;  ///< WideBvh::any_hit_in_storage_order
 };
 
 using WideKernel = void (*)(const WideBatch&);

@@ -434,16 +434,24 @@ inline void prefetch_slot(const WideNode<N>* nodes, const TriangleBlock* blocks,
 
 // The children of `node` that the ray enters (bit i of `mask`, entered at t_entry[i]): returns the one
 // to visit next and pushes the others. One child, the common case below the top levels, goes straight.
-// Two or more are sorted nearest first by a 64-bit key, the entry distance as an ordered integer above
-// and the slot below (ties go to the higher slot, as in bvh2_traversal.h, so both kernels visit the same
-// nodes); the rest are pushed farthest first and fetched ahead. Any-hit is sorted too: on Sponza's
-// shadow rays storage order is 1.7x slower (bvh2_traversal.h).
-template <uint32_t N>
+// Closest hit: two or more are sorted nearest first by a 64-bit key, the entry distance as an ordered
+// integer above and the slot below (ties go to the higher slot, as in bvh2_traversal.h, so both kernels
+// visit the same nodes); the rest are pushed farthest first and fetched ahead. With kSlotOrder (any
+// hit on a wide tree, bvh2_traversal.h's any_hit_in_storage_order) in slot order instead, which the
+// wide builders make largest area first (builders/child_order.h).
+template <uint32_t N, bool kSlotOrder>
 inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry, const WideNode<N>* nodes,
                               const TriangleBlock* blocks, WideStackEntry* stack, uint32_t& size) {
-  if ((mask & (mask - 1)) == 0) {
-    const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
-    return {node.child[i], node.count[i], t_entry[i]};
+  const uint32_t first = static_cast<uint32_t>(__builtin_ctz(mask));
+  if ((mask & (mask - 1)) == 0) return {node.child[first], node.count[first], t_entry[first]};
+  if constexpr (kSlotOrder) {
+    for (uint32_t rest = mask & (mask - 1); rest;) {
+      const uint32_t i = 31u - static_cast<uint32_t>(__builtin_clz(rest));  // the last slot left
+      stack[size++] = {node.child[i], node.count[i], t_entry[i]};
+      prefetch_slot(nodes, blocks, node.child[i], node.count[i]);
+      rest &= ~(1u << i);
+    }
+    return {node.child[first], node.count[first], t_entry[first]};
   }
   uint64_t keys[N < 4 ? 4 : N];
   uint32_t k = 0;
@@ -462,7 +470,7 @@ inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const floa
   return {node.child[i], node.count[i], t_entry[i]};
 }
 
-template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>
+template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount, bool kSlotOrder>
 inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const TriangleBlock* blocks, const WideRay& r,
                      WideCounts* counts) {
   Hit best;
@@ -504,7 +512,7 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
       uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
       if (mask != 0) {
         // Continue with the nearest child entered; the others go on the stack, farthest deepest.
-        entry = descend<N>(node, mask, t_entry, nodes, blocks, stack, size);
+        entry = descend<N, kSlotOrder>(node, mask, t_entry, nodes, blocks, stack, size);
         continue;
       }
     }
@@ -520,12 +528,17 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
 template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>
 void trace_batch(const WideBatch& batch) {
   const auto* nodes = static_cast<const WideNode<N>*>(batch.nodes);
-  for (std::size_t i = 0; i < batch.count; ++i) {
-    if constexpr (kCount) ++batch.counts->rays;
-    const Hit hit = trace_ray<N, kTri, kRobust, kAnyHit, kCount>(batch.root_planes, nodes, batch.blocks, batch.rays[i], batch.counts);
-    if constexpr (kAnyHit) batch.occluded[i] = hit.prim != kInvalidPrim;
-    else batch.hits[i] = hit;
-  }
+  auto run = [&]<bool kSlotOrder>() {
+    for (std::size_t i = 0; i < batch.count; ++i) {
+      if constexpr (kCount) ++batch.counts->rays;
+      const Hit hit = trace_ray<N, kTri, kRobust, kAnyHit, kCount, kSlotOrder>(batch.root_planes, nodes, batch.blocks,
+                                                                                batch.rays[i], batch.counts);
+      if constexpr (kAnyHit) batch.occluded[i] = hit.prim != kInvalidPrim;
+      else batch.hits[i] = hit;
+    }
+  };
+  if (kAnyHit && batch.any_hit_in_storage_order) run.template operator()<kAnyHit>();
+  else run.template operator()<false>();
 }
 
 // The table of this instruction set's kernels: [width 4, 8][triangle test][box test][closest, any].

@@ -245,10 +245,11 @@ TEST(TravBvh, TreeDeeperThanTheLimitThrows) {
   for (uint32_t k = 0; k < kChain; ++k) {
     const auto first = static_cast<uint32_t>(bvh.nodes.size());
     bvh.nodes[current].first = first;
-    // Leaf first: any-hit pushes in storage order, so the inner node is popped next and the leaf waits.
-    bvh.nodes.push_back(leaf(k));
+    // Inner node first: any hit visits in storage order and closest hit nearest first, so both take the
+    // inner node next and leave the leaf waiting on the stack.
     bvh.nodes.push_back(k + 1 < kChain ? inner(k + 1) : leaf(k));
-    current = first + 1;
+    bvh.nodes.push_back(leaf(k));
+    current = first;
   }
   bvh.prim_refs.resize(kChain);
   for (uint32_t i = 0; i < kChain; ++i) bvh.prim_refs[i] = i;

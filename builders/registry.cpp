@@ -172,12 +172,12 @@ BuilderInfo sbvh_info() {
           [](const ParamSet& p) { check_sbvh_params(sbvh_params(p)); }};
 }
 
-// The wide builders' trees come out with their children largest area first, the order in which the
-// any-hit kernels visit the children of wide nodes (child_order.h).
-BuilderInfo with_children_by_area(BuilderInfo info) {
+// The wide builders' trees come out with each node's children in the order in which any hit visits the
+// children of wide nodes (child_order.h), by the builder's own SAH constants.
+BuilderInfo with_children_for_occlusion(BuilderInfo info) {
   info.build = [build = std::move(info.build)](const BuildInput& input, const ParamSet& p) {
     Bvh bvh = build(input, p);
-    order_children_by_area(bvh);
+    order_children_for_occlusion(bvh, input.triangles, sah_cost_of(p));
     return bvh;
   };
   return info;
@@ -188,8 +188,8 @@ std::vector<BuilderInfo>& registry() {
   static std::vector<BuilderInfo> all = {
       binned_sah_info(),
       sweep_sah_info(),
-      with_children_by_area(wide_binned_sah_info()),
-      with_children_by_area(wide_collapse_info()),
+      with_children_for_occlusion(wide_binned_sah_info()),
+      with_children_for_occlusion(wide_collapse_info()),
       sbvh_info(),
   };
   return all;

@@ -38,10 +38,11 @@ struct TraversalCounters {
 };
 
 /// Whether any hit visits a node's children in storage order rather than nearest first: on wide trees
-/// (arity above 2), whose builders store the children largest area first (builders/child_order.h), and
-/// where the 8-wide kernels' shadow rays were 2 to 8% faster that way than nearest first (no sort, and
-/// the larger box the likelier occluder). Binary trees stay nearest first: storage order cost their
-/// shadow rays 10 to 16% (both measured against Embree in one run; notes of issue 4).
+/// (arity above 2), whose builders store first the children likeliest to hold an occluder per unit of
+/// cost (builders/child_order.h). The 8-wide kernels' shadow rays gained that way (no sort on the way
+/// to the next node, and a better order than the distance for occlusion), on Sponza most. Binary trees
+/// stay nearest first: storage order cost their shadow rays 10 to 16% (measured against Embree in one
+/// run; notes of issue 4).
 inline bool any_hit_in_storage_order(const Bvh& bvh) { return bvh.arity > 2; }
 
 namespace detail {

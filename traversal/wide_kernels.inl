@@ -438,7 +438,7 @@ inline void prefetch_slot(const WideNode<N>* nodes, const TriangleBlock* blocks,
 // integer above and the slot below (ties go to the higher slot, as in bvh2_traversal.h, so both kernels
 // visit the same nodes); the rest are pushed farthest first and fetched ahead. With kSlotOrder (any
 // hit on a wide tree, bvh2_traversal.h's any_hit_in_storage_order) in slot order instead, which the
-// wide builders make largest area first (builders/child_order.h).
+// wide builders make an occlusion order (builders/child_order.h).
 template <uint32_t N, bool kSlotOrder>
 inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry, const WideNode<N>* nodes,
                               const TriangleBlock* blocks, WideStackEntry* stack, uint32_t& size) {

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <map>
 #include <memory>
 #include <optional>
@@ -26,6 +25,7 @@
 #include "harness/ray_sets.h"
 #include "harness/reference.h"
 #include "harness/result_row.h"
+#include "harness/run_common.h"
 #include "harness/timing.h"
 #include "scenes/animation.h"
 #include "scenes/load.h"
@@ -35,13 +35,6 @@
 
 namespace sahbench {
 namespace {
-
-// Embree's own BVH traced through its own API, one ray at a time or in packets (as in runner.cpp).
-struct EmbreeLayout {
-  const char* name;
-  int packet_width;  // 1: rtcIntersect1 / rtcOccluded1
-};
-constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 8}, {"embree_16", 16}};
 
 // What a cell's tree is.
 enum class Variant {
@@ -123,20 +116,6 @@ struct FrameData {
   std::vector<Reference> references;
 };
 
-std::string now_stamp() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
-  return buf;
-}
-
-std::string format_duration(double seconds) {
-  const auto s = static_cast<long>(std::lround(seconds));
-  return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
-}
-
 Aabb bounds_of(std::span<const Triangle> triangles) {
   Aabb box;
   for (const auto& t : triangles) box.extend(t.bounds());
@@ -158,22 +137,14 @@ class AnimationRunner {
     CsvWriter csv(output_, animation_columns());
     if (csv.dropped_partial_row())
       log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
-    if (options_.resume) {
-      for (const auto& row : read_csv(output_)) {
-        finished_.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"),
-                                  row.at("layout"), std::stoi(row.at("threads")), row.at("ray_set"),
-                                  std::stoi(row.at("frame"))));
-        if (row.at("config") == cfg_.path.string()) run_id_ = row.at("run_id");
-      }
-      log_ << fmt::format("resume: {} finished cells in {}\n", finished_.size(), output_.string());
-    }
-    check_packet_support();
+    if (options_.resume) finished_ = finished_cells(output_, cfg_, run_id_, log_);
+    embree_layouts_ = supported_embree_layouts(log_);
 
     // Scenes are loaded one at a time; the plan counts cells as each scene's frames become known.
     log_ << fmt::format("run {}: animation experiment, {} frames per scene; writing {}\n", run_id_,
                         cfg_.animation->frames, output_.string());
     start_ = std::chrono::steady_clock::now();
-    for (const auto& name : scenes_to_run()) run_scene(name, csv);
+    for (const auto& name : scenes_to_run(cfg_, log_)) run_scene(name, csv);
     log_ << fmt::format("done in {}; rows in {}\n", format_duration(elapsed_s()), output_.string());
     print_summary();
     return exit_code_;
@@ -182,38 +153,6 @@ class AnimationRunner {
  private:
   double elapsed_s() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
-
-  void check_packet_support() {
-    EmbreeDevice probe(1);
-    for (const auto& l : kEmbreeLayouts) {
-      if (l.packet_width == 1 || embree_packets_supported(probe, l.packet_width)) {
-        embree_layouts_.push_back(l);
-      } else {
-        log_ << fmt::format("skipping layout {}: Embree has no native {}-wide packets on this CPU\n", l.name,
-                            l.packet_width);
-      }
-    }
-  }
-
-  // Required scenes must exist before the first cell runs; optional ones are skipped when absent.
-  std::vector<std::string> scenes_to_run() {
-    for (const auto& name : cfg_.scenes) {
-      if (is_procedural_spec(name)) {
-        parse_proc_spec(name, procedural_kinds());
-      } else if (!std::filesystem::is_regular_file(name) && !find_scene_file(name)) {
-        load_scene(name);  // throws the loader's error, which names the scene and the search path
-      }
-    }
-    std::vector<std::string> out = cfg_.scenes;
-    for (const auto& name : cfg_.optional_scenes) {
-      if (find_scene_file(name)) {
-        out.push_back(name);
-      } else {
-        log_ << fmt::format("skipping optional scene '{}': not found on the scene search path\n", name);
-      }
-    }
-    return out;
   }
 
   std::vector<std::string> layouts_for(const AnimatedBuilder& b) const {

@@ -6,7 +6,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <functional>
 #include <memory>
 #include <ostream>
@@ -27,6 +26,7 @@
 #include "harness/ray_sets.h"
 #include "harness/reference.h"
 #include "harness/result_row.h"
+#include "harness/run_common.h"
 #include "harness/timing.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
@@ -46,27 +46,6 @@ std::vector<std::string> all_columns() {
   std::vector<std::string> c = design_columns();
   c.insert(c.end(), extra_columns().begin(), extra_columns().end());
   return c;
-}
-
-// Embree's own BVH is traced through its own API, one ray at a time or in packets: each is a layout.
-struct EmbreeLayout {
-  const char* name;
-  int packet_width;  // 1: rtcIntersect1 / rtcOccluded1
-};
-constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 8}, {"embree_16", 16}};
-
-std::string now_stamp() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
-  return buf;
-}
-
-std::string format_duration(double seconds) {
-  const auto s = static_cast<long>(std::lround(seconds));
-  return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
 }
 
 class Progress {
@@ -142,18 +121,10 @@ class ExperimentRunner {
     CsvWriter csv(output_, all_columns());
     if (csv.dropped_partial_row()) log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
     std::set<std::string> finished;
-    if (options_.resume) {
-      for (const auto& row : read_csv(output_)) {
-        finished.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"), row.at("layout"),
-                                 std::stoi(row.at("threads")), row.at("ray_set"), std::stoi(row.at("frame"))));
-        // A resumed run continues the same run: its rows share the run id, so a report shows them together.
-        if (row.at("config") == cfg_.path.string()) run_id_ = row.at("run_id");
-      }
-      log_ << fmt::format("resume: {} finished cells in {}\n", finished.size(), output_.string());
-    }
+    if (options_.resume) finished = finished_cells(output_, cfg_, run_id_, log_);
 
-    check_packet_support();
-    const std::vector<std::string> scenes = scenes_to_run();
+    supported_embree_layouts_ = supported_embree_layouts(log_);
+    const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
     // Plan: which cells of each scene are still to do.
     std::size_t total = 0;
     for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
@@ -174,39 +145,6 @@ class ExperimentRunner {
   }
 
  private:
-  // Embree's packet kernels exist only where the CPU has the vector width (16 lanes: AVX-512); the
-  // cells of a missing width do not apply on this machine and are left out with a reason.
-  void check_packet_support() {
-    EmbreeDevice probe(1);
-    for (const auto& l : kEmbreeLayouts) {
-      if (l.packet_width == 1 || embree_packets_supported(probe, l.packet_width)) {
-        supported_embree_layouts_.push_back(l);
-      } else {
-        log_ << fmt::format("skipping layout {}: Embree has no native {}-wide packets on this CPU\n", l.name, l.packet_width);
-      }
-    }
-  }
-
-  // Required scenes must exist before the first cell runs, not fail hours in; optional ones are skipped.
-  std::vector<std::string> scenes_to_run() {
-    for (const auto& name : cfg_.scenes) {
-      if (is_procedural_spec(name)) {
-        parse_proc_spec(name, procedural_kinds());
-      } else if (!std::filesystem::is_regular_file(name) && !find_scene_file(name)) {
-        load_scene(name);  // throws the loader's error, which names the scene and the search path
-      }
-    }
-    std::vector<std::string> out = cfg_.scenes;
-    for (const auto& name : cfg_.optional_scenes) {
-      if (find_scene_file(name)) {
-        out.push_back(name);
-      } else {
-        log_ << fmt::format("skipping optional scene '{}': not found on the scene search path\n", name);
-      }
-    }
-    return out;
-  }
-
   std::vector<std::string> layouts_for(const ResolvedBuilder& b) const {
     std::vector<std::string> out;
     if (b.is_embree()) {

@@ -44,17 +44,10 @@ enum class Variant {
   kEmbreeRefit,    // Embree's refit of its first-frame build
 };
 
-struct AnimatedBuilder {
+struct AnimatedBuilder : ResolvedRun {
   Variant variant = Variant::kRebuild;
-  std::string name;                   // the CSV builder column: "binned_sah", "refit(binned_sah)", "embree"
-  std::string label;                  // for the log: the config's label, "refit(...)" around it for refits
-  const BuilderInfo* info = nullptr;  // ours
-  ParamSet params;                    // ours
-  uint32_t arity = 2;                 // ours: of its trees; traced only with layouts of that arity
-  EmbreeQuality quality = EmbreeQuality::kMedium;
-  std::string params_text;  // the CSV builder_params column
-
-  bool is_embree() const { return variant == Variant::kEmbreeRebuild || variant == Variant::kEmbreeRefit; }
+  std::string name;   // the CSV builder column: "binned_sah", "refit(binned_sah)", "embree"
+  std::string label;  // for the log: the config's label, "refit(...)" around it for refits
 };
 
 // Each of our builder runs becomes a rebuild and a refit; Embree runs stay one (refit by quality).
@@ -62,31 +55,16 @@ std::vector<AnimatedBuilder> expand_builders(const ExperimentConfig& cfg) {
   std::vector<AnimatedBuilder> out;
   for (const auto& run : cfg.builders) {
     AnimatedBuilder b;
-    if (run.is_embree()) {
-      std::string quality = "medium";
-      for (const auto& [k, v] : run.params)
-        if (k == "quality") quality = v;
-      b.quality = parse_embree_quality(quality);
+    static_cast<ResolvedRun&>(b) = resolve_run(run, cfg.layouts);
+    b.label = run.label();
+    if (b.is_embree()) {
       b.variant = b.quality == EmbreeQuality::kRefit ? Variant::kEmbreeRefit : Variant::kEmbreeRebuild;
       b.name = "embree";
-      b.label = run.label();
-      b.params_text = "quality=" + quality;
       out.push_back(std::move(b));
       continue;
     }
-    b.info = &find_builder(run.name);
-    b.params = resolve_params(b.info->name, b.info->params, run.params);
-    b.params_text = b.params.to_string();
-    b.arity = b.info->arity ? b.info->arity(b.params) : 2;
-    const bool traceable = std::any_of(cfg.layouts.begin(), cfg.layouts.end(), [&](const std::string& l) {
-      return find_layout(parse_layout_spec(l).name).arity == b.arity;
-    });
-    if (!traceable)
-      throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
-                  "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
     b.variant = Variant::kRebuild;
     b.name = run.name;
-    b.label = run.label();
     out.push_back(b);
     b.variant = Variant::kRefit;
     b.name = "refit(" + run.name + ")";
@@ -156,14 +134,7 @@ class AnimationRunner {
   }
 
   std::vector<std::string> layouts_for(const AnimatedBuilder& b) const {
-    std::vector<std::string> out;
-    if (b.is_embree()) {
-      for (const auto& l : embree_layouts_) out.push_back(l.name);
-    } else {
-      for (const auto& l : cfg_.layouts)
-        if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
-    }
-    return out;
+    return sahbench::layouts_for(b, cfg_.layouts, embree_layouts_);
   }
 
   bool wanted(const std::string& scene, const AnimatedBuilder& b, const std::string& layout, int threads,
@@ -293,25 +264,8 @@ class AnimationRunner {
   }
 
   CsvRow base_row(const FrameData& frame, const AnimatedBuilder& b, int threads) const {
-    CsvRow row;
-    row["run_id"] = run_id_;
-    row["git_commit"] = env_.git_commit;
-    row["cpu"] = env_.cpu;
-    row["compiler"] = env_.compiler;
-    row["threads"] = std::to_string(threads);
-    row["scene"] = frame.scene.name;
-    row["scene_triangles"] = std::to_string(frame.scene.triangles.size());
-    row["frame"] = std::to_string(frame.index);
+    CsvRow row = common_row(run_id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
     row["frame_time"] = fmt::format("{:.6g}", frame.time);
-    row["builder"] = b.name;
-    row["builder_params"] = b.params_text;
-    row["build_reps"] = std::to_string(cfg_.reps.build);
-    row["trace_reps"] = std::to_string(cfg_.reps.trace);
-    row["config"] = cfg_.path.string();
-    row["seed"] = std::to_string(cfg_.seed);
-    row["scene_source"] = frame.scene.source;
-    row["scene_removed"] = std::to_string(frame.scene.removed.total());
-    row["embree_version"] = env_.embree;
     return row;
   }
 

@@ -2,13 +2,16 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <ctime>
 #include <ostream>
 
+#include "core/error.h"
 #include "harness/csv.h"
 #include "harness/embree_scene.h"
 #include "harness/embree_trace.h"
+#include "harness/layout.h"
 #include "harness/runner.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
@@ -74,6 +77,65 @@ std::set<std::string> finished_cells(const std::filesystem::path& output, const 
   }
   log << fmt::format("resume: {} finished cells in {}\n", finished.size(), output.string());
   return finished;
+}
+
+ResolvedRun resolve_run(const BuilderRun& run, const std::vector<std::string>& layouts) {
+  ResolvedRun b;
+  if (run.is_embree()) {
+    std::string quality = "medium";
+    for (const auto& [k, v] : run.params)
+      if (k == "quality") quality = v;
+    b.quality = parse_embree_quality(quality);
+    b.params_text = "quality=" + quality;
+    return b;
+  }
+  b.info = &find_builder(run.name);
+  b.params = resolve_params(b.info->name, b.info->params, run.params);
+  b.params_text = b.params.to_string();
+  b.arity = b.info->arity ? b.info->arity(b.params) : 2;
+  const bool traceable = std::any_of(layouts.begin(), layouts.end(), [&](const std::string& l) {
+    return find_layout(parse_layout_spec(l).name).arity == b.arity;
+  });
+  if (!traceable)
+    throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
+                "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
+  return b;
+}
+
+std::vector<std::string> layouts_for(const ResolvedRun& b, const std::vector<std::string>& configured,
+                                     std::span<const EmbreeLayout> embree) {
+  std::vector<std::string> out;
+  if (b.is_embree()) {
+    for (const auto& l : embree) out.push_back(l.name);
+  } else {
+    for (const auto& l : configured)
+      if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
+  }
+  return out;
+}
+
+CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
+                  const Scene& scene, uint32_t frame, const std::string& builder, const std::string& params_text,
+                  int threads) {
+  CsvRow row;
+  row["run_id"] = run_id;
+  row["git_commit"] = env.git_commit;
+  row["cpu"] = env.cpu;
+  row["compiler"] = env.compiler;
+  row["threads"] = std::to_string(threads);
+  row["scene"] = scene.name;
+  row["scene_triangles"] = std::to_string(scene.triangles.size());
+  row["frame"] = std::to_string(frame);
+  row["builder"] = builder;
+  row["builder_params"] = params_text;
+  row["build_reps"] = std::to_string(cfg.reps.build);
+  row["trace_reps"] = std::to_string(cfg.reps.trace);
+  row["config"] = cfg.path.string();
+  row["seed"] = std::to_string(cfg.seed);
+  row["scene_source"] = scene.source;
+  row["scene_removed"] = std::to_string(scene.removed.total());
+  row["embree_version"] = env.embree;
+  return row;
 }
 
 }  // namespace sahbench

@@ -6,10 +6,16 @@
 #include <filesystem>
 #include <iosfwd>
 #include <set>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "builders/registry.h"
 #include "harness/config.h"
+#include "harness/csv.h"
+#include "harness/embree_scene.h"
+#include "harness/environment.h"
+#include "scenes/scene.h"
 
 namespace sahbench {
 
@@ -41,5 +47,33 @@ std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream
 /// together. Says on `log` how many cells are finished.
 std::set<std::string> finished_cells(const std::filesystem::path& output, const ExperimentConfig& cfg,
                                      std::string& run_id, std::ostream& log);
+
+/// One [[builder]] run resolved against the registry: one of our builders with its parameters, or
+/// Embree's own BVH at a build quality.
+struct ResolvedRun {
+  const BuilderInfo* info = nullptr;  // ours; null for Embree
+  ParamSet params;                    // ours
+  uint32_t arity = 2;                 // ours: of its trees; traced only with layouts of that arity
+  EmbreeQuality quality = EmbreeQuality::kMedium;
+  std::string params_text;  // the CSV builder_params column
+  bool is_embree() const { return info == nullptr; }
+};
+
+/// Resolves `run`: Embree's quality ("medium" where the run does not say), or our builder and its
+/// parameters. Our builder must build trees of an arity that one of `layouts` traces; else an Error
+/// names the builder run and the arity.
+ResolvedRun resolve_run(const BuilderRun& run, const std::vector<std::string>& layouts);
+
+/// The layouts that trace `b`'s trees: every one of `embree` for Embree, else those of `configured`
+/// with the arity of `b`'s trees.
+std::vector<std::string> layouts_for(const ResolvedRun& b, const std::vector<std::string>& configured,
+                                     std::span<const EmbreeLayout> embree);
+
+/// The columns every row of a cell starts with: the run (run_id, config, seed, build_reps, trace_reps),
+/// the machine (git_commit, cpu, compiler, embree_version), the scene and `frame`, the builder run
+/// (`builder`, its `params_text`) and the thread count.
+CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
+                  const Scene& scene, uint32_t frame, const std::string& builder, const std::string& params_text,
+                  int threads);
 
 }  // namespace sahbench

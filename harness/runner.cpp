@@ -72,41 +72,13 @@ class Progress {
 };
 
 // One builder run of the config, resolved against the registry.
-struct ResolvedBuilder {
+struct ResolvedBuilder : ResolvedRun {
   BuilderRun run;
-  const BuilderInfo* info = nullptr;  // null for Embree
-  ParamSet params;
-  EmbreeQuality quality = EmbreeQuality::kMedium;
-  std::string params_text;  // the CSV form
-  uint32_t arity = 2;       // of the trees it builds; the harness traces them with layouts of that arity
-  bool is_embree() const { return info == nullptr; }
 };
 
 std::vector<ResolvedBuilder> resolve_builders(const ExperimentConfig& cfg) {
   std::vector<ResolvedBuilder> out;
-  for (const auto& run : cfg.builders) {
-    ResolvedBuilder b;
-    b.run = run;
-    if (run.name == "embree") {
-      std::string quality = "medium";
-      for (const auto& [k, v] : run.params)
-        if (k == "quality") quality = v;
-      b.quality = parse_embree_quality(quality);
-      b.params_text = "quality=" + quality;
-    } else {
-      b.info = &find_builder(run.name);
-      b.params = resolve_params(b.info->name, b.info->params, run.params);
-      b.params_text = b.params.to_string();
-      b.arity = b.info->arity ? b.info->arity(b.params) : 2;
-      const bool traceable = std::any_of(cfg.layouts.begin(), cfg.layouts.end(), [&](const std::string& l) {
-        return find_layout(parse_layout_spec(l).name).arity == b.arity;
-      });
-      if (!traceable)
-        throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
-                    "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
-    }
-    out.push_back(std::move(b));
-  }
+  for (const auto& run : cfg.builders) out.push_back({resolve_run(run, cfg.layouts), run});
   return out;
 }
 
@@ -146,14 +118,7 @@ class ExperimentRunner {
 
  private:
   std::vector<std::string> layouts_for(const ResolvedBuilder& b) const {
-    std::vector<std::string> out;
-    if (b.is_embree()) {
-      for (const auto& l : supported_embree_layouts_) out.push_back(l.name);
-    } else {
-      for (const auto& l : cfg_.layouts)
-        if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
-    }
-    return out;
+    return sahbench::layouts_for(b, cfg_.layouts, supported_embree_layouts_);
   }
 
   // Keys of the cells of `scene` that are neither finished (resume) nor filtered out (--only).
@@ -302,25 +267,7 @@ class ExperimentRunner {
   }
 
   CsvRow base_row(const Scene& scene, const ResolvedBuilder& b, int threads) const {
-    CsvRow row;
-    row["run_id"] = run_id_;
-    row["git_commit"] = env_.git_commit;
-    row["cpu"] = env_.cpu;
-    row["compiler"] = env_.compiler;
-    row["threads"] = std::to_string(threads);
-    row["scene"] = scene.name;
-    row["scene_triangles"] = std::to_string(scene.triangles.size());
-    row["frame"] = "0";
-    row["builder"] = b.run.name;
-    row["builder_params"] = b.params_text;
-    row["build_reps"] = std::to_string(cfg_.reps.build);
-    row["trace_reps"] = std::to_string(cfg_.reps.trace);
-    row["config"] = cfg_.path.string();
-    row["seed"] = std::to_string(cfg_.seed);
-    row["scene_source"] = scene.source;
-    row["scene_removed"] = std::to_string(scene.removed.total());
-    row["embree_version"] = env_.embree;
-    return row;
+    return common_row(run_id_, env_, cfg_, scene, 0, b.run.name, b.params_text, threads);
   }
 
   template <class Wanted>

@@ -246,23 +246,6 @@ class AnimationRunner {
     return frame;
   }
 
-  // Warm-up, then timed repetitions of `step`, each after an untimed `reset`; the heap peak of the first
-  // timed one.
-  template <class Step, class Reset>
-  std::pair<TimingSummary, int64_t> time_steps(Step step, Reset reset) const {
-    for (int w = 0; w < cfg_.reps.build_warmup; ++w) step();
-    std::vector<double> ms;
-    int64_t peak = 0;
-    for (int r = 0; r < cfg_.reps.build; ++r) {
-      reset();
-      const int64_t before = heap_bytes();
-      reset_heap_peak();
-      ms.push_back(time_ms(step));
-      if (r == 0) peak = heap_peak_bytes() - before;
-    }
-    return {summarize(ms), peak};
-  }
-
   CsvRow base_row(const FrameData& frame, const AnimatedBuilder& b, int threads) const {
     CsvRow row = common_row(run_id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
     row["frame_time"] = fmt::format("{:.6g}", frame.time);
@@ -285,7 +268,7 @@ class AnimationRunner {
     Bvh bvh;
     // The previous repetition's tree is freed before the clock starts, as in a static run.
     const auto [build_t, peak] =
-        time_steps([&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
+        time_builds(cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
                    [&] { bvh = Bvh{}; });
     trace_ours(frame, b, threads, bvh, build_t, peak, nullptr, csv);
   }
@@ -293,7 +276,7 @@ class AnimationRunner {
   void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, RefitState& state,
                  CsvWriter& csv) {
     // Every refit recomputes every box, so repeating it on the same frame times the same work.
-    const auto [refit_t, peak] = time_steps([&] { refit(state.tree, frame.scene.triangles); }, [] {});
+    const auto [refit_t, peak] = time_builds(cfg_.reps, [&] { refit(state.tree, frame.scene.triangles); }, [] {});
     trace_ours(frame, b, threads, state.tree, refit_t, peak, &state, csv);
   }
 
@@ -340,17 +323,13 @@ class AnimationRunner {
       double layout_time = 0.0;  // median ms of the compile or of the layout refit
       if (valid && refit_state) {
         compiled = &refit_layout(*refit_state, layout_name, scene.triangles);
-        const TimingSummary t = time_steps([&] { compiled->refit(scene.triangles); }, [] {}).first;
+        const TimingSummary t = time_builds(cfg_.reps, [&] { compiled->refit(scene.triangles); }, [] {}).time;
         layout_time = t.median;
       } else if (valid) {
-        const LayoutSpec layout = parse_layout_spec(layout_name);
-        std::vector<double> compile_ms;
-        for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
-          fresh.reset();
-          compile_ms.push_back(time_ms([&] { fresh = compile_layout(layout, bvh, scene.triangles); }));
-        }
+        TimedCompile timed = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
+        fresh = std::move(timed.layout);
         compiled = fresh.get();
-        layout_time = summarize(compile_ms).median;
+        layout_time = timed.median_ms;
       }
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
@@ -361,9 +340,7 @@ class AnimationRunner {
         put_timing(row, "build_ms", build_t);
         row["nodes"] = std::to_string(bvh.nodes.size());
         row["arity"] = std::to_string(bvh.arity);
-        row["ray_set"] = rs.name;
-        row["ray_count"] = std::to_string(rs.rays.size());
-        row["query"] = rs.occlusion ? "any" : "closest";
+        put_ray_set(row, rs);
         if (refit_state) row["notes"] = "tree and layout of frame 0 refitted";
         if (!valid) {
           row["notes"] = "invalid tree, not traced: " + report.errors.front();
@@ -375,14 +352,9 @@ class AnimationRunner {
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
         const TimingSummary trace_t =
-            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
-              if (rs.occlusion)
-                compiled->trace_any(rs.rays, occluded);
-              else
-                compiled->trace_closest(rs.rays, hits);
-            });
-        const TraceCounts counts =
-            rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
+            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
+                       [&] { trace_layout(*compiled, rs, hits, occluded); });
+        const TraceCounts counts = count_layout(*compiled, rs);
         const Reference& ref = frame.references[s];
         row[refit_state ? "layout_refit_ms" : "layout_ms"] = fmt::format("{:.4f}", layout_time);
         row["isa"] = compiled->isa();
@@ -391,14 +363,8 @@ class AnimationRunner {
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
         put_tree_stats(row, stats, cost);
         put_timing(row, "trace_mrays", trace_t);
-        row["nodes_per_ray"] = fmt::format(
-            "{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
-        row["prims_per_ray"] = fmt::format(
-            "{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
-        row["reference"] = ref.name;
-        row["mismatches"] = ref.name == "none"
-                                ? ""
-                                : std::to_string(count_mismatches(ref, rs, frame.diagonal, hits, occluded));
+        put_per_ray_counts(row, counts);
+        put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
         append(csv, row,
                fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms + {} {:.3f} ms, SAH {:.2f}, {:.2f} Mrays/s, "
                            "{} mismatches",
@@ -418,30 +384,23 @@ class AnimationRunner {
     const Scene& scene = frame.scene;
     EmbreeDevice device(threads);
     std::unique_ptr<EmbreeScene> built;
-    std::vector<double> build_ms;
-    int64_t peak = 0;
+    BuildTiming timing;
     if (b.variant == Variant::kEmbreeRefit) {
       built = std::make_unique<EmbreeScene>(device, first, EmbreeQuality::kRefit);
       for (int w = 0; w < cfg_.reps.build_warmup; ++w) built->update_vertices(scene.triangles);
+      std::vector<double> refit_ms;
       for (int r = 0; r < cfg_.reps.build; ++r) {
         const int64_t before = device.bytes();
         device.reset_peak();
-        build_ms.push_back(built->update_vertices(scene.triangles));
-        if (r == 0) peak = device.peak_bytes() - before;
+        refit_ms.push_back(built->update_vertices(scene.triangles));
+        if (r == 0) timing.peak_bytes = device.peak_bytes() - before;
       }
+      timing.time = summarize(refit_ms);
     } else {
-      for (int w = 0; w < cfg_.reps.build_warmup; ++w)
-        built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
-      for (int r = 0; r < cfg_.reps.build; ++r) {
-        built.reset();
-        const int64_t before = device.bytes();
-        device.reset_peak();
-        built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
-        build_ms.push_back(built->commit_ms());
-        if (r == 0) peak = device.peak_bytes() - before;
-      }
+      timing = time_embree_builds(cfg_.reps, device, scene.triangles, b.quality, built);
     }
-    const TimingSummary build_t = summarize(build_ms);
+    const TimingSummary build_t = timing.time;
+    const int64_t peak = timing.peak_bytes;
     for (const auto& layout : embree_layouts_) {
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
@@ -449,19 +408,8 @@ class AnimationRunner {
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
         const TimingSummary trace_t =
-            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
-              if (layout.packet_width == 1) {
-                if (rs.occlusion)
-                  embree_occluded1(*built, rs.rays, occluded);
-                else
-                  embree_intersect1(*built, rs.rays, hits);
-              } else {
-                if (rs.occlusion)
-                  embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
-                else
-                  embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
-              }
-            });
+            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
+                       [&] { trace_embree(*built, layout, rs, hits, occluded); });
         const Reference& ref = frame.references[s];
         CsvRow row = base_row(frame, b, threads);
         row["isa"] = "embree:" + embree_isa(device);
@@ -471,14 +419,9 @@ class AnimationRunner {
         row["bytes_per_tri"] =
             bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene.triangles.size());
         row["mem_peak_bytes"] = std::to_string(peak);
-        row["ray_set"] = rs.name;
-        row["ray_count"] = std::to_string(rs.rays.size());
+        put_ray_set(row, rs);
         put_timing(row, "trace_mrays", trace_t);
-        row["reference"] = ref.name;
-        row["mismatches"] = ref.name == "none"
-                                ? ""
-                                : std::to_string(count_mismatches(ref, rs, frame.diagonal, hits, occluded));
-        row["query"] = rs.occlusion ? "any" : "closest";
+        put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
         if (b.variant == Variant::kEmbreeRefit)
           row["notes"] = "Embree refit of frame 0's build (dynamic scene, geometry quality refit)";
         append(csv, row,

@@ -138,4 +138,58 @@ CsvRow common_row(const std::string& run_id, const Environment& env, const Exper
   return row;
 }
 
+BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device, std::span<const Triangle> triangles,
+                               EmbreeQuality quality, std::unique_ptr<EmbreeScene>& built) {
+  for (int w = 0; w < reps.build_warmup; ++w) built = std::make_unique<EmbreeScene>(device, triangles, quality);
+  std::vector<double> build_ms;
+  int64_t peak = 0;
+  for (int r = 0; r < reps.build; ++r) {
+    built.reset();
+    const int64_t before = device.bytes();
+    device.reset_peak();
+    built = std::make_unique<EmbreeScene>(device, triangles, quality);
+    build_ms.push_back(built->commit_ms());
+    if (r == 0) peak = device.peak_bytes() - before;
+  }
+  return {summarize(build_ms), peak};
+}
+
+TimedCompile compile_timed(const LayoutSpec& spec, const Bvh& bvh, std::span<const Triangle> triangles,
+                           const Repetitions& reps) {
+  TimedCompile out;
+  std::vector<double> compile_ms;
+  for (int r = 0; r < std::max(1, reps.build); ++r) {
+    out.layout.reset();
+    compile_ms.push_back(time_ms([&] { out.layout = compile_layout(spec, bvh, triangles); }));
+  }
+  out.median_ms = summarize(compile_ms).median;
+  return out;
+}
+
+void trace_layout(const CompiledLayout& layout, const RaySet& rs, std::span<Hit> hits, std::span<uint8_t> occluded) {
+  if (rs.occlusion)
+    layout.trace_any(rs.rays, occluded);
+  else
+    layout.trace_closest(rs.rays, hits);
+}
+
+TraceCounts count_layout(const CompiledLayout& layout, const RaySet& rs) {
+  return rs.occlusion ? layout.count_any(rs.rays) : layout.count_closest(rs.rays);
+}
+
+void trace_embree(const EmbreeScene& scene, const EmbreeLayout& layout, const RaySet& rs, std::span<Hit> hits,
+                  std::span<uint8_t> occluded) {
+  if (layout.packet_width == 1) {
+    if (rs.occlusion)
+      embree_occluded1(scene, rs.rays, occluded);
+    else
+      embree_intersect1(scene, rs.rays, hits);
+  } else {
+    if (rs.occlusion)
+      embree_occluded_packets(scene, rs.rays, occluded, layout.packet_width);
+    else
+      embree_intersect_packets(scene, rs.rays, hits, layout.packet_width);
+  }
+}
+
 }  // namespace sahbench

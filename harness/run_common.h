@@ -3,8 +3,10 @@
 // (animation_runner.cpp) share, so that both name runs, pick scenes and layouts, resume and log the same
 // way. Internal to the harness.
 
+#include <cstdint>
 #include <filesystem>
 #include <iosfwd>
+#include <memory>
 #include <set>
 #include <span>
 #include <string>
@@ -15,6 +17,10 @@
 #include "harness/csv.h"
 #include "harness/embree_scene.h"
 #include "harness/environment.h"
+#include "harness/layout.h"
+#include "harness/memory_tracker.h"
+#include "harness/ray_sets.h"
+#include "harness/timing.h"
 #include "scenes/scene.h"
 
 namespace sahbench {
@@ -75,5 +81,56 @@ std::vector<std::string> layouts_for(const ResolvedRun& b, const std::vector<std
 CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
                   const Scene& scene, uint32_t frame, const std::string& builder, const std::string& params_text,
                   int threads);
+
+/// A build's time over its repetitions (ms), and the bytes it allocated at its peak in the first timed one.
+struct BuildTiming {
+  TimingSummary time;
+  int64_t peak_bytes = 0;
+};
+
+/// Times a build as every run does: `reps.build_warmup` untimed calls of `step`, then `reps.build` timed
+/// ones, each after an untimed `reset` (so that no repetition pays for freeing the last one's result);
+/// the peak is the heap's (memory_tracker.h) over the first timed one.
+template <class Step, class Reset>
+BuildTiming time_builds(const Repetitions& reps, Step step, Reset reset) {
+  for (int w = 0; w < reps.build_warmup; ++w) step();
+  std::vector<double> ms;
+  int64_t peak = 0;
+  for (int r = 0; r < reps.build; ++r) {
+    reset();
+    const int64_t before = heap_bytes();
+    reset_heap_peak();
+    ms.push_back(time_ms(step));
+    if (r == 0) peak = heap_peak_bytes() - before;
+  }
+  return {summarize(ms), peak};
+}
+
+/// Embree's build of `triangles` at `quality`, timed the same way: warm-up builds, then timed ones, each
+/// after freeing the last; the time is rtcCommitScene's (EmbreeScene::commit_ms) and the peak the
+/// device's over the first timed build. `built` keeps the last build.
+BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device, std::span<const Triangle> triangles,
+                               EmbreeQuality quality, std::unique_ptr<EmbreeScene>& built);
+
+/// A layout compiled max(1, reps.build) times, each after freeing the one before: the last compile and
+/// the median of their times (ms).
+struct TimedCompile {
+  std::unique_ptr<CompiledLayout> layout;
+  double median_ms = 0.0;
+};
+TimedCompile compile_timed(const LayoutSpec& spec, const Bvh& bvh, std::span<const Triangle> triangles,
+                           const Repetitions& reps);
+
+/// One pass of `layout` over `rs`: closest hits into `hits`, or for an any-hit set occlusion into
+/// `occluded`.
+void trace_layout(const CompiledLayout& layout, const RaySet& rs, std::span<Hit> hits, std::span<uint8_t> occluded);
+
+/// The counting pass of `layout` over `rs` (count_closest, or count_any for an any-hit set).
+TraceCounts count_layout(const CompiledLayout& layout, const RaySet& rs);
+
+/// One pass of Embree's `layout` over `rs` in `scene` (rtcIntersect1/rtcOccluded1 or packets of its
+/// width): closest hits into `hits`, or for an any-hit set occlusion into `occluded`.
+void trace_embree(const EmbreeScene& scene, const EmbreeLayout& layout, const RaySet& rs, std::span<Hit> hits,
+                  std::span<uint8_t> occluded);
 
 }  // namespace sahbench

@@ -207,9 +207,7 @@ class ExperimentRunner {
   static void set_up_cell(TraceCell& cell, const Scene& scene, const ResolvedBuilder& b, const std::string& layout,
                           int threads, const RaySet& rs, std::size_t set, double build_ms,
                           std::shared_ptr<const void> keep_alive) {
-    cell.row["ray_set"] = rs.name;
-    cell.row["ray_count"] = std::to_string(rs.rays.size());
-    cell.row["query"] = rs.occlusion ? "any" : "closest";
+    put_ray_set(cell.row, rs);
     cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout, threads, rs.name);
     cell.build_ms = build_ms;
     cell.set = set;
@@ -253,13 +251,8 @@ class ExperimentRunner {
       CsvRow& row = cell.row;
       const TimingSummary trace_t = summarize(cell.mrays);
       put_timing(row, "trace_mrays", trace_t);
-      if (cell.count) {
-        const TraceCounts counts = cell.count();
-        row["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
-        row["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
-      }
-      row["reference"] = ref.name;
-      row["mismatches"] = ref.name == "none" ? "" : std::to_string(count_mismatches(ref, rs, diagonal_, *cell.hits, *cell.occluded));
+      if (cell.count) put_per_ray_counts(row, cell.count());
+      put_mismatches(row, ref, rs, diagonal_, *cell.hits, *cell.occluded);
       csv_ms_ += time_ms([&] { csv.append(row); });
       progress.cell_done(fmt::format("{}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", cell.label, cell.build_ms,
                                      trace_t.median, row["mismatches"]));
@@ -278,21 +271,9 @@ class ExperimentRunner {
     // Build: warm-up, then timed repetitions. The peak heap is taken over the first timed build.
     auto tree = std::make_shared<Bvh>();
     Bvh& bvh = *tree;
-    auto build = [&] {
-      const BuildInput input = BuildInput::from_triangles(scene.triangles);
-      bvh = b.info->build(input, b.params);
-    };
-    for (int w = 0; w < cfg_.reps.build_warmup; ++w) build();
-    std::vector<double> build_ms;
-    int64_t peak = 0;
-    for (int r = 0; r < cfg_.reps.build; ++r) {
-      bvh = Bvh{};
-      const int64_t before = heap_bytes();
-      reset_heap_peak();
-      build_ms.push_back(time_ms(build));
-      if (r == 0) peak = heap_peak_bytes() - before;
-    }
-    const TimingSummary build_t = summarize(build_ms);
+    const auto [build_t, peak] = time_builds(
+        cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(scene.triangles), b.params); },
+        [&] { bvh = Bvh{}; });
     const SahCost cost = sah_cost_of(b.params);
     const BvhStats stats = compute_stats(bvh, scene.triangles.size(), cost);
     const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
@@ -309,9 +290,7 @@ class ExperimentRunner {
           put_timing(row, "build_ms", build_t);
           row["nodes"] = std::to_string(stats.nodes);
           row["arity"] = std::to_string(bvh.arity);
-          row["ray_set"] = rs.name;
-          row["ray_count"] = std::to_string(rs.rays.size());
-          row["query"] = rs.occlusion ? "any" : "closest";
+          put_ray_set(row, rs);
           row["notes"] = "invalid tree, not traced: " + report.errors.front();
           csv_ms_ += time_ms([&] { csv.append(row); });
           progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name, b.run.label(),
@@ -324,17 +303,11 @@ class ExperimentRunner {
       bool any = false;
       for (const auto& rs : sets) any |= wanted(layout_name, rs);
       if (!any) continue;
-      const LayoutSpec layout = parse_layout_spec(layout_name);
-      std::unique_ptr<CompiledLayout> compiled;
-      std::vector<double> compile_ms;
-      for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
-        compiled.reset();
-        compile_ms.push_back(time_ms([&] { compiled = compile_layout(layout, bvh, scene.triangles); }));
-      }
+      TimedCompile compiled = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
       // The layout borrows the tree (bvh2 as built): both stay alive with the cells.
-      std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled));
+      std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled.layout));
       auto keep = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::shared_ptr<const CompiledLayout>>>(tree, shared_layout);
-      const double compile_median = summarize(compile_ms).median;
+      const double compile_median = compiled.median_ms;
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
         if (!wanted(layout_name, rs)) continue;
@@ -354,12 +327,9 @@ class ExperimentRunner {
         const CompiledLayout* layout_ptr = shared_layout.get();
         const RaySet* set_ptr = &rs;
         cell.trace = [layout_ptr, set_ptr, hits = cell.hits, occluded = cell.occluded] {
-          if (set_ptr->occlusion) layout_ptr->trace_any(set_ptr->rays, *occluded);
-          else layout_ptr->trace_closest(set_ptr->rays, *hits);
+          trace_layout(*layout_ptr, *set_ptr, *hits, *occluded);
         };
-        cell.count = [layout_ptr, set_ptr] {
-          return set_ptr->occlusion ? layout_ptr->count_any(set_ptr->rays) : layout_ptr->count_closest(set_ptr->rays);
-        };
+        cell.count = [layout_ptr, set_ptr] { return count_layout(*layout_ptr, *set_ptr); };
         cells.push_back(std::move(cell));
       }
     }
@@ -379,18 +349,7 @@ class ExperimentRunner {
     auto held = std::make_shared<EmbreeBuild>(threads);
     EmbreeDevice& device = held->device;
     std::unique_ptr<EmbreeScene>& built = held->scene;
-    for (int w = 0; w < cfg_.reps.build_warmup; ++w) built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
-    std::vector<double> build_ms;
-    int64_t peak = 0;
-    for (int r = 0; r < cfg_.reps.build; ++r) {
-      built.reset();
-      const int64_t before = device.bytes();
-      device.reset_peak();
-      built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
-      build_ms.push_back(built->commit_ms());
-      if (r == 0) peak = device.peak_bytes() - before;
-    }
-    const TimingSummary build_t = summarize(build_ms);
+    const auto [build_t, peak] = time_embree_builds(cfg_.reps, device, scene.triangles, b.quality, built);
     for (const auto& layout : supported_embree_layouts_) {
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
@@ -407,15 +366,8 @@ class ExperimentRunner {
         set_up_cell(cell, scene, b, layout.name, threads, rs, s, build_t.median, held);
         const EmbreeScene* embree = built.get();
         const RaySet* set_ptr = &rs;
-        const int width = layout.packet_width;
-        cell.trace = [embree, set_ptr, width, hits = cell.hits, occluded = cell.occluded] {
-          if (width == 1) {
-            if (set_ptr->occlusion) embree_occluded1(*embree, set_ptr->rays, *occluded);
-            else embree_intersect1(*embree, set_ptr->rays, *hits);
-          } else {
-            if (set_ptr->occlusion) embree_occluded_packets(*embree, set_ptr->rays, *occluded, width);
-            else embree_intersect_packets(*embree, set_ptr->rays, *hits, width);
-          }
+        cell.trace = [embree, layout, set_ptr, hits = cell.hits, occluded = cell.occluded] {
+          trace_embree(*embree, layout, *set_ptr, *hits, *occluded);
         };
         cells.push_back(std::move(cell));
       }

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <map>
 #include <memory>
 #include <optional>
@@ -26,6 +25,7 @@
 #include "harness/ray_sets.h"
 #include "harness/reference.h"
 #include "harness/result_row.h"
+#include "harness/run_common.h"
 #include "harness/timing.h"
 #include "scenes/animation.h"
 #include "scenes/load.h"
@@ -36,13 +36,6 @@
 namespace sahbench {
 namespace {
 
-// Embree's own BVH traced through its own API, one ray at a time or in packets (as in runner.cpp).
-struct EmbreeLayout {
-  const char* name;
-  int packet_width;  // 1: rtcIntersect1 / rtcOccluded1
-};
-constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 8}, {"embree_16", 16}};
-
 // What a cell's tree is.
 enum class Variant {
   kRebuild,        // one of our builders, built on this frame
@@ -51,17 +44,10 @@ enum class Variant {
   kEmbreeRefit,    // Embree's refit of its first-frame build
 };
 
-struct AnimatedBuilder {
+struct AnimatedBuilder : ResolvedRun {
   Variant variant = Variant::kRebuild;
-  std::string name;                   // the CSV builder column: "binned_sah", "refit(binned_sah)", "embree"
-  std::string label;                  // for the log: the config's label, "refit(...)" around it for refits
-  const BuilderInfo* info = nullptr;  // ours
-  ParamSet params;                    // ours
-  uint32_t arity = 2;                 // ours: of its trees; traced only with layouts of that arity
-  EmbreeQuality quality = EmbreeQuality::kMedium;
-  std::string params_text;  // the CSV builder_params column
-
-  bool is_embree() const { return variant == Variant::kEmbreeRebuild || variant == Variant::kEmbreeRefit; }
+  std::string name;   // the CSV builder column: "binned_sah", "refit(binned_sah)", "embree"
+  std::string label;  // for the log: the config's label, "refit(...)" around it for refits
 };
 
 // Each of our builder runs becomes a rebuild and a refit; Embree runs stay one (refit by quality).
@@ -69,31 +55,16 @@ std::vector<AnimatedBuilder> expand_builders(const ExperimentConfig& cfg) {
   std::vector<AnimatedBuilder> out;
   for (const auto& run : cfg.builders) {
     AnimatedBuilder b;
-    if (run.is_embree()) {
-      std::string quality = "medium";
-      for (const auto& [k, v] : run.params)
-        if (k == "quality") quality = v;
-      b.quality = parse_embree_quality(quality);
+    static_cast<ResolvedRun&>(b) = resolve_run(run, cfg.layouts);
+    b.label = run.label();
+    if (b.is_embree()) {
       b.variant = b.quality == EmbreeQuality::kRefit ? Variant::kEmbreeRefit : Variant::kEmbreeRebuild;
       b.name = "embree";
-      b.label = run.label();
-      b.params_text = "quality=" + quality;
       out.push_back(std::move(b));
       continue;
     }
-    b.info = &find_builder(run.name);
-    b.params = resolve_params(b.info->name, b.info->params, run.params);
-    b.params_text = b.params.to_string();
-    b.arity = b.info->arity ? b.info->arity(b.params) : 2;
-    const bool traceable = std::any_of(cfg.layouts.begin(), cfg.layouts.end(), [&](const std::string& l) {
-      return find_layout(parse_layout_spec(l).name).arity == b.arity;
-    });
-    if (!traceable)
-      throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
-                  "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
     b.variant = Variant::kRebuild;
     b.name = run.name;
-    b.label = run.label();
     out.push_back(b);
     b.variant = Variant::kRefit;
     b.name = "refit(" + run.name + ")";
@@ -123,20 +94,6 @@ struct FrameData {
   std::vector<Reference> references;
 };
 
-std::string now_stamp() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
-  return buf;
-}
-
-std::string format_duration(double seconds) {
-  const auto s = static_cast<long>(std::lround(seconds));
-  return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
-}
-
 Aabb bounds_of(std::span<const Triangle> triangles) {
   Aabb box;
   for (const auto& t : triangles) box.extend(t.bounds());
@@ -158,22 +115,14 @@ class AnimationRunner {
     CsvWriter csv(output_, animation_columns());
     if (csv.dropped_partial_row())
       log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
-    if (options_.resume) {
-      for (const auto& row : read_csv(output_)) {
-        finished_.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"),
-                                  row.at("layout"), std::stoi(row.at("threads")), row.at("ray_set"),
-                                  std::stoi(row.at("frame"))));
-        if (row.at("config") == cfg_.path.string()) run_id_ = row.at("run_id");
-      }
-      log_ << fmt::format("resume: {} finished cells in {}\n", finished_.size(), output_.string());
-    }
-    check_packet_support();
+    if (options_.resume) finished_ = finished_cells(output_, cfg_, run_id_, log_);
+    embree_layouts_ = supported_embree_layouts(log_);
 
     // Scenes are loaded one at a time; the plan counts cells as each scene's frames become known.
     log_ << fmt::format("run {}: animation experiment, {} frames per scene; writing {}\n", run_id_,
                         cfg_.animation->frames, output_.string());
     start_ = std::chrono::steady_clock::now();
-    for (const auto& name : scenes_to_run()) run_scene(name, csv);
+    for (const auto& name : scenes_to_run(cfg_, log_)) run_scene(name, csv);
     log_ << fmt::format("done in {}; rows in {}\n", format_duration(elapsed_s()), output_.string());
     print_summary();
     return exit_code_;
@@ -184,47 +133,8 @@ class AnimationRunner {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
 
-  void check_packet_support() {
-    EmbreeDevice probe(1);
-    for (const auto& l : kEmbreeLayouts) {
-      if (l.packet_width == 1 || embree_packets_supported(probe, l.packet_width)) {
-        embree_layouts_.push_back(l);
-      } else {
-        log_ << fmt::format("skipping layout {}: Embree has no native {}-wide packets on this CPU\n", l.name,
-                            l.packet_width);
-      }
-    }
-  }
-
-  // Required scenes must exist before the first cell runs; optional ones are skipped when absent.
-  std::vector<std::string> scenes_to_run() {
-    for (const auto& name : cfg_.scenes) {
-      if (is_procedural_spec(name)) {
-        parse_proc_spec(name, procedural_kinds());
-      } else if (!std::filesystem::is_regular_file(name) && !find_scene_file(name)) {
-        load_scene(name);  // throws the loader's error, which names the scene and the search path
-      }
-    }
-    std::vector<std::string> out = cfg_.scenes;
-    for (const auto& name : cfg_.optional_scenes) {
-      if (find_scene_file(name)) {
-        out.push_back(name);
-      } else {
-        log_ << fmt::format("skipping optional scene '{}': not found on the scene search path\n", name);
-      }
-    }
-    return out;
-  }
-
   std::vector<std::string> layouts_for(const AnimatedBuilder& b) const {
-    std::vector<std::string> out;
-    if (b.is_embree()) {
-      for (const auto& l : embree_layouts_) out.push_back(l.name);
-    } else {
-      for (const auto& l : cfg_.layouts)
-        if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
-    }
-    return out;
+    return sahbench::layouts_for(b, cfg_.layouts, embree_layouts_);
   }
 
   bool wanted(const std::string& scene, const AnimatedBuilder& b, const std::string& layout, int threads,
@@ -336,43 +246,9 @@ class AnimationRunner {
     return frame;
   }
 
-  // Warm-up, then timed repetitions of `step`, each after an untimed `reset`; the heap peak of the first
-  // timed one.
-  template <class Step, class Reset>
-  std::pair<TimingSummary, int64_t> time_steps(Step step, Reset reset) const {
-    for (int w = 0; w < cfg_.reps.build_warmup; ++w) step();
-    std::vector<double> ms;
-    int64_t peak = 0;
-    for (int r = 0; r < cfg_.reps.build; ++r) {
-      reset();
-      const int64_t before = heap_bytes();
-      reset_heap_peak();
-      ms.push_back(time_ms(step));
-      if (r == 0) peak = heap_peak_bytes() - before;
-    }
-    return {summarize(ms), peak};
-  }
-
   CsvRow base_row(const FrameData& frame, const AnimatedBuilder& b, int threads) const {
-    CsvRow row;
-    row["run_id"] = run_id_;
-    row["git_commit"] = env_.git_commit;
-    row["cpu"] = env_.cpu;
-    row["compiler"] = env_.compiler;
-    row["threads"] = std::to_string(threads);
-    row["scene"] = frame.scene.name;
-    row["scene_triangles"] = std::to_string(frame.scene.triangles.size());
-    row["frame"] = std::to_string(frame.index);
+    CsvRow row = common_row(run_id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
     row["frame_time"] = fmt::format("{:.6g}", frame.time);
-    row["builder"] = b.name;
-    row["builder_params"] = b.params_text;
-    row["build_reps"] = std::to_string(cfg_.reps.build);
-    row["trace_reps"] = std::to_string(cfg_.reps.trace);
-    row["config"] = cfg_.path.string();
-    row["seed"] = std::to_string(cfg_.seed);
-    row["scene_source"] = frame.scene.source;
-    row["scene_removed"] = std::to_string(frame.scene.removed.total());
-    row["embree_version"] = env_.embree;
     return row;
   }
 
@@ -392,7 +268,7 @@ class AnimationRunner {
     Bvh bvh;
     // The previous repetition's tree is freed before the clock starts, as in a static run.
     const auto [build_t, peak] =
-        time_steps([&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
+        time_builds(cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
                    [&] { bvh = Bvh{}; });
     trace_ours(frame, b, threads, bvh, build_t, peak, nullptr, csv);
   }
@@ -400,7 +276,7 @@ class AnimationRunner {
   void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, RefitState& state,
                  CsvWriter& csv) {
     // Every refit recomputes every box, so repeating it on the same frame times the same work.
-    const auto [refit_t, peak] = time_steps([&] { refit(state.tree, frame.scene.triangles); }, [] {});
+    const auto [refit_t, peak] = time_builds(cfg_.reps, [&] { refit(state.tree, frame.scene.triangles); }, [] {});
     trace_ours(frame, b, threads, state.tree, refit_t, peak, &state, csv);
   }
 
@@ -447,17 +323,13 @@ class AnimationRunner {
       double layout_time = 0.0;  // median ms of the compile or of the layout refit
       if (valid && refit_state) {
         compiled = &refit_layout(*refit_state, layout_name, scene.triangles);
-        const TimingSummary t = time_steps([&] { compiled->refit(scene.triangles); }, [] {}).first;
+        const TimingSummary t = time_builds(cfg_.reps, [&] { compiled->refit(scene.triangles); }, [] {}).time;
         layout_time = t.median;
       } else if (valid) {
-        const LayoutSpec layout = parse_layout_spec(layout_name);
-        std::vector<double> compile_ms;
-        for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
-          fresh.reset();
-          compile_ms.push_back(time_ms([&] { fresh = compile_layout(layout, bvh, scene.triangles); }));
-        }
+        TimedCompile timed = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
+        fresh = std::move(timed.layout);
         compiled = fresh.get();
-        layout_time = summarize(compile_ms).median;
+        layout_time = timed.median_ms;
       }
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
@@ -468,9 +340,7 @@ class AnimationRunner {
         put_timing(row, "build_ms", build_t);
         row["nodes"] = std::to_string(bvh.nodes.size());
         row["arity"] = std::to_string(bvh.arity);
-        row["ray_set"] = rs.name;
-        row["ray_count"] = std::to_string(rs.rays.size());
-        row["query"] = rs.occlusion ? "any" : "closest";
+        put_ray_set(row, rs);
         if (refit_state) row["notes"] = "tree and layout of frame 0 refitted";
         if (!valid) {
           row["notes"] = "invalid tree, not traced: " + report.errors.front();
@@ -482,14 +352,9 @@ class AnimationRunner {
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
         const TimingSummary trace_t =
-            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
-              if (rs.occlusion)
-                compiled->trace_any(rs.rays, occluded);
-              else
-                compiled->trace_closest(rs.rays, hits);
-            });
-        const TraceCounts counts =
-            rs.occlusion ? compiled->count_any(rs.rays) : compiled->count_closest(rs.rays);
+            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
+                       [&] { trace_layout(*compiled, rs, hits, occluded); });
+        const TraceCounts counts = count_layout(*compiled, rs);
         const Reference& ref = frame.references[s];
         row[refit_state ? "layout_refit_ms" : "layout_ms"] = fmt::format("{:.4f}", layout_time);
         row["isa"] = compiled->isa();
@@ -498,14 +363,8 @@ class AnimationRunner {
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
         put_tree_stats(row, stats, cost);
         put_timing(row, "trace_mrays", trace_t);
-        row["nodes_per_ray"] = fmt::format(
-            "{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
-        row["prims_per_ray"] = fmt::format(
-            "{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
-        row["reference"] = ref.name;
-        row["mismatches"] = ref.name == "none"
-                                ? ""
-                                : std::to_string(count_mismatches(ref, rs, frame.diagonal, hits, occluded));
+        put_per_ray_counts(row, counts);
+        put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
         append(csv, row,
                fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms + {} {:.3f} ms, SAH {:.2f}, {:.2f} Mrays/s, "
                            "{} mismatches",
@@ -525,30 +384,23 @@ class AnimationRunner {
     const Scene& scene = frame.scene;
     EmbreeDevice device(threads);
     std::unique_ptr<EmbreeScene> built;
-    std::vector<double> build_ms;
-    int64_t peak = 0;
+    BuildTiming timing;
     if (b.variant == Variant::kEmbreeRefit) {
       built = std::make_unique<EmbreeScene>(device, first, EmbreeQuality::kRefit);
       for (int w = 0; w < cfg_.reps.build_warmup; ++w) built->update_vertices(scene.triangles);
+      std::vector<double> refit_ms;
       for (int r = 0; r < cfg_.reps.build; ++r) {
         const int64_t before = device.bytes();
         device.reset_peak();
-        build_ms.push_back(built->update_vertices(scene.triangles));
-        if (r == 0) peak = device.peak_bytes() - before;
+        refit_ms.push_back(built->update_vertices(scene.triangles));
+        if (r == 0) timing.peak_bytes = device.peak_bytes() - before;
       }
+      timing.time = summarize(refit_ms);
     } else {
-      for (int w = 0; w < cfg_.reps.build_warmup; ++w)
-        built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
-      for (int r = 0; r < cfg_.reps.build; ++r) {
-        built.reset();
-        const int64_t before = device.bytes();
-        device.reset_peak();
-        built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
-        build_ms.push_back(built->commit_ms());
-        if (r == 0) peak = device.peak_bytes() - before;
-      }
+      timing = time_embree_builds(cfg_.reps, device, scene.triangles, b.quality, built);
     }
-    const TimingSummary build_t = summarize(build_ms);
+    const TimingSummary build_t = timing.time;
+    const int64_t peak = timing.peak_bytes;
     for (const auto& layout : embree_layouts_) {
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
@@ -556,19 +408,8 @@ class AnimationRunner {
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
         const TimingSummary trace_t =
-            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(), [&] {
-              if (layout.packet_width == 1) {
-                if (rs.occlusion)
-                  embree_occluded1(*built, rs.rays, occluded);
-                else
-                  embree_intersect1(*built, rs.rays, hits);
-              } else {
-                if (rs.occlusion)
-                  embree_occluded_packets(*built, rs.rays, occluded, layout.packet_width);
-                else
-                  embree_intersect_packets(*built, rs.rays, hits, layout.packet_width);
-              }
-            });
+            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
+                       [&] { trace_embree(*built, layout, rs, hits, occluded); });
         const Reference& ref = frame.references[s];
         CsvRow row = base_row(frame, b, threads);
         row["isa"] = "embree:" + embree_isa(device);
@@ -578,14 +419,9 @@ class AnimationRunner {
         row["bytes_per_tri"] =
             bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene.triangles.size());
         row["mem_peak_bytes"] = std::to_string(peak);
-        row["ray_set"] = rs.name;
-        row["ray_count"] = std::to_string(rs.rays.size());
+        put_ray_set(row, rs);
         put_timing(row, "trace_mrays", trace_t);
-        row["reference"] = ref.name;
-        row["mismatches"] = ref.name == "none"
-                                ? ""
-                                : std::to_string(count_mismatches(ref, rs, frame.diagonal, hits, occluded));
-        row["query"] = rs.occlusion ? "any" : "closest";
+        put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
         if (b.variant == Variant::kEmbreeRefit)
           row["notes"] = "Embree refit of frame 0's build (dynamic scene, geometry quality refit)";
         append(csv, row,

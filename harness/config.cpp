@@ -5,15 +5,14 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <map>
-#include <sstream>
 
 #include "builders/registry.h"
 #include "core/error.h"
 #include "harness/embree_scene.h"
 #include "harness/layout.h"
+#include "harness/toml_file.h"
 
 namespace sahbench {
 namespace {
@@ -514,24 +513,12 @@ std::string to_string(ReferencePolicy policy) {
 }
 
 ExperimentConfig load_experiment_config(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open the experiment config");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw Error(path.string() + ": cannot read the experiment config");
-  return parse_experiment_config(text.str(), path.string());
+  return parse_experiment_config(read_config_text(path, "experiment config"), path.string());
 }
 
 ExperimentConfig parse_experiment_config(std::string_view toml_text, const std::string& source_name) {
   const Source src{source_name};
-  toml::table root;
-  try {
-    root = toml::parse(toml_text, std::string_view(source_name));
-  } catch (const toml::parse_error& e) {
-    const auto& at = e.source().begin;
-    throw Error(source_name + ":" + std::to_string(std::max<uint32_t>(at.line, 1)) + ":" +
-                std::to_string(at.column) + ": TOML syntax error: " + std::string(e.description()));
-  }
+  const toml::table root = parse_toml(toml_text, source_name);
   check_keys(src, root, "the top level", {"experiment", "repetitions", "builder", "ray_set", "animation"});
 
   ExperimentConfig config;

@@ -1,13 +1,12 @@
 // The layout registry and the binary layouts. Wide layouts (BVH4/BVH8) register here too.
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 
 #include "core/error.h"
 #include "harness/layout.h"
+#include "harness/ray_chunks.h"
 #include "builders/refit.h"
 #include "harness/wide_layout.h"
 #include "traversal/bvh2_traversal.h"
@@ -19,30 +18,14 @@ namespace {
 // Rays handed to one task: enough to amortise scheduling, few enough to balance incoherent rays.
 constexpr std::size_t kRayChunk = 256;
 
-template <class Body>
-void for_each_ray_chunk(std::size_t count, Body body) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kRayChunk),
-                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
-}
-
+// The counters of `trace(i, counters)` summed over rays [0, count), in chunks of kRayChunk.
 template <class Trace>
 TraceCounts count_rays(std::size_t count, Trace trace) {
-  return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, count, kRayChunk), TraceCounts{},
-      [&](const tbb::blocked_range<std::size_t>& r, TraceCounts acc) {
-        TraversalCounters counters;
-        for (std::size_t i = r.begin(); i != r.end(); ++i) trace(i, counters);
-        acc.rays += r.size();
-        acc.nodes_visited += counters.nodes_visited();
-        acc.prims_tested += counters.prim_tests;
-        return acc;
-      },
-      [](TraceCounts a, const TraceCounts& b) {
-        a.rays += b.rays;
-        a.nodes_visited += b.nodes_visited;
-        a.prims_tested += b.prims_tested;
-        return a;
-      });
+  return sum_over_ray_chunks(count, kRayChunk, [&](std::size_t begin, std::size_t end) {
+    TraversalCounters counters;
+    for (std::size_t i = begin; i != end; ++i) trace(i, counters);
+    return TraceCounts{end - begin, counters.nodes_visited(), counters.prim_tests};
+  });
 }
 
 /// A binary tree in the common format, traversed by the traversal/ kernels. `bvh2` traverses the tree
@@ -76,7 +59,7 @@ class Bvh2Layout final : public CompiledLayout {
   }
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
-    for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
+    for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) {
         Hit hit = closest_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
         if (hit.found() && !ids_.empty()) hit.prim = ids_[hit.prim];
@@ -85,7 +68,7 @@ class Bvh2Layout final : public CompiledLayout {
     });
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
-    for_each_ray_chunk(rays.size(), [&](std::size_t b, std::size_t e) {
+    for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
     });
   }

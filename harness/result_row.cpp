@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 namespace sahbench {
 
 void put_tree_stats(CsvRow& row, const BvhStats& stats, const SahCost& cost) {
@@ -24,6 +26,25 @@ void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) 
 std::string bytes_per_triangle(std::size_t bytes, std::size_t triangles) {
   if (triangles == 0) return "";
   return fmt::format("{:.2f}", static_cast<double>(bytes) / static_cast<double>(triangles));
+}
+
+void put_ray_set(CsvRow& row, const RaySet& rs) {
+  row["ray_set"] = rs.name;
+  row["ray_count"] = std::to_string(rs.rays.size());
+  row["query"] = rs.occlusion ? "any" : "closest";
+}
+
+void put_per_ray_counts(CsvRow& row, const TraceCounts& counts) {
+  const auto rays = static_cast<double>(std::max<uint64_t>(1, counts.rays));
+  row["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / rays);
+  row["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / rays);
+}
+
+void put_mismatches(CsvRow& row, const Reference& ref, const RaySet& rs, float scene_diagonal,
+                    std::span<const Hit> hits, std::span<const uint8_t> occluded) {
+  row["reference"] = ref.name;
+  row["mismatches"] =
+      ref.name == "none" ? "" : std::to_string(count_mismatches(ref, rs, scene_diagonal, hits, occluded));
 }
 
 }  // namespace sahbench

@@ -3,11 +3,17 @@
 // column has one format in every CSV the harness writes.
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <string>
 
 #include "core/bvh_stats.h"
 #include "core/sah.h"
+#include "core/ray.h"
 #include "harness/csv.h"
+#include "harness/layout.h"
+#include "harness/ray_sets.h"
+#include "harness/reference.h"
 #include "harness/timing.h"
 
 namespace sahbench {
@@ -22,5 +28,16 @@ void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t);
 /// mem_bytes per scene triangle (2 decimals), the figure papers quote for a layout's footprint; empty
 /// for a scene without triangles.
 std::string bytes_per_triangle(std::size_t bytes, std::size_t triangles);
+
+/// The ray set of a cell: ray_set (its name), ray_count and query ("closest", or "any" for occlusion).
+void put_ray_set(CsvRow& row, const RaySet& rs);
+
+/// nodes_per_ray and prims_per_ray (3 decimals) from a counting pass.
+void put_per_ray_counts(CsvRow& row, const TraceCounts& counts);
+
+/// reference (its name), and mismatches: the answers in `hits` or `occluded` that differ from `ref`'s
+/// (count_mismatches), empty where there is no reference.
+void put_mismatches(CsvRow& row, const Reference& ref, const RaySet& rs, float scene_diagonal,
+                    std::span<const Hit> hits, std::span<const uint8_t> occluded);
 
 }  // namespace sahbench

@@ -6,7 +6,6 @@
 
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <functional>
 #include <memory>
 #include <ostream>
@@ -27,6 +26,7 @@
 #include "harness/ray_sets.h"
 #include "harness/reference.h"
 #include "harness/result_row.h"
+#include "harness/run_common.h"
 #include "harness/timing.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
@@ -46,27 +46,6 @@ std::vector<std::string> all_columns() {
   std::vector<std::string> c = design_columns();
   c.insert(c.end(), extra_columns().begin(), extra_columns().end());
   return c;
-}
-
-// Embree's own BVH is traced through its own API, one ray at a time or in packets: each is a layout.
-struct EmbreeLayout {
-  const char* name;
-  int packet_width;  // 1: rtcIntersect1 / rtcOccluded1
-};
-constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 8}, {"embree_16", 16}};
-
-std::string now_stamp() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
-  return buf;
-}
-
-std::string format_duration(double seconds) {
-  const auto s = static_cast<long>(std::lround(seconds));
-  return s >= 60 ? fmt::format("{}m{:02}s", s / 60, s % 60) : fmt::format("{}s", s);
 }
 
 class Progress {
@@ -93,41 +72,13 @@ class Progress {
 };
 
 // One builder run of the config, resolved against the registry.
-struct ResolvedBuilder {
+struct ResolvedBuilder : ResolvedRun {
   BuilderRun run;
-  const BuilderInfo* info = nullptr;  // null for Embree
-  ParamSet params;
-  EmbreeQuality quality = EmbreeQuality::kMedium;
-  std::string params_text;  // the CSV form
-  uint32_t arity = 2;       // of the trees it builds; the harness traces them with layouts of that arity
-  bool is_embree() const { return info == nullptr; }
 };
 
 std::vector<ResolvedBuilder> resolve_builders(const ExperimentConfig& cfg) {
   std::vector<ResolvedBuilder> out;
-  for (const auto& run : cfg.builders) {
-    ResolvedBuilder b;
-    b.run = run;
-    if (run.name == "embree") {
-      std::string quality = "medium";
-      for (const auto& [k, v] : run.params)
-        if (k == "quality") quality = v;
-      b.quality = parse_embree_quality(quality);
-      b.params_text = "quality=" + quality;
-    } else {
-      b.info = &find_builder(run.name);
-      b.params = resolve_params(b.info->name, b.info->params, run.params);
-      b.params_text = b.params.to_string();
-      b.arity = b.info->arity ? b.info->arity(b.params) : 2;
-      const bool traceable = std::any_of(cfg.layouts.begin(), cfg.layouts.end(), [&](const std::string& l) {
-        return find_layout(parse_layout_spec(l).name).arity == b.arity;
-      });
-      if (!traceable)
-        throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
-                    "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
-    }
-    out.push_back(std::move(b));
-  }
+  for (const auto& run : cfg.builders) out.push_back({resolve_run(run, cfg.layouts), run});
   return out;
 }
 
@@ -142,18 +93,10 @@ class ExperimentRunner {
     CsvWriter csv(output_, all_columns());
     if (csv.dropped_partial_row()) log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
     std::set<std::string> finished;
-    if (options_.resume) {
-      for (const auto& row : read_csv(output_)) {
-        finished.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"), row.at("layout"),
-                                 std::stoi(row.at("threads")), row.at("ray_set"), std::stoi(row.at("frame"))));
-        // A resumed run continues the same run: its rows share the run id, so a report shows them together.
-        if (row.at("config") == cfg_.path.string()) run_id_ = row.at("run_id");
-      }
-      log_ << fmt::format("resume: {} finished cells in {}\n", finished.size(), output_.string());
-    }
+    if (options_.resume) finished = finished_cells(output_, cfg_, run_id_, log_);
 
-    check_packet_support();
-    const std::vector<std::string> scenes = scenes_to_run();
+    supported_embree_layouts_ = supported_embree_layouts(log_);
+    const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
     // Plan: which cells of each scene are still to do.
     std::size_t total = 0;
     for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
@@ -174,48 +117,8 @@ class ExperimentRunner {
   }
 
  private:
-  // Embree's packet kernels exist only where the CPU has the vector width (16 lanes: AVX-512); the
-  // cells of a missing width do not apply on this machine and are left out with a reason.
-  void check_packet_support() {
-    EmbreeDevice probe(1);
-    for (const auto& l : kEmbreeLayouts) {
-      if (l.packet_width == 1 || embree_packets_supported(probe, l.packet_width)) {
-        supported_embree_layouts_.push_back(l);
-      } else {
-        log_ << fmt::format("skipping layout {}: Embree has no native {}-wide packets on this CPU\n", l.name, l.packet_width);
-      }
-    }
-  }
-
-  // Required scenes must exist before the first cell runs, not fail hours in; optional ones are skipped.
-  std::vector<std::string> scenes_to_run() {
-    for (const auto& name : cfg_.scenes) {
-      if (is_procedural_spec(name)) {
-        parse_proc_spec(name, procedural_kinds());
-      } else if (!std::filesystem::is_regular_file(name) && !find_scene_file(name)) {
-        load_scene(name);  // throws the loader's error, which names the scene and the search path
-      }
-    }
-    std::vector<std::string> out = cfg_.scenes;
-    for (const auto& name : cfg_.optional_scenes) {
-      if (find_scene_file(name)) {
-        out.push_back(name);
-      } else {
-        log_ << fmt::format("skipping optional scene '{}': not found on the scene search path\n", name);
-      }
-    }
-    return out;
-  }
-
   std::vector<std::string> layouts_for(const ResolvedBuilder& b) const {
-    std::vector<std::string> out;
-    if (b.is_embree()) {
-      for (const auto& l : supported_embree_layouts_) out.push_back(l.name);
-    } else {
-      for (const auto& l : cfg_.layouts)
-        if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
-    }
-    return out;
+    return sahbench::layouts_for(b, cfg_.layouts, supported_embree_layouts_);
   }
 
   // Keys of the cells of `scene` that are neither finished (resume) nor filtered out (--only).
@@ -304,9 +207,7 @@ class ExperimentRunner {
   static void set_up_cell(TraceCell& cell, const Scene& scene, const ResolvedBuilder& b, const std::string& layout,
                           int threads, const RaySet& rs, std::size_t set, double build_ms,
                           std::shared_ptr<const void> keep_alive) {
-    cell.row["ray_set"] = rs.name;
-    cell.row["ray_count"] = std::to_string(rs.rays.size());
-    cell.row["query"] = rs.occlusion ? "any" : "closest";
+    put_ray_set(cell.row, rs);
     cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout, threads, rs.name);
     cell.build_ms = build_ms;
     cell.set = set;
@@ -350,13 +251,8 @@ class ExperimentRunner {
       CsvRow& row = cell.row;
       const TimingSummary trace_t = summarize(cell.mrays);
       put_timing(row, "trace_mrays", trace_t);
-      if (cell.count) {
-        const TraceCounts counts = cell.count();
-        row["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / std::max<uint64_t>(1, counts.rays));
-        row["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / std::max<uint64_t>(1, counts.rays));
-      }
-      row["reference"] = ref.name;
-      row["mismatches"] = ref.name == "none" ? "" : std::to_string(count_mismatches(ref, rs, diagonal_, *cell.hits, *cell.occluded));
+      if (cell.count) put_per_ray_counts(row, cell.count());
+      put_mismatches(row, ref, rs, diagonal_, *cell.hits, *cell.occluded);
       csv_ms_ += time_ms([&] { csv.append(row); });
       progress.cell_done(fmt::format("{}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", cell.label, cell.build_ms,
                                      trace_t.median, row["mismatches"]));
@@ -364,25 +260,7 @@ class ExperimentRunner {
   }
 
   CsvRow base_row(const Scene& scene, const ResolvedBuilder& b, int threads) const {
-    CsvRow row;
-    row["run_id"] = run_id_;
-    row["git_commit"] = env_.git_commit;
-    row["cpu"] = env_.cpu;
-    row["compiler"] = env_.compiler;
-    row["threads"] = std::to_string(threads);
-    row["scene"] = scene.name;
-    row["scene_triangles"] = std::to_string(scene.triangles.size());
-    row["frame"] = "0";
-    row["builder"] = b.run.name;
-    row["builder_params"] = b.params_text;
-    row["build_reps"] = std::to_string(cfg_.reps.build);
-    row["trace_reps"] = std::to_string(cfg_.reps.trace);
-    row["config"] = cfg_.path.string();
-    row["seed"] = std::to_string(cfg_.seed);
-    row["scene_source"] = scene.source;
-    row["scene_removed"] = std::to_string(scene.removed.total());
-    row["embree_version"] = env_.embree;
-    return row;
+    return common_row(run_id_, env_, cfg_, scene, 0, b.run.name, b.params_text, threads);
   }
 
   template <class Wanted>
@@ -393,21 +271,9 @@ class ExperimentRunner {
     // Build: warm-up, then timed repetitions. The peak heap is taken over the first timed build.
     auto tree = std::make_shared<Bvh>();
     Bvh& bvh = *tree;
-    auto build = [&] {
-      const BuildInput input = BuildInput::from_triangles(scene.triangles);
-      bvh = b.info->build(input, b.params);
-    };
-    for (int w = 0; w < cfg_.reps.build_warmup; ++w) build();
-    std::vector<double> build_ms;
-    int64_t peak = 0;
-    for (int r = 0; r < cfg_.reps.build; ++r) {
-      bvh = Bvh{};
-      const int64_t before = heap_bytes();
-      reset_heap_peak();
-      build_ms.push_back(time_ms(build));
-      if (r == 0) peak = heap_peak_bytes() - before;
-    }
-    const TimingSummary build_t = summarize(build_ms);
+    const auto [build_t, peak] = time_builds(
+        cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(scene.triangles), b.params); },
+        [&] { bvh = Bvh{}; });
     const SahCost cost = sah_cost_of(b.params);
     const BvhStats stats = compute_stats(bvh, scene.triangles.size(), cost);
     const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
@@ -424,9 +290,7 @@ class ExperimentRunner {
           put_timing(row, "build_ms", build_t);
           row["nodes"] = std::to_string(stats.nodes);
           row["arity"] = std::to_string(bvh.arity);
-          row["ray_set"] = rs.name;
-          row["ray_count"] = std::to_string(rs.rays.size());
-          row["query"] = rs.occlusion ? "any" : "closest";
+          put_ray_set(row, rs);
           row["notes"] = "invalid tree, not traced: " + report.errors.front();
           csv_ms_ += time_ms([&] { csv.append(row); });
           progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name, b.run.label(),
@@ -439,17 +303,11 @@ class ExperimentRunner {
       bool any = false;
       for (const auto& rs : sets) any |= wanted(layout_name, rs);
       if (!any) continue;
-      const LayoutSpec layout = parse_layout_spec(layout_name);
-      std::unique_ptr<CompiledLayout> compiled;
-      std::vector<double> compile_ms;
-      for (int r = 0; r < std::max(1, cfg_.reps.build); ++r) {
-        compiled.reset();
-        compile_ms.push_back(time_ms([&] { compiled = compile_layout(layout, bvh, scene.triangles); }));
-      }
+      TimedCompile compiled = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
       // The layout borrows the tree (bvh2 as built): both stay alive with the cells.
-      std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled));
+      std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled.layout));
       auto keep = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::shared_ptr<const CompiledLayout>>>(tree, shared_layout);
-      const double compile_median = summarize(compile_ms).median;
+      const double compile_median = compiled.median_ms;
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
         if (!wanted(layout_name, rs)) continue;
@@ -469,12 +327,9 @@ class ExperimentRunner {
         const CompiledLayout* layout_ptr = shared_layout.get();
         const RaySet* set_ptr = &rs;
         cell.trace = [layout_ptr, set_ptr, hits = cell.hits, occluded = cell.occluded] {
-          if (set_ptr->occlusion) layout_ptr->trace_any(set_ptr->rays, *occluded);
-          else layout_ptr->trace_closest(set_ptr->rays, *hits);
+          trace_layout(*layout_ptr, *set_ptr, *hits, *occluded);
         };
-        cell.count = [layout_ptr, set_ptr] {
-          return set_ptr->occlusion ? layout_ptr->count_any(set_ptr->rays) : layout_ptr->count_closest(set_ptr->rays);
-        };
+        cell.count = [layout_ptr, set_ptr] { return count_layout(*layout_ptr, *set_ptr); };
         cells.push_back(std::move(cell));
       }
     }
@@ -494,18 +349,7 @@ class ExperimentRunner {
     auto held = std::make_shared<EmbreeBuild>(threads);
     EmbreeDevice& device = held->device;
     std::unique_ptr<EmbreeScene>& built = held->scene;
-    for (int w = 0; w < cfg_.reps.build_warmup; ++w) built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
-    std::vector<double> build_ms;
-    int64_t peak = 0;
-    for (int r = 0; r < cfg_.reps.build; ++r) {
-      built.reset();
-      const int64_t before = device.bytes();
-      device.reset_peak();
-      built = std::make_unique<EmbreeScene>(device, scene.triangles, b.quality);
-      build_ms.push_back(built->commit_ms());
-      if (r == 0) peak = device.peak_bytes() - before;
-    }
-    const TimingSummary build_t = summarize(build_ms);
+    const auto [build_t, peak] = time_embree_builds(cfg_.reps, device, scene.triangles, b.quality, built);
     for (const auto& layout : supported_embree_layouts_) {
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
@@ -522,15 +366,8 @@ class ExperimentRunner {
         set_up_cell(cell, scene, b, layout.name, threads, rs, s, build_t.median, held);
         const EmbreeScene* embree = built.get();
         const RaySet* set_ptr = &rs;
-        const int width = layout.packet_width;
-        cell.trace = [embree, set_ptr, width, hits = cell.hits, occluded = cell.occluded] {
-          if (width == 1) {
-            if (set_ptr->occlusion) embree_occluded1(*embree, set_ptr->rays, *occluded);
-            else embree_intersect1(*embree, set_ptr->rays, *hits);
-          } else {
-            if (set_ptr->occlusion) embree_occluded_packets(*embree, set_ptr->rays, *occluded, width);
-            else embree_intersect_packets(*embree, set_ptr->rays, *hits, width);
-          }
+        cell.trace = [embree, layout, set_ptr, hits = cell.hits, occluded = cell.occluded] {
+          trace_embree(*embree, layout, *set_ptr, *hits, *occluded);
         };
         cells.push_back(std::move(cell));
       }

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -13,6 +12,7 @@
 #include "core/error.h"
 #include "harness/build_command.h"
 #include "harness/layout.h"
+#include "harness/toml_file.h"
 
 namespace sahbench {
 namespace {
@@ -256,23 +256,11 @@ std::vector<std::string> all_layout_variants() {
 }
 
 StressConfig load_stress_config(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open the stress config");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw Error(path.string() + ": cannot read the stress config");
-  return parse_stress_config(text.str(), path.string());
+  return parse_stress_config(read_config_text(path, "stress config"), path.string());
 }
 
 StressConfig parse_stress_config(std::string_view toml_text, const std::string& source_name) {
-  toml::table root;
-  try {
-    root = toml::parse(toml_text, std::string_view(source_name));
-  } catch (const toml::parse_error& e) {
-    const auto& at = e.source().begin;
-    throw Error(source_name + ":" + std::to_string(std::max<uint32_t>(at.line, 1)) + ":" +
-                std::to_string(at.column) + ": TOML syntax error: " + std::string(e.description()));
-  }
+  const toml::table root = parse_toml(toml_text, source_name);
   const Reader r(source_name);
   r.check_keys(root, "the top level", {"stress", "case"});
   StressConfig c;

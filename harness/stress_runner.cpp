@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <ctime>
 #include <memory>
 #include <ostream>
 #include <set>
@@ -24,6 +23,7 @@
 #include "harness/environment.h"
 #include "harness/layout.h"
 #include "harness/result_row.h"
+#include "harness/run_common.h"
 #include "harness/stress_metrics.h"
 #include "harness/timing.h"
 #include "traversal/exact_reference.h"
@@ -46,15 +46,6 @@ std::vector<std::string> all_columns() {
   c.insert(c.end(), stress_metric_columns().begin(), stress_metric_columns().end());
   c.insert(c.end(), extra_columns().begin(), extra_columns().end());
   return c;
-}
-
-std::string now_stamp() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", &tm);
-  return buf;
 }
 
 // Nodes with a NaN anywhere in their box.

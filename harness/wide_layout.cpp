@@ -1,14 +1,11 @@
 #include "harness/wide_layout.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-
 #include <algorithm>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
+#include "harness/ray_chunks.h"
 #include "traversal/wide_bvh.h"
 
 namespace sahbench {
@@ -65,42 +62,34 @@ class WideLayout final : public CompiledLayout {
   // Sets up chunks of rays and hands each to `kernel(batch, first ray index)`, in parallel.
   template <class Kernel>
   void run(std::span<const Ray> rays, Kernel kernel) const {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), kWideChunk),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        WideRay setup[kWideChunk];
-                        for (std::size_t i = r.begin(); i < r.end(); i += kWideChunk) {
-                          const std::size_t n = std::min(kWideChunk, r.end() - i);
-                          for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
-                          kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr, bvh_.any_hit_in_storage_order}, i);
-                        }
-                      });
+    for_each_ray_chunk(rays.size(), kWideChunk, [&](std::size_t begin, std::size_t end) {
+      WideRay setup[kWideChunk];
+      for (std::size_t i = begin; i < end; i += kWideChunk) {
+        const std::size_t n = std::min(kWideChunk, end - i);
+        for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
+        kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr, bvh_.any_hit_in_storage_order}, i);
+      }
+    });
   }
 
   TraceCounts count(std::span<const Ray> rays, WideKernel kernel) const {
     if (bvh_.nodes.empty()) return {rays.size(), 0, 0};
-    return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, rays.size(), kWideChunk), TraceCounts{},
-        [&](const tbb::blocked_range<std::size_t>& r, TraceCounts acc) {
-          WideRay setup[kWideChunk];
-          std::vector<Hit> hits(kWideChunk);
-          std::vector<uint8_t> occluded(kWideChunk);
-          for (std::size_t i = r.begin(); i < r.end(); i += kWideChunk) {
-            const std::size_t n = std::min(kWideChunk, r.end() - i);
-            for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
-            WideCounts c;
-            kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c, bvh_.any_hit_in_storage_order});
-            acc.rays += c.rays;
-            acc.nodes_visited += c.inner_visits + c.leaf_visits;
-            acc.prims_tested += c.prim_tests;
-          }
-          return acc;
-        },
-        [](TraceCounts a, const TraceCounts& b) {
-          a.rays += b.rays;
-          a.nodes_visited += b.nodes_visited;
-          a.prims_tested += b.prims_tested;
-          return a;
-        });
+    return sum_over_ray_chunks(rays.size(), kWideChunk, [&](std::size_t begin, std::size_t end) {
+      WideRay setup[kWideChunk];
+      std::vector<Hit> hits(kWideChunk);
+      std::vector<uint8_t> occluded(kWideChunk);
+      TraceCounts sum;
+      for (std::size_t i = begin; i < end; i += kWideChunk) {
+        const std::size_t n = std::min(kWideChunk, end - i);
+        for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
+        WideCounts c;
+        kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c, bvh_.any_hit_in_storage_order});
+        sum.rays += c.rays;
+        sum.nodes_visited += c.inner_visits + c.leaf_visits;
+        sum.prims_tested += c.prim_tests;
+      }
+      return sum;
+    });
   }
 
   WideBvh<N> bvh_;

@@ -1,6 +1,5 @@
 #include "scenes/generators.h"
 
-#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -9,25 +8,14 @@
 #include <numbers>
 
 #include "scenes/noise.h"
+#include "scenes/parallel_index.h"
 #include "scenes/rng.h"
+#include "scenes/surface_grid.h"
 #include "scenes/triangle_filter.h"
 
 namespace sahbench {
 
 namespace {
-
-// Items per task: large enough that scheduling is negligible next to generating them.
-constexpr std::size_t kGrain = 4096;
-
-/// Calls body(i) for i in [0, n), in parallel. Every body writes only its own outputs, so the result
-/// does not depend on the thread count.
-template <typename Body>
-void parallel_for_each_index(std::size_t n, Body body) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) body(i);
-                    });
-}
 
 using Mat3 = std::array<double, 9>;  // row-major
 
@@ -134,34 +122,18 @@ std::vector<Triangle> generate_sphere(uint64_t tris, uint64_t seed) {
 }
 
 std::vector<Triangle> generate_terrain(uint64_t tris, uint64_t seed, int octaves) {
-  // Square cells, nx along x and nz along z, with 2 nx nz ~ tris.
-  const std::size_t nx = std::max<std::size_t>(1, round_to_size(std::sqrt(static_cast<double>(tris) / 2.0)));
-  const std::size_t nz =
-      std::max<std::size_t>(1, round_to_size(static_cast<double>(tris) / (2.0 * static_cast<double>(nx))));
-  const double cell = 2.0 / static_cast<double>(nx);
-  const double z0 = -0.5 * cell * static_cast<double>(nz);
+  const SurfaceGrid grid = surface_grid(tris);
   // Features at 2 per unit for the first octave; heights up to about a quarter of the extent.
   constexpr double kBaseFrequency = 2.0;
   constexpr double kAmplitude = 0.25;
 
-  const std::size_t row = nx + 1;
-  std::vector<Vec3> grid(row * (nz + 1));
-  parallel_for_each_index(grid.size(), [&](std::size_t v) {
-    const double x = -1.0 + cell * static_cast<double>(v % row);
-    const double z = z0 + cell * static_cast<double>(v / row);
+  std::vector<Vec3> vertices(grid.vertex_count());
+  parallel_for_each_index(vertices.size(), [&](std::size_t v) {
+    const double x = grid.x(v), z = grid.z(v);
     const double h = kAmplitude * fractal_noise(kBaseFrequency * x, kBaseFrequency * z, seed, octaves);
-    grid[v] = {to_float(x), to_float(h), to_float(z)};
+    vertices[v] = {to_float(x), to_float(h), to_float(z)};
   });
-
-  std::vector<Triangle> out(2 * nx * nz);
-  parallel_for_each_index(nx * nz, [&](std::size_t q) {
-    const std::size_t i = q % nx, k = q / nx;
-    const Vec3 a = grid[k * row + i], b = grid[k * row + i + 1];
-    const Vec3 c = grid[(k + 1) * row + i], d = grid[(k + 1) * row + i + 1];
-    out[2 * q] = {a, c, d};
-    out[2 * q + 1] = {a, d, b};
-  });
-  return out;
+  return triangulate(grid, vertices);
 }
 
 std::vector<Triangle> generate_soup(uint64_t tris, uint64_t seed) {

@@ -204,25 +204,7 @@ class ValueReader {
       if (ec != std::errc() || end != token.data() + token.size()) throw bad_number(token);
       return v;
     }
-    switch (t) {
-      case Type::kInt8:
-        return binary<int8_t>();
-      case Type::kUInt8:
-        return binary<uint8_t>();
-      case Type::kInt16:
-        return binary<int16_t>();
-      case Type::kUInt16:
-        return binary<uint16_t>();
-      case Type::kInt32:
-        return binary<int32_t>();
-      case Type::kUInt32:
-        return binary<uint32_t>();
-      case Type::kFloat32:
-        return binary<float>();
-      case Type::kFloat64:
-        return binary<double>();
-    }
-    return std::nullopt;
+    return binary_as<double>(t);
   }
 
   /// An integer-typed value (list counts, indices).
@@ -232,23 +214,8 @@ class ValueReader {
       if (token.empty()) return std::nullopt;
       return parse_ascii_integer(token);
     }
-    switch (t) {
-      case Type::kInt8:
-        return binary<int8_t>();
-      case Type::kUInt8:
-        return binary<uint8_t>();
-      case Type::kInt16:
-        return binary<int16_t>();
-      case Type::kUInt16:
-        return binary<uint16_t>();
-      case Type::kInt32:
-        return binary<int32_t>();
-      case Type::kUInt32:
-        return binary<uint32_t>();
-      default:
-        break;
-    }
-    return std::nullopt;  // not reached: the header check allows only integer types here
+    if (!is_integer(t)) return std::nullopt;  // not reached: the header check allows only integer types here
+    return binary_as<int64_t>(t);
   }
 
   /// Skips one value; false at end of file.
@@ -270,6 +237,30 @@ class ValueReader {
   }
 
  private:
+  /// The next binary value, of type `t`, converted to `Out`; nullopt at end of file.
+  template <typename Out>
+  std::optional<Out> binary_as(Type t) {
+    switch (t) {
+      case Type::kInt8:
+        return binary<int8_t>();
+      case Type::kUInt8:
+        return binary<uint8_t>();
+      case Type::kInt16:
+        return binary<int16_t>();
+      case Type::kUInt16:
+        return binary<uint16_t>();
+      case Type::kInt32:
+        return binary<int32_t>();
+      case Type::kUInt32:
+        return binary<uint32_t>();
+      case Type::kFloat32:
+        return binary<float>();
+      case Type::kFloat64:
+        return binary<double>();
+    }
+    return std::nullopt;
+  }
+
   template <typename T>
   std::optional<T> binary() {
     std::array<unsigned char, sizeof(T)> bytes;

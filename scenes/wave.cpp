@@ -1,21 +1,18 @@
 #include "scenes/wave.h"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
+#include "scenes/parallel_index.h"
 #include "scenes/rng.h"
+#include "scenes/surface_grid.h"
 #include "scenes/triangle_filter.h"
 
 namespace sahbench {
 
 namespace {
 
-// Vertices per task: large enough that scheduling is negligible.
-constexpr std::size_t kGrain = 4096;
 // Wavelengths drawn in this range (the sheet is 2 wide): several crests across it, none finer than the
 // grid of a small scene can show.
 constexpr double kMinWavelength = 0.25, kMaxWavelength = 1.0;
@@ -58,49 +55,26 @@ std::vector<Wave> draw_waves(const WaveParams& p) {
 }  // namespace
 
 std::vector<Triangle> generate_wave(const WaveParams& params, double t) {
-  // Square cells, nx along x and nz along z, with 2 nx nz ~ tris (as the terrain generator).
-  const auto nx = std::max<std::size_t>(
-      1, static_cast<std::size_t>(std::llround(std::sqrt(static_cast<double>(params.tris) / 2.0))));
-  const auto nz =
-      std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(static_cast<double>(params.tris) /
-                                                                     (2.0 * static_cast<double>(nx)))));
-  const double cell = 2.0 / static_cast<double>(nx);
-  const double z0 = -0.5 * cell * static_cast<double>(nz);
+  // The terrain generator's sheet (surface_grid), displaced by the waves.
+  const SurfaceGrid grid = surface_grid(params.tris);
   const std::vector<Wave> waves = draw_waves(params);
 
-  const std::size_t row = nx + 1;
-  std::vector<Vec3> grid(row * (nz + 1));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.size(), kGrain),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t v = r.begin(); v != r.end(); ++v) {
-                        const double x = -1.0 + cell * static_cast<double>(v % row);
-                        const double z = z0 + cell * static_cast<double>(v / row);
-                        // Gerstner: P = (x + sum q a dx cos th, sum a sin th, z + sum q a dz cos th), th = k
-                        // d.x0 - omega t + phase.
-                        double px = x, py = 0.0, pz = z;
-                        for (const Wave& w : waves) {
-                          const double theta = w.k * (w.dx * x + w.dz * z) - w.omega * t + w.phase;
-                          const double c = std::cos(theta), s = std::sin(theta);
-                          px += w.q * w.a * w.dx * c;
-                          pz += w.q * w.a * w.dz * c;
-                          py += w.a * s;
-                        }
-                        grid[v] = {to_float(px), to_float(py), to_float(pz)};
-                      }
-                    });
-
-  std::vector<Triangle> out(2 * nx * nz);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nx * nz, kGrain),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t q = r.begin(); q != r.end(); ++q) {
-                        const std::size_t i = q % nx, k = q / nx;
-                        const Vec3 a = grid[k * row + i], b = grid[k * row + i + 1];
-                        const Vec3 c = grid[(k + 1) * row + i], d = grid[(k + 1) * row + i + 1];
-                        out[2 * q] = {a, c, d};
-                        out[2 * q + 1] = {a, d, b};
-                      }
-                    });
-  return out;
+  std::vector<Vec3> vertices(grid.vertex_count());
+  parallel_for_each_index(vertices.size(), [&](std::size_t v) {
+    const double x = grid.x(v), z = grid.z(v);
+    // Gerstner: P = (x + sum q a dx cos th, sum a sin th, z + sum q a dz cos th), th = k d.x0 - omega t
+    // + phase.
+    double px = x, py = 0.0, pz = z;
+    for (const Wave& w : waves) {
+      const double theta = w.k * (w.dx * x + w.dz * z) - w.omega * t + w.phase;
+      const double c = std::cos(theta), s = std::sin(theta);
+      px += w.q * w.a * w.dx * c;
+      pz += w.q * w.a * w.dz * c;
+      py += w.a * s;
+    }
+    vertices[v] = {to_float(px), to_float(py), to_float(pz)};
+  });
+  return triangulate(grid, vertices);
 }
 
 }  // namespace sahbench

@@ -21,6 +21,7 @@
 #include "harness/embree_trace.h"
 #include "harness/runner.h"
 #include "scenes/wave.h"
+#include "tests/support/config_error.h"
 #include "tests/support/hit_check.h"
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
@@ -28,36 +29,16 @@
 namespace sahbench {
 namespace {
 
-// Parses `text` as "anim.toml" and checks that its Error starts with "anim.toml:<line>:" and contains
-// every one of `parts`.
+// The config errors of this suite come from "anim.toml".
 void expect_error(std::string_view text, int line, std::initializer_list<std::string_view> parts) {
-  std::string message;
-  try {
-    parse_experiment_config(text, "anim.toml");
-  } catch (const Error& e) {
-    message = e.what();
-  }
-  ASSERT_FALSE(message.empty()) << "no error for:\n" << text;
-  const std::string prefix = "anim.toml:" + std::to_string(line) + ":";
-  EXPECT_EQ(message.substr(0, prefix.size()), prefix) << message;
-  for (auto part : parts)
-    EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
+  test::expect_config_error(text, "anim.toml", line, parts);
 }
 
 // A valid static config of 9 lines; tests append from line 10 on.
-constexpr std::string_view kBase = R"([experiment]
-name = "a"
-scenes = ["proc:wave:tris=1k"]
-
-[[builder]]
-name = "binned_sah"
-
-[[ray_set]]
-kind = "primary"
-)";
+const std::string kBase = test::minimal_config("a", "proc:wave:tris=1k");
 
 ExperimentConfig parse_with(std::string_view extra) {
-  return parse_experiment_config(std::string(kBase) + std::string(extra), "anim.toml");
+  return parse_experiment_config(kBase + std::string(extra), "anim.toml");
 }
 
 TEST(HarnessAnimationConfig, FramesTimesAndDefaults) {
@@ -77,22 +58,22 @@ TEST(HarnessAnimationConfig, FramesTimesAndDefaults) {
 }
 
 TEST(HarnessAnimationConfig, ErrorsNameKeyAndLine) {
-  expect_error(std::string(kBase) + "[animation]\nframes = 0\n", 11, {"animation.frames = 0", "[1, 10000]"});
-  expect_error(std::string(kBase) + "[animation]\nframes = \"ten\"\n", 11,
+  expect_error(kBase + "[animation]\nframes = 0\n", 11, {"animation.frames = 0", "[1, 10000]"});
+  expect_error(kBase + "[animation]\nframes = \"ten\"\n", 11,
                {"animation.frames must be an integer"});
-  expect_error(std::string(kBase) + "[animation]\nframes = 20000\n", 11, {"animation.frames = 20000"});
-  expect_error(std::string(kBase) + "[animation]\ntimes = [0.5, 0.2]\n", 11,
+  expect_error(kBase + "[animation]\nframes = 20000\n", 11, {"animation.frames = 20000"});
+  expect_error(kBase + "[animation]\ntimes = [0.5, 0.2]\n", 11,
                {"animation.times must increase", "0.2", "0.5"});
-  expect_error(std::string(kBase) + "[animation]\ntimes = [0, \"1\"]\n", 11,
+  expect_error(kBase + "[animation]\ntimes = [0, \"1\"]\n", 11,
                {"animation.times must be a list of numbers"});
-  expect_error(std::string(kBase) + "[animation]\ntimes = []\n", 11,
+  expect_error(kBase + "[animation]\ntimes = []\n", 11,
                {"animation.times must not be an empty list"});
-  expect_error(std::string(kBase) + "[animation]\ntimes = 1.5\n", 11, {"animation.times must be a list"});
-  expect_error(std::string(kBase) + "[animation]\nframes = 3\ntimes = [0.0]\n", 12, {"exclude each other"});
-  expect_error(std::string(kBase) + "[animation]\nfps = 30\n", 11,
+  expect_error(kBase + "[animation]\ntimes = 1.5\n", 11, {"animation.times must be a list"});
+  expect_error(kBase + "[animation]\nframes = 3\ntimes = [0.0]\n", 12, {"exclude each other"});
+  expect_error(kBase + "[animation]\nfps = 30\n", 11,
                {"unknown key 'fps' in [animation]", "frames, times"});
-  expect_error("animation = 3\n" + std::string(kBase), 1, {"[animation] must be a table"});
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"embree\"\nquality = \"refit\"\n", 12,
+  expect_error("animation = 3\n" + kBase, 1, {"[animation] must be a table"});
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\nquality = \"refit\"\n", 12,
                {"'refit'", "[animation]", "low, medium, high"});
 }
 

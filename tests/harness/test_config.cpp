@@ -12,40 +12,21 @@
 #include "builders/registry.h"
 #include "core/error.h"
 #include "harness/config.h"
+#include "tests/support/config_error.h"
 
 namespace sahbench {
 namespace {
 
-// Parses `text` as "test.toml" and checks that the Error it throws starts with "test.toml:<line>:" and
-// contains every one of `parts`.
+// The config errors of this suite come from "test.toml".
 void expect_error(std::string_view text, int line, std::initializer_list<std::string_view> parts) {
-  std::string message;
-  try {
-    parse_experiment_config(text, "test.toml");
-  } catch (const Error& e) {
-    message = e.what();
-  }
-  ASSERT_FALSE(message.empty()) << "no error for:\n" << text;
-  const std::string prefix = "test.toml:" + std::to_string(line) + ":";
-  EXPECT_EQ(message.substr(0, prefix.size()), prefix) << message;
-  for (auto part : parts)
-    EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
+  test::expect_config_error(text, "test.toml", line, parts);
 }
 
 // A minimal valid config (lines 1-9); tests append [[builder]] or [[ray_set]] tables from line 10 on.
-constexpr std::string_view kBase = R"([experiment]
-name = "t"
-scenes = ["proc:soup:tris=1k"]
-
-[[builder]]
-name = "binned_sah"
-
-[[ray_set]]
-kind = "primary"
-)";
+const std::string kBase = test::minimal_config("t", "proc:soup:tris=1k");
 
 ExperimentConfig parse_with(std::string_view extra) {
-  return parse_experiment_config(std::string(kBase) + std::string(extra), "test.toml");
+  return parse_experiment_config(kBase + std::string(extra), "test.toml");
 }
 
 std::vector<std::string> labels(const ExperimentConfig& config) {
@@ -285,7 +266,7 @@ bins = 4
 
 TEST(HarnessConfigSweep, TooManyRunsIsAnError) {
   // 11 x 11 x 11 x 11 = 14641 runs > kMaxSweepRuns.
-  expect_error(std::string(kBase) + R"(
+  expect_error(kBase + R"(
 [[builder]]
 name = "binned_sah"
 bins = [4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14]
@@ -304,9 +285,9 @@ TEST(HarnessConfigSweep, DuplicateRunsAreAnError) {
   ASSERT_NE(spec, bins.end());
   const std::string default_bins = std::to_string(static_cast<int>(spec->default_value));
   expect_error(
-      std::string(kBase) + "\n[[builder]]\nname = \"binned_sah\"\nbins = [8, " + default_bins + "]\n", 11,
+      kBase + "\n[[builder]]\nname = \"binned_sah\"\nbins = [8, " + default_bins + "]\n", 11,
       {"binned_sah[bins=" + default_bins + "]", "'binned_sah' (line 5)"});
-  expect_error(std::string(kBase) + R"(
+  expect_error(kBase + R"(
 [[builder]]
 name = "sweep_sah"
 max_leaf = [4, 4.0]
@@ -335,28 +316,28 @@ max_leaf = 1e1
 }
 
 TEST(HarnessConfigValues, BadValuesNameKeyAndLine) {
-  expect_error(std::string(kBase) + R"(
+  expect_error(kBase + R"(
 [[builder]]
 name = "binned_sah"
 bins = [8,
         2]
 )",
                14, {"bins", "'2'", "outside [4, 256]"});
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nmax_leaf = 2.5\n", 12,
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nmax_leaf = 2.5\n", 12,
                {"max_leaf", "2.5", "not an integer"});
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nbins = \"many\"\n", 12,
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = \"many\"\n", 12,
                {"bins", "many", "not a number"});
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nbins = []\n", 12,
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = []\n", 12,
                {"bins", "empty list"});
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nbins = [[8]]\n", 12,
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = [[8]]\n", 12,
                {"bins", "nest"});
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nbins = 1979-05-27\n", 12,
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = 1979-05-27\n", 12,
                {"bins", "a date"});
 }
 
 TEST(HarnessConfigValues, ParameterCombinationsAreCheckedWhenLoading) {
   // Each value is in range, but together they cannot build: caught at load, not when the cell runs.
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"binned_sah\"\nmin_leaf = 8\nmax_leaf = 4\n", 10,
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nmin_leaf = 8\nmax_leaf = 4\n", 10,
                {"max_leaf = 4", "below min_leaf = 8"});
 }
 
@@ -379,15 +360,15 @@ name = "embree"
 }
 
 TEST(HarnessConfigEmbree, DefaultQualityDuplicatesExplicitMedium) {
-  expect_error(std::string(kBase) +
+  expect_error(kBase +
                    "[[builder]]\nname = \"embree\"\nquality = \"medium\"\n\n[[builder]]\nname = \"embree\"\n",
                14, {"embree[quality=medium]", "line 10"});
 }
 
 TEST(HarnessConfigEmbree, OnlyKnownQualities) {
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"embree\"\nquality = [\"high\", \"refit\"]\n", 12,
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\nquality = [\"high\", \"refit\"]\n", 12,
                {"refit", "low, medium, high"});
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"embree\"\n\nbins = 8\n", 13,
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\n\nbins = 8\n", 13,
                {"embree", "unknown parameter 'bins'", "quality"});
 }
 
@@ -397,10 +378,10 @@ TEST(HarnessConfigErrors, TomlSyntax) {
 }
 
 TEST(HarnessConfigErrors, UnknownTablesAndKeys) {
-  expect_error(std::string(kBase) + "\n[repetition]\nbuild = 2\n", 11,
+  expect_error(kBase + "\n[repetition]\nbuild = 2\n", 11,
                {"unknown table [repetition]", "experiment, repetitions, builder, ray_set"});
-  expect_error(std::string(kBase) + "[[rayset]]\nkind = \"primary\"\n", 10, {"unknown table [[rayset]]"});
-  expect_error(std::string(kBase) + "[repetitions]\nbuild = 2\nwarmup = 1\n", 12,
+  expect_error(kBase + "[[rayset]]\nkind = \"primary\"\n", 10, {"unknown table [[rayset]]"});
+  expect_error(kBase + "[repetitions]\nbuild = 2\nwarmup = 1\n", 12,
                {"unknown key 'warmup' in [repetitions]", "build, build_warmup, trace, trace_warmup"});
   expect_error(R"([experiment]
 name = "t"
@@ -408,14 +389,14 @@ thread = 2
 scenes = ["s"]
 )",
                3, {"unknown key 'thread' in [experiment]", "threads", "brute_force_max_triangles"});
-  expect_error("top = 1\n" + std::string(kBase), 1, {"unknown key 'top'"});
-  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"primary\"\nname = \"p2\"\nlights = 3\n", 13,
+  expect_error("top = 1\n" + kBase, 1, {"unknown key 'top'"});
+  expect_error(kBase + "[[ray_set]]\nkind = \"primary\"\nname = \"p2\"\nlights = 3\n", 13,
                {"unknown key 'lights' in [[ray_set]] of kind primary", "name, kind, width, height"});
-  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"random\"\nwidth = 3\n", 12,
+  expect_error(kBase + "[[ray_set]]\nkind = \"random\"\nwidth = 3\n", 12,
                {"unknown key 'width' in [[ray_set]] of kind random"});
-  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"shadow\"\nlight_source = \"scene\"\nlights = 2\n",
+  expect_error(kBase + "[[ray_set]]\nkind = \"shadow\"\nlight_source = \"scene\"\nlights = 2\n",
                13, {"lights", "light_source = \"auto\""});
-  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"beam\"\n", 11,
+  expect_error(kBase + "[[ray_set]]\nkind = \"beam\"\n", 11,
                {"ray_set.kind", "beam", "primary | shadow"});
 }
 
@@ -442,12 +423,12 @@ TEST(HarnessConfigErrors, WrongTypes) {
   expect_error("experiment = 1\n", 1, {"[experiment] must be a table", "an integer"});
   expect_error("builder = 3\n[experiment]\nname = \"t\"\nscenes = [\"s\"]\n", 1,
                {"[[builder]]", "an integer"});
-  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"ao\"\nao_radius = \"far\"\n", 12,
+  expect_error(kBase + "[[ray_set]]\nkind = \"ao\"\nao_radius = \"far\"\n", 12,
                {"ao_radius must be a number", "a string"});
-  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"ao\"\nao_radius = 0\n", 12,
+  expect_error(kBase + "[[ray_set]]\nkind = \"ao\"\nao_radius = 0\n", 12,
                {"ao_radius = 0", "positive"});
-  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"random\"\ncount = 0\n", 12, {"ray_set.count = 0"});
-  expect_error(std::string(kBase) + "[[ray_set]]\nkind = \"diffuse\"\nwidth = 100000\n", 12,
+  expect_error(kBase + "[[ray_set]]\nkind = \"random\"\ncount = 0\n", 12, {"ray_set.count = 0"});
+  expect_error(kBase + "[[ray_set]]\nkind = \"diffuse\"\nwidth = 100000\n", 12,
                {"ray_set.width = 100000", "16384"});
 }
 
@@ -469,9 +450,9 @@ TEST(HarnessConfigErrors, EmptyListsAndDuplicates) {
 }
 
 TEST(HarnessConfigErrors, DuplicateRaySetNames) {
-  expect_error(std::string(kBase) + "\n[[ray_set]]\nkind = \"primary\"\nwidth = 64\n", 11,
+  expect_error(kBase + "\n[[ray_set]]\nkind = \"primary\"\nwidth = 64\n", 11,
                {"ray set name 'primary' is used twice"});
-  expect_error(std::string(kBase) +
+  expect_error(kBase +
                    "[[ray_set]]\nname = \"a\"\nkind = \"ao\"\n[[ray_set]]\nkind = \"shadow\"\nname = \"a\"\n",
                15, {"ray set name 'a' is used twice"});
 }
@@ -484,12 +465,12 @@ TEST(HarnessConfigErrors, CountsBelowMinimum) {
   };
   expect_error(experiment("threads = 0"), 4, {"experiment.threads = 0 must be at least 1"});
   expect_error(experiment("threads = [1, -2]"), 4, {"experiment.threads = -2"});
-  expect_error(std::string(kBase) + "[repetitions]\nbuild = 0\n", 11,
+  expect_error(kBase + "[repetitions]\nbuild = 0\n", 11,
                {"repetitions.build = 0 must be at least 1"});
-  expect_error(std::string(kBase) + "[repetitions]\ntrace = 0\n", 11, {"repetitions.trace = 0"});
-  expect_error(std::string(kBase) + "[repetitions]\ntrace_warmup = -1\n", 11,
+  expect_error(kBase + "[repetitions]\ntrace = 0\n", 11, {"repetitions.trace = 0"});
+  expect_error(kBase + "[repetitions]\ntrace_warmup = -1\n", 11,
                {"repetitions.trace_warmup = -1"});
-  expect_error(std::string(kBase) + "[repetitions]\ninterleave = 1\n", 11,
+  expect_error(kBase + "[repetitions]\ninterleave = 1\n", 11,
                {"repetitions.interleave must be true or false"});
   const auto ok = parse_with("[repetitions]\nbuild_warmup = 0\ntrace_warmup = 0\n");
   EXPECT_EQ(ok.reps, (Repetitions{5, 0, 5, 0}));
@@ -505,15 +486,15 @@ TEST(HarnessConfigErrors, ExperimentNameAndRequiredTables) {
                {"no [[builder]]", "at least one builder"});
   expect_error("[experiment]\nname = \"t\"\nscenes = [\"s\"]\n[[builder]]\nname = \"binned_sah\"\n", 1,
                {"no [[ray_set]]", "at least one ray set"});
-  expect_error(std::string(kBase) + "[[ray_set]]\nname = \"a b\"\nkind = \"ao\"\n", 11,
+  expect_error(kBase + "[[ray_set]]\nname = \"a b\"\nkind = \"ao\"\n", 11,
                {"ray_set.name", "a b"});
 }
 
 TEST(HarnessConfigErrors, UnknownBuilderParameterAndLayout) {
-  expect_error(std::string(kBase) + "[[builder]]\n\nname = \"binned_sha\"\n", 12,
+  expect_error(kBase + "[[builder]]\n\nname = \"binned_sha\"\n", 12,
                {"unknown builder 'binned_sha'", "binned_sah", "sweep_sah"});
-  expect_error(std::string(kBase) + "[[builder]]\nbins = 8\n", 10, {"[[builder]] has no name"});
-  expect_error(std::string(kBase) + "[[builder]]\nname = \"sweep_sah\"\nbins = 8\n", 12,
+  expect_error(kBase + "[[builder]]\nbins = 8\n", 10, {"[[builder]] has no name"});
+  expect_error(kBase + "[[builder]]\nname = \"sweep_sah\"\nbins = 8\n", 12,
                {"sweep_sah", "unknown parameter 'bins'", "min_leaf, max_leaf, c_trav, c_isect"});
   expect_error(R"([experiment]
 name = "t"

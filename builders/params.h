@@ -21,7 +21,7 @@ struct ParamSpec {
   double min_value = 0.0;
   double max_value = 0.0;
   std::string help;
-  std::vector<std::string> choices;  ///< kChoice only
+  std::vector<std::string> choices = {};  ///< kChoice only
 };
 
 /// A kChoice parameter whose default is choices[default_index].

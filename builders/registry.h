@@ -25,7 +25,7 @@ struct BuilderInfo {
   std::function<void(const ParamSet&)> check;
   /// The arity of the trees built with these parameters, so the harness can pair the builder with
   /// layouts before building. Optional: empty means binary.
-  std::function<uint32_t(const ParamSet&)> arity;
+  std::function<uint32_t(const ParamSet&)> arity = {};
 };
 
 /// Every registered builder, in registration order.

@@ -28,10 +28,10 @@ std::vector<double> occlusion_order_keys(const Bvh& bvh, std::span<const Triangl
 /// Reorders the children of every inner node of `bvh` by occlusion_order_keys, largest first (stable:
 /// equal keys keep the builder's order). Only sibling order changes: the same boxes, leaves and
 /// references, so the SAH cost, the closest hits and the set of nodes a ray enters are the builder's.
-/// Measured on the shadow rays of configs/wide.toml (notes of issue 4): against nearest-first, 8-wide
-/// any hit in this order traced Sponza 13-85% faster, bunny and dragon 2-8% faster and the 1M terrain
-/// 2% slower; against ordering by box area alone, Sponza gained a further 12% and the others were
-/// within 2%.
+/// Measured on the shadow rays of configs/wide.toml against Embree (notes of issue 4): against
+/// nearest-first, 8-wide any hit in this order traced Sponza 20% (wide_collapse) to 80%
+/// (wide_binned_sah) faster, bunny 3% and dragon 8% faster, and the 1M terrain within 2%; against
+/// ordering by box area alone, Sponza 13% faster and the terrain 1-3% slower.
 void order_children_for_occlusion(Bvh& bvh, std::span<const Triangle> triangles, const SahCost& cost);
 
 }  // namespace sahbench

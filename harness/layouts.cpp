@@ -36,13 +36,14 @@ TraceCounts count_rays(std::size_t count, Trace trace) {
 template <class Tri, class Box>
 class Bvh2Layout final : public CompiledLayout {
  public:
-  /// The tree as built; `bvh` and `triangles` must outlive the layout.
-  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles)
-      : bvh_(&bvh), triangles_(triangles), triangle_count_(triangles.size()) {}
+  /// The tree as built; `bvh` and `triangles` must outlive the layout. Any hit visits children in `order`.
+  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, AnyHitOrder order)
+      : bvh_(&bvh), triangles_(triangles), triangle_count_(triangles.size()), order_(order) {}
 
   /// Packed: owns a copy of the nodes in depth-first order and the triangles in leaf order.
-  static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles) {
+  static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles, AnyHitOrder order) {
     auto layout = std::unique_ptr<Bvh2Layout>(new Bvh2Layout());
+    layout->order_ = order;
     layout->owned_ = depth_first(bvh);
     const std::size_t refs = layout->owned_.prim_refs.size();
     layout->packed_.resize(refs);
@@ -69,14 +70,14 @@ class Bvh2Layout final : public CompiledLayout {
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
+      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit<Tri, Box>(*bvh_, triangles_, rays[i], order_);
     });
   }
   TraceCounts count_closest(std::span<const Ray> rays) const override {
     return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c); });
   }
   TraceCounts count_any(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c); });
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c, order_); });
   }
   // Refit (builders/refit.h): as built, a copy of the borrowed tree is made the first time, and the new
   // triangles are borrowed like the old ones; packed, the packed copies are rewritten first.
@@ -143,6 +144,7 @@ class Bvh2Layout final : public CompiledLayout {
   Bvh owned_;                      // packed; as built, once refitted
   std::vector<Triangle> packed_;   // packed only
   std::vector<uint32_t> ids_;      // packed only: scene index of each packed triangle
+  AnyHitOrder order_ = AnyHitOrder::kAuto;
 };
 
 void require_binary(const Bvh& bvh, const char* layout) {
@@ -154,7 +156,7 @@ void require_binary(const Bvh& bvh, const char* layout) {
 std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
   require_binary(bvh, "bvh2");
   return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
-    return std::make_unique<Bvh2Layout<Tri, Box>>(bvh, tris);
+    return std::make_unique<Bvh2Layout<Tri, Box>>(bvh, tris, spec.variant.any_hit);
   });
 }
 
@@ -162,7 +164,7 @@ std::unique_ptr<CompiledLayout> compile_bvh2_packed(const Bvh& bvh, std::span<co
                                                     const LayoutSpec& spec) {
   require_binary(bvh, "bvh2_packed");
   return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
-    return Bvh2Layout<Tri, Box>::packed(bvh, tris);
+    return Bvh2Layout<Tri, Box>::packed(bvh, tris, spec.variant.any_hit);
   });
 }
 
@@ -205,6 +207,7 @@ std::string LayoutSpec::text() const {
   const KernelVariant defaults;
   if (variant.triangle != defaults.triangle) add("tri", to_string(variant.triangle));
   if (variant.box != defaults.box) add("box", to_string(variant.box));
+  if (variant.any_hit != defaults.any_hit) add("anyhit", to_string(variant.any_hit));
   if (isa != KernelIsa::kAuto) add("isa", to_string(isa));
   return name + options;
 }
@@ -224,7 +227,7 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     const std::string_view item = rest.substr(0, comma);
     const auto eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0)
-      throw Error(where + ": option '" + std::string(item) + "' is not of the form key=value (keys: tri, box" +
+      throw Error(where + ": option '" + std::string(item) + "' is not of the form key=value (keys: tri, box, anyhit" +
                   (info.has_isa ? ", isa)" : ")"));
     const std::string key(item.substr(0, eq));
     const std::string value(item.substr(eq + 1));
@@ -239,12 +242,16 @@ LayoutSpec parse_layout_spec(std::string_view text) {
       const auto kind = parse_box_test(value);
       if (!kind) throw Error(where + ": box = '" + value + "' is not one of robust, fast");
       spec.variant.box = *kind;
+    } else if (key == "anyhit") {
+      const auto order = parse_any_hit_order(value);
+      if (!order) throw Error(where + ": anyhit = '" + value + "' is not one of auto, nearest, stored");
+      spec.variant.any_hit = *order;
     } else if (key == "isa" && info.has_isa) {
       const auto isa = parse_kernel_isa(value);
       if (!isa) throw Error(where + ": isa = '" + value + "' is not one of auto, scalar, sse, avx2, avx512");
       spec.isa = *isa;
     } else {
-      throw Error(where + ": unknown option '" + key + "' (known: tri, box" + (info.has_isa ? ", isa)" : ")"));
+      throw Error(where + ": unknown option '" + key + "' (known: tri, box, anyhit" + (info.has_isa ? ", isa)" : ")"));
     }
     if (comma == std::string_view::npos) break;
     rest = rest.substr(comma + 1);

@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "harness/ray_chunks.h"
+#include "traversal/bvh2_traversal.h"
 #include "traversal/wide_bvh.h"
 
 namespace sahbench {
@@ -18,11 +19,12 @@ constexpr std::size_t kWideChunk = 256;
 template <uint32_t N>
 class WideLayout final : public CompiledLayout {
  public:
-  WideLayout(WideBvh<N> bvh, std::size_t triangle_count, KernelIsa isa, const KernelVariant& variant)
+  WideLayout(WideBvh<N> bvh, std::size_t triangle_count, KernelIsa isa, const KernelVariant& variant, bool stored_order)
       : bvh_(std::move(bvh)),
         triangle_count_(triangle_count),
         isa_(isa),
         shear_(variant.triangle == TriangleTestKind::kWatertight) {
+    bvh_.any_hit_in_storage_order = stored_order;
     closest_ = find_wide_kernel(isa, N, variant, false, false);
     any_ = find_wide_kernel(isa, N, variant, true, false);
     count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
@@ -108,8 +110,11 @@ std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& b
     throw Error("layout '" + spec.text() + "': isa " + std::string(to_string(isa)) +
                 " is not available on this CPU or build (auto would pick " +
                 std::string(to_string(preferred_kernel_isa())) + ")");
-  if (width == 4) return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles), triangles.size(), isa, spec.variant);
-  if (width == 8) return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles), triangles.size(), isa, spec.variant);
+  const bool stored_order = any_hit_in_storage_order(bvh, spec.variant.any_hit);
+  if (width == 4)
+    return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles), triangles.size(), isa, spec.variant, stored_order);
+  if (width == 8)
+    return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles), triangles.size(), isa, spec.variant, stored_order);
   throw Error("no " + std::to_string(width) + "-wide layout");
 }
 

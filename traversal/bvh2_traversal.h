@@ -9,6 +9,7 @@
 #include "core/bvh.h"
 #include "core/ray.h"
 #include "core/triangle.h"
+#include "traversal/kernel_variant.h"
 #include "traversal/ray_box.h"
 #include "traversal/triangle_tests.h"
 
@@ -37,13 +38,16 @@ struct TraversalCounters {
   friend bool operator==(const TraversalCounters&, const TraversalCounters&) = default;
 };
 
-/// Whether any hit visits a node's children in storage order rather than nearest first: on wide trees
-/// (arity above 2), whose builders store first the children likeliest to hold an occluder per unit of
-/// cost (builders/child_order.h). The 8-wide kernels' shadow rays gained that way (no sort on the way
-/// to the next node, and a better order than the distance for occlusion), on Sponza most. Binary trees
-/// stay nearest first: storage order cost their shadow rays 10 to 16% (measured against Embree in one
-/// run; notes of issue 4).
-inline bool any_hit_in_storage_order(const Bvh& bvh) { return bvh.arity > 2; }
+/// Whether any hit visits a node's children in storage order rather than nearest first. `order` kAuto:
+/// on wide trees (arity above 2), whose builders store first the children likeliest to hold an occluder
+/// per unit of cost (builders/child_order.h); the 8-wide kernels' shadow rays gained that way (no sort on
+/// the way to the next node, and a better order than the distance for occlusion), on Sponza most.
+/// Binary trees stay nearest first: storage order cost their shadow rays 10 to 16% (measured against
+/// Embree in one run; notes of issue 4). The layout option anyhit=nearest|stored overrides it.
+inline bool any_hit_in_storage_order(const Bvh& bvh, AnyHitOrder order = AnyHitOrder::kAuto) {
+  if (order == AnyHitOrder::kAuto) return bvh.arity > 2;
+  return order == AnyHitOrder::kStored;
+}
 
 namespace detail {
 
@@ -80,7 +84,7 @@ struct StackEntry {
 // among hits at the same float t the lowest index wins, as in the brute-force reference.
 template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
 Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
-             [[maybe_unused]] TraversalCounters* counters) {
+             [[maybe_unused]] TraversalCounters* counters, AnyHitOrder order) {
   if constexpr (kCount) ++counters->rays;
   if (bvh.nodes.empty() || !traceable(ray)) return {};
   const BoxTest box_test(ray);
@@ -95,7 +99,7 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
 
   Hit best;
   float best_t = ray.tmax;
-  const bool wide = any_hit_in_storage_order(bvh);
+  const bool stored_order = kAnyHit && any_hit_in_storage_order(bvh, order);
   while (size > 0) {
     const StackEntry entry = stack[--size];
     if constexpr (!kAnyHit) {
@@ -135,7 +139,7 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
       throw_stack_overflow(entry.node, node.child_count);
     const uint32_t end = node.first + node.child_count;
     const uint32_t base = size;
-    if (kAnyHit && wide) {
+    if (stored_order) {
       // Storage order: pushed last child first, so the first child entered is popped first.
       for (uint32_t child = end; child-- > node.first;)
         if (box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) stack[size++] = {child, t_entry};
@@ -164,27 +168,29 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
 /// wins. An empty `bvh` (no nodes) is a miss. Throws sahbench::Error for a tree deeper than kMaxDepth.
 template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
 Hit closest_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray) {
-  return detail::traverse<TriangleTest, BoxTest, false, false>(bvh, triangles, ray, nullptr);
+  return detail::traverse<TriangleTest, BoxTest, false, false>(bvh, triangles, ray, nullptr, AnyHitOrder::kAuto);
 }
 
 /// Whether any triangle is hit within [ray.tmin, ray.tmax] (shadow rays): stops at the first hit found.
+/// Children are visited in `order` (any_hit_in_storage_order).
 template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
-bool any_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray) {
-  return detail::traverse<TriangleTest, BoxTest, true, false>(bvh, triangles, ray, nullptr).found();
+bool any_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
+             AnyHitOrder order = AnyHitOrder::kAuto) {
+  return detail::traverse<TriangleTest, BoxTest, true, false>(bvh, triangles, ray, nullptr, order).found();
 }
 
 /// closest_hit, also adding this ray's work to `counters`. Same traversal, same result; not for timing.
 template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
 Hit closest_hit_counted(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
                         TraversalCounters& counters) {
-  return detail::traverse<TriangleTest, BoxTest, false, true>(bvh, triangles, ray, &counters);
+  return detail::traverse<TriangleTest, BoxTest, false, true>(bvh, triangles, ray, &counters, AnyHitOrder::kAuto);
 }
 
 /// any_hit, also adding this ray's work to `counters`. Same traversal, same result; not for timing.
 template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
 bool any_hit_counted(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
-                     TraversalCounters& counters) {
-  return detail::traverse<TriangleTest, BoxTest, true, true>(bvh, triangles, ray, &counters).found();
+                     TraversalCounters& counters, AnyHitOrder order = AnyHitOrder::kAuto) {
+  return detail::traverse<TriangleTest, BoxTest, true, true>(bvh, triangles, ray, &counters, order).found();
 }
 
 }  // namespace sahbench

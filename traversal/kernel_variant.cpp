@@ -15,6 +15,11 @@ constexpr std::array<std::pair<BoxTestKind, std::string_view>, 2> kBoxNames{{
     {BoxTestKind::kRobust, "robust"},
     {BoxTestKind::kFast, "fast"},
 }};
+constexpr std::array<std::pair<AnyHitOrder, std::string_view>, 3> kAnyHitOrderNames{{
+    {AnyHitOrder::kAuto, "auto"},
+    {AnyHitOrder::kNearest, "nearest"},
+    {AnyHitOrder::kStored, "stored"},
+}};
 constexpr std::array<std::pair<KernelIsa, std::string_view>, 5> kIsaNames{{
     {KernelIsa::kAuto, "auto"},
     {KernelIsa::kScalar, "scalar"},
@@ -78,9 +83,11 @@ bool compiled_in(KernelIsa isa) {
 std::string_view to_string(TriangleTestKind kind) { return name_of(kTriangleNames, kind); }
 std::string_view to_string(BoxTestKind kind) { return name_of(kBoxNames, kind); }
 std::string_view to_string(KernelIsa isa) { return name_of(kIsaNames, isa); }
+std::string_view to_string(AnyHitOrder order) { return name_of(kAnyHitOrderNames, order); }
 std::optional<TriangleTestKind> parse_triangle_test(std::string_view name) { return value_of(kTriangleNames, name); }
 std::optional<BoxTestKind> parse_box_test(std::string_view name) { return value_of(kBoxNames, name); }
 std::optional<KernelIsa> parse_kernel_isa(std::string_view name) { return value_of(kIsaNames, name); }
+std::optional<AnyHitOrder> parse_any_hit_order(std::string_view name) { return value_of(kAnyHitOrderNames, name); }
 
 bool kernel_isa_available(KernelIsa isa) {
   if (isa == KernelIsa::kAuto) return false;

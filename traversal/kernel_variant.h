@@ -20,6 +20,14 @@ enum class BoxTestKind : uint8_t {
   kFast,    ///< the plain slab test
 };
 
+/// The order in which any hit (shadow rays) visits the children a ray enters; closest hit always visits
+/// them nearest first.
+enum class AnyHitOrder : uint8_t {
+  kAuto,     ///< kStored on wide trees (arity above 2), kNearest on binary ones: the faster of the two there
+  kNearest,  ///< nearest entry distance first, as closest hit
+  kStored,   ///< the tree's child order (the wide builders store an occlusion order: builders/child_order.h)
+};
+
 /// The instruction set a SIMD kernel is compiled for. kAuto picks the widest one that is both compiled
 /// in and supported by the CPU running the program.
 enum class KernelIsa : uint8_t { kAuto, kScalar, kSse, kAvx2, kAvx512 };
@@ -27,6 +35,7 @@ enum class KernelIsa : uint8_t { kAuto, kScalar, kSse, kAvx2, kAvx512 };
 struct KernelVariant {
   TriangleTestKind triangle = TriangleTestKind::kWatertight;
   BoxTestKind box = BoxTestKind::kRobust;
+  AnyHitOrder any_hit = AnyHitOrder::kAuto;
 
   friend constexpr bool operator==(const KernelVariant&, const KernelVariant&) = default;
 };
@@ -34,10 +43,12 @@ struct KernelVariant {
 std::string_view to_string(TriangleTestKind kind);
 std::string_view to_string(BoxTestKind kind);
 std::string_view to_string(KernelIsa isa);
+std::string_view to_string(AnyHitOrder order);
 /// The inverse of to_string; nullopt for an unknown name.
 std::optional<TriangleTestKind> parse_triangle_test(std::string_view name);
 std::optional<BoxTestKind> parse_box_test(std::string_view name);
 std::optional<KernelIsa> parse_kernel_isa(std::string_view name);
+std::optional<AnyHitOrder> parse_any_hit_order(std::string_view name);
 
 /// Whether kernels for `isa` are compiled into this program and the CPU (and OS) can run them. kScalar
 /// is always available; kAuto is never (resolve it first).

@@ -77,8 +77,8 @@ struct WideBvh {
   float root_planes[6] = {};
   std::vector<WideNode<N>> nodes;
   std::vector<TriangleBlock> blocks;
-  /// Any hit visits children in slot order rather than nearest first: set for trees of arity above 2,
-  /// as the scalar kernel decides (bvh2_traversal.h: any_hit_in_storage_order).
+  /// Any hit visits children in slot order rather than nearest first. compile_wide sets the default for
+  /// the tree (bvh2_traversal.h: any_hit_in_storage_order); the layout may override it (anyhit=...).
   bool any_hit_in_storage_order = false;
 
   std::size_t bytes() const { return nodes.size() * sizeof(WideNode<N>) + blocks.size() * sizeof(TriangleBlock); }

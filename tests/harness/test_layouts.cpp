@@ -46,11 +46,17 @@ std::vector<std::string> specs_for(const LayoutInfo& layout) {
   };
   if (!layout.has_isa) {
     add_variants("");
+    for (const char* order : {"nearest", "stored"}) out.push_back(layout.name + ":anyhit=" + order);
     return out;
   }
   const KernelIsa best = best_kernel_isa();
   add_variants(",isa=scalar");
   if (best != KernelIsa::kScalar) add_variants(",isa=" + std::string(to_string(best)));
+  // Both any-hit orders, whichever the tree's arity picks by default.
+  for (const char* order : {"nearest", "stored"}) {
+    out.push_back(layout.name + ":anyhit=" + order + ",isa=scalar");
+    out.push_back(layout.name + ":tri=mt0,box=fast,anyhit=" + order + ",isa=" + std::string(to_string(best)));
+  }
   for (KernelIsa isa : {KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
     if (isa != best && kernel_isa_available(isa)) out.push_back(layout.name + ":isa=" + std::string(to_string(isa)));
   return out;
@@ -113,7 +119,8 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
           bool tie_broken_differently = false;
           with_test_types(spec.variant, [&]<class Tri, class Box>() {
             for (std::size_t i = 0; i < rays.size(); ++i) {
-              const bool expected_any = any_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_any);
+              const bool expected_any =
+                  any_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_any, spec.variant.any_hit);
               ASSERT_EQ(occluded[i] != 0, expected_any) << "ray " << i;
               const Hit expected = closest_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_closest);
               if (hits[i].prim != expected.prim && hits[i].found() && expected.found() && hits[i].t == expected.t) {
@@ -341,6 +348,9 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
   EXPECT_EQ(parse_layout_spec("bvh2").text(), "bvh2");
   EXPECT_EQ(parse_layout_spec("bvh2:tri=watertight,box=robust").text(), "bvh2");
   EXPECT_EQ(parse_layout_spec("bvh8:box=fast,tri=mt0").text(), "bvh8:tri=mt0,box=fast");
+  EXPECT_EQ(parse_layout_spec("bvh8:anyhit=nearest,box=fast").text(), "bvh8:box=fast,anyhit=nearest");
+  EXPECT_EQ(parse_layout_spec("bvh2:anyhit=auto").text(), "bvh2");
+  EXPECT_EQ(parse_layout_spec("bvh2_packed:anyhit=stored").variant.any_hit, AnyHitOrder::kStored);
   EXPECT_EQ(parse_layout_spec("bvh4:isa=scalar").isa, KernelIsa::kScalar);
   auto error_of = [](const std::string& text) {
     try {
@@ -351,6 +361,7 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
     return std::string("no error");
   };
   EXPECT_NE(error_of("bvh9").find("unknown layout 'bvh9'"), std::string::npos);
+  EXPECT_NE(error_of("bvh8:anyhit=first").find("anyhit = 'first' is not one of auto, nearest, stored"), std::string::npos);
   EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0"), std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);

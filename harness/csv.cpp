@@ -120,7 +120,8 @@ void CsvWriter::append(const CsvRow& row) {
   std::string line;
   for (std::size_t i = 0; i < columns_.size(); ++i) {
     const auto it = row.find(columns_[i]);
-    line += (i ? "," : "") + (it == row.end() ? std::string() : csv_escape(it->second));
+    if (i) line += ',';
+    if (it != row.end()) line += csv_escape(it->second);
   }
   out_ << line << '\n' << std::flush;
   if (!out_) throw Error(path_.string() + ": write failed");

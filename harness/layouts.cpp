@@ -202,7 +202,8 @@ void CompiledLayout::refit(std::span<const Triangle>) { throw Error("this layout
 std::string LayoutSpec::text() const {
   std::string options;
   auto add = [&](std::string_view key, std::string_view value) {
-    options += (options.empty() ? ":" : ",") + std::string(key) + "=" + std::string(value);
+    options += options.empty() ? ':' : ',';
+    options.append(key).append("=").append(value);
   };
   const KernelVariant defaults;
   if (variant.triangle != defaults.triangle) add("tri", to_string(variant.triangle));

@@ -23,8 +23,8 @@ class WideLayout final : public CompiledLayout {
       : bvh_(std::move(bvh)),
         triangle_count_(triangle_count),
         isa_(isa),
-        shear_(variant.triangle == TriangleTestKind::kWatertight) {
-    bvh_.any_hit_in_storage_order = stored_order;
+        shear_(variant.triangle == TriangleTestKind::kWatertight),
+        stored_order_(stored_order) {
     closest_ = find_wide_kernel(isa, N, variant, false, false);
     any_ = find_wide_kernel(isa, N, variant, true, false);
     count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
@@ -69,7 +69,7 @@ class WideLayout final : public CompiledLayout {
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
         for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
-        kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr, bvh_.any_hit_in_storage_order}, i);
+        kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr, stored_order_}, i);
       }
     });
   }
@@ -85,7 +85,7 @@ class WideLayout final : public CompiledLayout {
         const std::size_t n = std::min(kWideChunk, end - i);
         for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
         WideCounts c;
-        kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c, bvh_.any_hit_in_storage_order});
+        kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c, stored_order_});
         sum.rays += c.rays;
         sum.nodes_visited += c.inner_visits + c.leaf_visits;
         sum.prims_tested += c.prim_tests;
@@ -98,6 +98,7 @@ class WideLayout final : public CompiledLayout {
   std::size_t triangle_count_;
   KernelIsa isa_;
   bool shear_;  // the rays need the watertight shear (make_wide_ray)
+  bool stored_order_;  // any hit in slot order (bvh2_traversal.h: any_hit_in_storage_order)
   WideKernel closest_ = nullptr, any_ = nullptr, count_closest_ = nullptr, count_any_ = nullptr;
 };
 

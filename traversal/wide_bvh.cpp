@@ -10,7 +10,6 @@
 #include <string>
 
 #include "core/error.h"
-#include "traversal/bvh2_traversal.h"
 #include "traversal/triangle_tests.h"
 #include "traversal/wide_kernels_isa.h"
 
@@ -105,7 +104,6 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
     throw Error("layout bvh" + std::to_string(N) + " takes trees of arity " + std::to_string(N) +
                 " or less; this tree has arity " + std::to_string(bvh.arity));
   WideBvh<N> out;
-  out.any_hit_in_storage_order = any_hit_in_storage_order(bvh);
   if (bvh.nodes.empty()) return out;
   for (uint32_t ref : bvh.prim_refs)
     if (ref >= triangles.size())

@@ -77,9 +77,6 @@ struct WideBvh {
   float root_planes[6] = {};
   std::vector<WideNode<N>> nodes;
   std::vector<TriangleBlock> blocks;
-  /// Any hit visits children in slot order rather than nearest first. compile_wide sets the default for
-  /// the tree (bvh2_traversal.h: any_hit_in_storage_order); the layout may override it (anyhit=...).
-  bool any_hit_in_storage_order = false;
 
   std::size_t bytes() const { return nodes.size() * sizeof(WideNode<N>) + blocks.size() * sizeof(TriangleBlock); }
 };
@@ -119,7 +116,9 @@ struct WideBatch {
   Hit* hits;
   uint8_t* occluded;
   WideCounts* counts;
-  bool any_hit_in_storage_order;  ///< WideBvh::any_hit_in_storage_order
+  /// Any hit visits children in slot order rather than nearest first (bvh2_traversal.h:
+  /// any_hit_in_storage_order, resolved by the layout from its anyhit option and the tree).
+  bool any_hit_in_storage_order;
 };
 
 using WideKernel = void (*)(const WideBatch&);

@@ -34,7 +34,7 @@ class WideLayout final : public CompiledLayout {
   }
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
-    if (bvh_.nodes.empty()) return std::fill(hits.begin(), hits.end(), Hit{});  // no triangles
+    if (bvh_.empty()) return std::fill(hits.begin(), hits.end(), Hit{});  // no triangles
     run(rays, [&](const WideBatch& batch, std::size_t begin) {
       WideBatch b = batch;
       b.hits = hits.data() + begin;
@@ -42,7 +42,7 @@ class WideLayout final : public CompiledLayout {
     });
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
-    if (bvh_.nodes.empty()) return std::fill(occluded.begin(), occluded.end(), uint8_t{0});
+    if (bvh_.empty()) return std::fill(occluded.begin(), occluded.end(), uint8_t{0});
     run(rays, [&](const WideBatch& batch, std::size_t begin) {
       WideBatch b = batch;
       b.occluded = occluded.data() + begin;
@@ -69,13 +69,13 @@ class WideLayout final : public CompiledLayout {
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
         for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
-        kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, nullptr, nullptr, nullptr, stored_order_}, i);
+        kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, nullptr, nullptr, nullptr, stored_order_}, i);
       }
     });
   }
 
   TraceCounts count(std::span<const Ray> rays, WideKernel kernel) const {
-    if (bvh_.nodes.empty()) return {rays.size(), 0, 0};
+    if (bvh_.empty()) return {rays.size(), 0, 0};
     return sum_over_ray_chunks(rays.size(), kWideChunk, [&](std::size_t begin, std::size_t end) {
       WideRay setup[kWideChunk];
       std::vector<Hit> hits(kWideChunk);
@@ -85,7 +85,7 @@ class WideLayout final : public CompiledLayout {
         const std::size_t n = std::min(kWideChunk, end - i);
         for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
         WideCounts c;
-        kernel(WideBatch{bvh_.root_planes, bvh_.nodes.data(), bvh_.blocks.data(), setup, n, hits.data(), occluded.data(), &c, stored_order_});
+        kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, hits.data(), occluded.data(), &c, stored_order_});
         sum.rays += c.rays;
         sum.nodes_visited += c.inner_visits + c.leaf_visits;
         sum.prims_tested += c.prim_tests;

@@ -1,5 +1,6 @@
 #include "traversal/wide_bvh.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -109,70 +110,77 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
     if (ref >= triangles.size())
       throw Error("layout bvh" + std::to_string(N) + ": reference " + std::to_string(ref) + " is beyond the " +
                   std::to_string(triangles.size()) + " triangles");
-
-  // Sizes first, so the arrays are allocated once.
-  std::size_t inner = 0, blocks = 0;
-  for (const Node& node : bvh.nodes) {
-    if (node.is_leaf()) blocks += blocks_for(node.prim_count);
-    else ++inner;
-  }
-  out.nodes.reserve(std::max<std::size_t>(inner, 1));
-  out.blocks.resize(blocks);
-
-  std::size_t next_block = 0;
-  // Places the children of common-format node `n` into wide node `w` (depth `depth`); inner children get
-  // new wide nodes right away, so siblings are contiguous and every child follows its parent.
-  struct Pending {
-    uint32_t n, w, depth;
-  };
-  std::vector<Pending> stack;
-  auto place = [&](std::span<const uint32_t> children, uint32_t w, uint32_t depth) {
-    WideNode<N> node = empty_node<N>();
-    for (uint32_t slot = 0; slot < children.size(); ++slot) {
-      const Node& child = bvh.nodes[children[slot]];
-      set_box(node, slot, child.bounds);
-      if (child.is_leaf()) {
-        node.child[slot] = static_cast<uint32_t>(next_block);
-        node.count[slot] = blocks_for(child.prim_count);
-        fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count), triangles, &out.blocks[next_block]);
-        next_block += node.count[slot];
-      } else {
-        node.child[slot] = static_cast<uint32_t>(out.nodes.size());
-        out.nodes.push_back(WideNode<N>{});
-        stack.push_back({children[slot], node.child[slot], depth + 1});
-      }
-    }
-    out.nodes[w] = node;
-  };
-
   for (uint32_t axis = 0; axis < 3; ++axis) {
     out.root_planes[2 * axis] = bvh.root().bounds.min[axis];
     out.root_planes[2 * axis + 1] = bvh.root().bounds.max[axis];
   }
-  out.nodes.push_back(WideNode<N>{});
-  const uint32_t root = 0;
-  if (bvh.root().is_leaf()) {
-    place(std::span(&root, 1), 0, 0);
-    return out;
-  }
-  stack.push_back({0, 0, 0});
-  std::vector<uint32_t> children;
+
+  // First the arena's order (wide_bvh.h), sequentially: where each wide node and each leaf's blocks go.
+  // A wide node holds the children [first, first + count) of a common-format node; a root that is a leaf
+  // gets a wide node of its own, holding just it.
+  struct WidePlan {
+    uint32_t first, count, depth;
+  };
+  constexpr uint64_t kNodeUnits = sizeof(WideNode<N>) / kWideUnit, kBlockUnits = sizeof(TriangleBlock) / kWideUnit;
+  std::vector<WidePlan> plan;
+  std::vector<uint32_t> ref_of(bvh.nodes.size(), 0);  // a common-format node's wide node or first block
+  std::vector<uint32_t> plan_ref;                     // plan[i]'s wide node
+  uint64_t used = 0;
+  auto add_node = [&](WidePlan p) {
+    used = (used + 1) & ~uint64_t{1};  // 64-byte line
+    plan.push_back(p);
+    plan_ref.push_back(static_cast<uint32_t>(used));
+    used += kNodeUnits;
+  };
+  add_node(bvh.root().is_leaf() ? WidePlan{0, 1, 0} : WidePlan{bvh.root().first, bvh.root().child_count, 0});
+  std::vector<std::size_t> stack{0};
   while (!stack.empty()) {
-    const Pending p = stack.back();
+    const WidePlan p = plan[stack.back()];
     stack.pop_back();
     // The kernels' stack holds (N - 1) kMaxDepth + 1 entries (wide_kernels.inl), enough for wide nodes
     // at depths 0 .. kMaxDepth - 1.
     if (p.depth >= kMaxDepth)
       throw Error("layout bvh" + std::to_string(N) + ": the tree is deeper than " + std::to_string(kMaxDepth) +
                   " levels");
-    const Node& node = bvh.nodes[p.n];
-    children.resize(node.child_count);
-    for (uint32_t c = 0; c < node.child_count; ++c) children[c] = node.first + c;
-    const std::size_t first_new = stack.size();
-    place(children, p.w, p.depth);
-    // Depth first, first child next: reverse what place() pushed.
-    std::reverse(stack.begin() + static_cast<std::ptrdiff_t>(first_new), stack.end());
+    for (uint32_t c = p.first; c < p.first + p.count; ++c) {
+      if (!bvh.nodes[c].is_leaf()) continue;
+      ref_of[c] = static_cast<uint32_t>(used);
+      used += blocks_for(bvh.nodes[c].prim_count) * kBlockUnits;
+    }
+    const std::size_t first_child = plan.size();
+    for (uint32_t c = p.first; c < p.first + p.count; ++c) {
+      const Node& child = bvh.nodes[c];
+      if (child.is_leaf()) continue;
+      add_node({child.first, child.child_count, p.depth + 1});
+      ref_of[c] = plan_ref.back();
+    }
+    // Depth first, first child next.
+    for (std::size_t i = plan.size(); i > first_child; --i) stack.push_back(i - 1);
+    if (used > std::numeric_limits<uint32_t>::max())
+      throw Error("layout bvh" + std::to_string(N) + ": the tree needs more than 128 GiB");
   }
+
+  // Then the nodes and blocks themselves, in parallel.
+  out.arena.resize(used);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, plan.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      WideNode<N> node = empty_node<N>();
+      for (uint32_t slot = 0; slot < plan[i].count; ++slot) {
+        const uint32_t c = plan[i].first + slot;
+        const Node& child = bvh.nodes[c];
+        set_box(node, slot, child.bounds);
+        node.child[slot] = ref_of[c];
+        if (!child.is_leaf()) continue;
+        node.count[slot] = blocks_for(child.prim_count);
+        fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count), triangles, &out.block(ref_of[c]));
+      }
+      out.node(plan_ref[i]) = node;
+    }
+  });
+  out.node_count = plan.size();
+  for (const WidePlan& p : plan)
+    for (uint32_t c = p.first; c < p.first + p.count; ++c)
+      if (bvh.nodes[c].is_leaf()) out.block_count += blocks_for(bvh.nodes[c].prim_count);
   return out;
 }
 
@@ -192,10 +200,10 @@ template <uint32_t N>
 class WideRefitter {
  public:
   WideRefitter(WideBvh<N>& wide, std::span<const Triangle> triangles, uint32_t spawn_depth)
-      : nodes_(wide.nodes.data()), blocks_(wide.blocks.data()), triangles_(triangles.data()), spawn_depth_(spawn_depth) {}
+      : wide_(wide), triangles_(triangles.data()), spawn_depth_(spawn_depth) {}
 
-  Aabb refit(uint32_t index, uint32_t depth) const {
-    WideNode<N>& node = nodes_[index];
+  Aabb refit(uint32_t ref, uint32_t depth) const {
+    WideNode<N>& node = wide_.node(ref);
     std::array<Aabb, N> boxes;
     auto refit_slot = [&](uint32_t i) {
       if (node.count[i] != 0) boxes[i] = refit_leaf(node.child[i], node.count[i]);
@@ -218,7 +226,8 @@ class WideRefitter {
  private:
   Aabb refit_leaf(uint32_t first, uint32_t count) const {
     Aabb box = Aabb::empty();
-    for (TriangleBlock* block = blocks_ + first; block != blocks_ + first + count; ++block) {
+    for (uint32_t b = 0; b < count; ++b) {
+      TriangleBlock* block = &wide_.block(first, b);
       for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
         if (block->prim[lane] == kInvalidPrim) continue;
         const Triangle& t = triangles_[block->prim[lane]];
@@ -233,8 +242,7 @@ class WideRefitter {
     return box;
   }
 
-  WideNode<N>* nodes_;
-  TriangleBlock* blocks_;
+  WideBvh<N>& wide_;
   const Triangle* triangles_;
   uint32_t spawn_depth_;
 };
@@ -243,7 +251,7 @@ class WideRefitter {
 
 template <uint32_t N>
 void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles) {
-  if (wide.nodes.empty()) return;
+  if (wide.empty()) return;
   const int threads = tbb::this_task_arena::max_concurrency();
   uint32_t spawn_depth = 0;
   if (threads > 1)

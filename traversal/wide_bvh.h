@@ -10,21 +10,30 @@
 //   WideNode<8>: planes[6][8] floats (192) + child[8] (32) + count[8] (32) = 256 bytes
 // planes[] holds min x, max x, min y, max y, min z, max z of each child, so a ray picks its near and
 // far plane per axis by index (2 axis + sign). A child slot is
-//   inner: count = 0, child = index of its WideNode;
-//   leaf:  count = number of TriangleBlocks, child = index of the first;
+//   inner: count = 0, child = reference of its WideNode;
+//   leaf:  count = number of TriangleBlocks, child = reference of the first (the others follow it);
 //   empty: count = 0, child = 0, and an inverted box (min +inf, max -inf) that no ray can enter.
 // TriangleBlock: v0, v1, v2 as [component][lane] floats (144) + prim[4] (16) = 160 bytes per 4 triangles;
 // unused lanes have prim = kInvalidPrim and NaN vertices, which no test can hit.
 //
+// Nodes and blocks share one array, the arena, and a reference counts 32-byte units from its start.
+// Its order is depth first, as a recursive builder allocating from one pool lays out its tree (Embree's
+// BVH builders with their FastAllocator): the root; then, on entering a node, the blocks of its leaf
+// slots, its child nodes side by side, and each child's part in turn. Nodes start on a 64-byte line.
+// A ray going down the tree so reads forward through memory, and a subtree's nodes and triangles share
+// pages. With nodes and blocks in two arrays the layouts traced 1-3% slower; the arena is also advised
+// for huge pages (core/huge_pages.h), which took 6-10% more on a 1M-triangle scene (issue 4's note).
+//
 // This header and wide_kernels.inl are also compiled for each SIMD instruction set
 // (wide_kernels_*.cpp), so the types here are plain data: no functions a kernel might share with
-// another instruction set's translation unit.
+// another instruction set's translation unit (the kernels call none of WideBvh's accessors).
 
 #include <cstdint>
 #include <span>
 #include <vector>
 
 #include "core/bvh.h"
+#include "core/huge_pages.h"
 #include "core/ray.h"
 #include "core/triangle.h"
 #include "traversal/kernel_variant.h"
@@ -68,17 +77,36 @@ struct WideRay {
 /// out takes 3 divisions and a branchy axis choice off every ray.
 WideRay make_wide_ray(const Ray& ray, bool shear = true);
 
-/// A compiled wide tree. Node 0 is the root (always an inner node: a tree that is a single leaf gets a
-/// root with one leaf slot); children have larger indices than their parents.
+/// The arena's unit (wide_bvh.h): references to nodes and blocks count these from the arena's start.
+inline constexpr std::size_t kWideUnit = 32;
+struct alignas(kWideUnit) WideUnit {
+  unsigned char bytes[kWideUnit];
+};
+static_assert(sizeof(TriangleBlock) % kWideUnit == 0 && sizeof(WideNode<4>) % kWideUnit == 0,
+              "blocks and nodes are whole units");
+
+/// A compiled wide tree. The root node is at reference 0 (always an inner node: a tree that is a single
+/// leaf gets a root with one leaf slot); children come after their parents.
 template <uint32_t N>
 struct WideBvh {
   /// The root's box as six planes (min x, max x, min y, ...): tested first, so rays that miss the scene
   /// cost one box test, and so the kernels visit exactly the nodes bvh2_traversal.h visits on the same tree.
   float root_planes[6] = {};
-  std::vector<WideNode<N>> nodes;
-  std::vector<TriangleBlock> blocks;
+  std::vector<WideUnit, HugePageAllocator<WideUnit>> arena;
+  std::size_t node_count = 0;
+  std::size_t block_count = 0;
 
-  std::size_t bytes() const { return nodes.size() * sizeof(WideNode<N>) + blocks.size() * sizeof(TriangleBlock); }
+  bool empty() const { return arena.empty(); }
+  std::size_t bytes() const { return arena.size() * sizeof(WideUnit); }
+  WideNode<N>& node(uint32_t ref) { return *reinterpret_cast<WideNode<N>*>(arena.data() + ref); }
+  const WideNode<N>& node(uint32_t ref) const { return *reinterpret_cast<const WideNode<N>*>(arena.data() + ref); }
+  /// Block `i` of the leaf whose first block is at `ref`.
+  TriangleBlock& block(uint32_t ref, uint32_t i = 0) {
+    return *reinterpret_cast<TriangleBlock*>(arena.data() + ref + i * (sizeof(TriangleBlock) / kWideUnit));
+  }
+  const TriangleBlock& block(uint32_t ref, uint32_t i = 0) const {
+    return *reinterpret_cast<const TriangleBlock*>(arena.data() + ref + i * (sizeof(TriangleBlock) / kWideUnit));
+  }
 };
 
 /// Compiles `bvh` (arity <= N) over `triangles`. Throws Error for a wider or deeper tree than the
@@ -87,7 +115,7 @@ template <uint32_t N>
 WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles);
 
 /// Refit: copies the new positions of `triangles` (same indices as at compile time) into the blocks and
-/// recomputes every child box bottom up, one level at a time, each level in parallel. The topology is
+/// recomputes every child box bottom up, subtrees near the root in parallel. The topology is
 /// kept, so the tree may lose quality as the geometry moves (issue: refit against rebuild).
 template <uint32_t N>
 void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles);
@@ -109,8 +137,7 @@ struct WideCounts {
 /// `counts` (counting kernels only).
 struct WideBatch {
   const float* root_planes;  ///< WideBvh::root_planes
-  const void* nodes;         ///< WideNode<N>[]
-  const TriangleBlock* blocks;
+  const WideUnit* arena;     ///< WideBvh::arena
   const WideRay* rays;
   std::size_t count;
   Hit* hits;

@@ -421,11 +421,16 @@ inline void sort_keys(uint64_t* keys, uint32_t k) {
   }
 }
 
+// The node or block at arena reference `ref` (wide_bvh.h).
+template <class T>
+inline const T& at(const WideUnit* arena, uint32_t ref) {
+  return *reinterpret_cast<const T*>(arena + ref);
+}
+
 // A child's node, or its leaf's first block, fetched ahead of its visit.
 template <uint32_t N>
-inline void prefetch_slot(const WideNode<N>* nodes, const TriangleBlock* blocks, uint32_t child, uint32_t count) {
-  const char* p = count == 0 ? reinterpret_cast<const char*>(nodes + child)
-                             : reinterpret_cast<const char*>(blocks + child);
+inline void prefetch_slot(const WideUnit* arena, uint32_t child, uint32_t count) {
+  const char* p = reinterpret_cast<const char*>(arena + child);
   __builtin_prefetch(p);
   __builtin_prefetch(p + 64);
   __builtin_prefetch(p + 128);
@@ -440,15 +445,15 @@ inline void prefetch_slot(const WideNode<N>* nodes, const TriangleBlock* blocks,
 // hit on a wide tree, bvh2_traversal.h's any_hit_in_storage_order) in slot order instead, which the
 // wide builders make an occlusion order (builders/child_order.h).
 template <uint32_t N, bool kSlotOrder>
-inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry, const WideNode<N>* nodes,
-                              const TriangleBlock* blocks, WideStackEntry* stack, uint32_t& size) {
+inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry, const WideUnit* arena,
+                              WideStackEntry* stack, uint32_t& size) {
   const uint32_t first = static_cast<uint32_t>(__builtin_ctz(mask));
   if ((mask & (mask - 1)) == 0) return {node.child[first], node.count[first], t_entry[first]};
   if constexpr (kSlotOrder) {
     for (uint32_t rest = mask & (mask - 1); rest;) {
       const uint32_t i = 31u - static_cast<uint32_t>(__builtin_clz(rest));  // the last slot left
       stack[size++] = {node.child[i], node.count[i], t_entry[i]};
-      prefetch_slot(nodes, blocks, node.child[i], node.count[i]);
+      prefetch_slot<N>(arena, node.child[i], node.count[i]);
       rest &= ~(1u << i);
     }
     return {node.child[first], node.count[first], t_entry[first]};
@@ -459,7 +464,7 @@ inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const floa
     const uint32_t i = static_cast<uint32_t>(__builtin_ctz(m));
     // + 0.0f turns -0 into +0, which compare equal as floats.
     keys[k++] = (static_cast<uint64_t>(ordered_bits(t_entry[i] + 0.0f)) << 32) | (N - 1 - i);
-    prefetch_slot(nodes, blocks, node.child[i], node.count[i]);
+    prefetch_slot<N>(arena, node.child[i], node.count[i]);
   }
   sort_keys<N>(keys, k);
   for (uint32_t j = k - 1; j > 0; --j) {
@@ -471,8 +476,7 @@ inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const floa
 }
 
 template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount, bool kSlotOrder>
-inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const TriangleBlock* blocks, const WideRay& r,
-                     WideCounts* counts) {
+inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const WideRay& r, WideCounts* counts) {
   Hit best;
   float t_root;
   if (!intersect_root<kRobust>(root_planes, r, t_root)) return best;
@@ -484,7 +488,8 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
   while (true) {
     if (entry.count != 0) {
       if constexpr (kCount) ++counts->leaf_visits;
-      for (uint32_t b = entry.child; b < entry.child + entry.count; ++b) {
+      const TriangleBlock* blocks = &at<TriangleBlock>(arena, entry.child);
+      for (uint32_t b = 0; b < entry.count; ++b) {
         alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
         uint32_t lanes = intersect_block<kTri>(blocks[b], r, r.tmin, best_t, t, u, v);
         if constexpr (kCount) counts->prim_tests += occupied_lanes(blocks[b]);
@@ -503,7 +508,7 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
         }
       }
     } else {
-      const WideNode<N>& node = nodes[entry.child];
+      const WideNode<N>& node = at<WideNode<N>>(arena, entry.child);
       // The child and count line is read only after the box test has picked a child: ask for it now, so
       // that it arrives with the planes rather than one memory latency after them.
       __builtin_prefetch(node.child);
@@ -512,7 +517,7 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
       uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
       if (mask != 0) {
         // Continue with the nearest child entered; the others go on the stack, farthest deepest.
-        entry = descend<N, kSlotOrder>(node, mask, t_entry, nodes, blocks, stack, size);
+        entry = descend<N, kSlotOrder>(node, mask, t_entry, arena, stack, size);
         continue;
       }
     }
@@ -527,12 +532,11 @@ inline Hit trace_ray(const float* root_planes, const WideNode<N>* nodes, const T
 
 template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>
 void trace_batch(const WideBatch& batch) {
-  const auto* nodes = static_cast<const WideNode<N>*>(batch.nodes);
   auto run = [&]<bool kSlotOrder>() {
     for (std::size_t i = 0; i < batch.count; ++i) {
       if constexpr (kCount) ++batch.counts->rays;
-      const Hit hit = trace_ray<N, kTri, kRobust, kAnyHit, kCount, kSlotOrder>(batch.root_planes, nodes, batch.blocks,
-                                                                                batch.rays[i], batch.counts);
+      const Hit hit = trace_ray<N, kTri, kRobust, kAnyHit, kCount, kSlotOrder>(batch.root_planes, batch.arena, batch.rays[i],
+                                                                                batch.counts);
       if constexpr (kAnyHit) batch.occluded[i] = hit.prim != kInvalidPrim;
       else batch.hits[i] = hit;
     }

@@ -1,0 +1,83 @@
+#pragma once
+// An allocator for large arrays that a traversal reads all over, such as a BVH layout's nodes: arrays
+// of 2 MiB or more get fresh pages of their own (mmap), aligned to 2 MiB and advised to the kernel as
+// candidates for transparent huge pages (madvise MADV_HUGEPAGE), so that random accesses into them miss
+// the TLB less. This is what Embree does with its BVH memory (os_malloc and os_advise in its
+// common/sys/alloc.cpp): on a system whose THP setting is "madvise" (Debian's default), Embree's trees
+// get huge pages and a plain std::vector does not. The pages must be fresh: heap memory that was
+// touched before keeps its small pages.
+//
+// Smaller arrays come from the aligned global operator new. Elements are default-initialised: a resize
+// leaves them as uninitialised as `new T[n]` would, which saves zeroing arrays that are written in full
+// right after. Mapped arrays are not counted by the harness's heap tracker (harness/memory_tracker.h),
+// which measures builds, not layouts.
+
+#include <cstddef>
+#include <cstdint>
+#include <new>
+#include <utility>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
+
+namespace sahbench {
+
+inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
+
+template <class T>
+class HugePageAllocator {
+ public:
+  using value_type = T;
+
+  HugePageAllocator() = default;
+  template <class U>
+  HugePageAllocator(const HugePageAllocator<U>&) noexcept {}
+
+  T* allocate(std::size_t n) {
+    const std::size_t bytes = n * sizeof(T);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (bytes >= kHugePageBytes) {
+      // Map one huge page more than needed, then unmap the parts before and after the aligned range.
+      const std::size_t size = rounded(bytes);
+      void* mapped = mmap(nullptr, size + kHugePageBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      if (mapped == MAP_FAILED) throw std::bad_alloc();
+      char* const start = static_cast<char*>(mapped);
+      const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(start);
+      char* const aligned = start + ((kHugePageBytes - address % kHugePageBytes) % kHugePageBytes);
+      if (aligned != start) munmap(start, static_cast<std::size_t>(aligned - start));
+      if (aligned + size != start + size + kHugePageBytes)
+        munmap(aligned + size, static_cast<std::size_t>(start + size + kHugePageBytes - (aligned + size)));
+      madvise(aligned, size, MADV_HUGEPAGE);  // a hint: where THP is off it fails, and nothing changes
+      return reinterpret_cast<T*>(aligned);
+    }
+#endif
+    return static_cast<T*>(::operator new(bytes, std::align_val_t{kAlignment}));
+  }
+
+  void deallocate(T* p, std::size_t n) noexcept {
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (n * sizeof(T) >= kHugePageBytes) {
+      munmap(p, rounded(n * sizeof(T)));
+      return;
+    }
+#endif
+    ::operator delete(p, std::align_val_t{kAlignment});
+  }
+
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
+    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+
+  friend bool operator==(const HugePageAllocator&, const HugePageAllocator&) { return true; }
+
+ private:
+  static constexpr std::size_t kAlignment = alignof(T) > 64 ? alignof(T) : 64;
+  static constexpr std::size_t rounded(std::size_t bytes) {
+    return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+  }
+};
+
+}  // namespace sahbench

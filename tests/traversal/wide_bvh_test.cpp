@@ -1,0 +1,123 @@
+// The wide layouts' memory: the arena's depth-first order (wide_bvh.h) and the huge-page allocator
+// under it (core/huge_pages.h). That the kernels find the same hits on it is tested with every layout
+// in tests/harness/test_layouts.cpp.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "core/huge_pages.h"
+#include "tests/support/test_scenes.h"
+#include "tests/traversal/median_builder.h"
+#include "traversal/wide_bvh.h"
+
+namespace sahbench {
+namespace {
+
+constexpr uint32_t kBlockUnits = sizeof(TriangleBlock) / kWideUnit;
+
+// Marks the units of a node or block, so that overlaps show.
+void take(std::vector<int>& units, uint64_t first, uint64_t count) {
+  ASSERT_LE(first + count, units.size());
+  for (uint64_t u = first; u < first + count; ++u) ++units[u];
+}
+
+// Walks the tree depth first, in slot order, with `next` the arena's unit where the walk expects what
+// comes next, and checks the order of wide_bvh.h: on entering a node, the blocks of its leaf slots in
+// slot order, then its child nodes side by side (from a 64-byte line), then each child's subtree in
+// turn, the next child's only after the whole of the one before.
+template <uint32_t N>
+void check_subtree(const WideBvh<N>& wide, uint32_t ref, uint64_t& next, std::vector<int>& units,
+                   std::vector<uint32_t>& prims, std::size_t& nodes, std::size_t& blocks) {
+  constexpr uint32_t kNodeUnits = sizeof(WideNode<N>) / kWideUnit;
+  const WideNode<N>& node = wide.node(ref);
+  for (uint32_t i = 0; i < N; ++i) {
+    if (node.count[i] == 0) continue;
+    ASSERT_EQ(node.child[i], next) << "the blocks of slot " << i << " of node " << ref << " are not next";
+    take(units, next, uint64_t{node.count[i]} * kBlockUnits);
+    for (uint32_t b = 0; b < node.count[i]; ++b)
+      for (uint32_t lane = 0; lane < kBlockWidth; ++lane)
+        if (wide.block(node.child[i], b).prim[lane] != kInvalidPrim) prims.push_back(wide.block(node.child[i], b).prim[lane]);
+    blocks += node.count[i];
+    next += uint64_t{node.count[i]} * kBlockUnits;
+  }
+  std::vector<uint32_t> inner;
+  for (uint32_t i = 0; i < N; ++i)
+    if (node.count[i] == 0 && node.child[i] != 0) inner.push_back(node.child[i]);
+  if (inner.empty()) return;
+  next = (next + 1) & ~uint64_t{1};
+  for (uint32_t c : inner) {
+    ASSERT_EQ(c, next) << "the child nodes of node " << ref << " are not side by side after its blocks";
+    ASSERT_GT(c, ref);
+    take(units, c, kNodeUnits);
+    ++nodes;
+    next += kNodeUnits;
+  }
+  for (uint32_t c : inner) check_subtree(wide, c, next, units, prims, nodes, blocks);
+}
+
+template <uint32_t N>
+void check_arena(uint32_t arity, std::size_t triangles, uint32_t max_leaf) {
+  const auto scene = test::random_triangles(triangles, 7 + arity + max_leaf);
+  const Bvh bvh = test::build_median_bvh(scene, arity, max_leaf);
+  const WideBvh<N> wide = compile_wide<N>(bvh, scene);
+  SCOPED_TRACE("N=" + std::to_string(N) + " arity=" + std::to_string(arity) + " max_leaf=" + std::to_string(max_leaf));
+  std::vector<int> units(wide.arena.size(), 0);
+  std::vector<uint32_t> prims;
+  uint64_t next = sizeof(WideNode<N>) / kWideUnit;  // the root, at 0
+  std::size_t nodes = 1, blocks = 0;
+  take(units, 0, next);
+  check_subtree(wide, 0, next, units, prims, nodes, blocks);
+  EXPECT_EQ(next, wide.arena.size()) << "the arena has units past the last subtree";
+  EXPECT_EQ(nodes, wide.node_count);
+  EXPECT_EQ(blocks, wide.block_count);
+  EXPECT_EQ(wide.bytes(), wide.arena.size() * kWideUnit);
+  // No unit is used twice; the unused ones are padding before a node, at most one per node.
+  EXPECT_EQ(std::count_if(units.begin(), units.end(), [](int n) { return n > 1; }), 0);
+  EXPECT_LE(static_cast<std::size_t>(std::count(units.begin(), units.end(), 0)), nodes);
+  // Every primitive once.
+  std::sort(prims.begin(), prims.end());
+  std::vector<uint32_t> expected(bvh.prim_refs.begin(), bvh.prim_refs.end());
+  std::sort(expected.begin(), expected.end());
+  EXPECT_EQ(prims, expected);
+}
+
+TEST(WideBvh, ArenaIsInDepthFirstOrder) {
+  for (uint32_t max_leaf : {1u, 4u, 8u}) {
+    check_arena<4>(2, 2000, max_leaf);
+    check_arena<4>(4, 2000, max_leaf);
+    check_arena<8>(2, 3000, max_leaf);
+    check_arena<8>(8, 3000, max_leaf);
+  }
+}
+
+TEST(WideBvh, TreeThatIsOneLeafGetsARootWithOneLeafSlot) {
+  const auto scene = test::random_triangles(3, 1);
+  const WideBvh<8> wide = compile_wide<8>(test::build_median_bvh(scene, 2, 8), scene);
+  ASSERT_EQ(wide.node_count, 1u);
+  EXPECT_EQ(wide.node(0).count[0], 1u);
+  EXPECT_EQ(wide.node(0).child[0], sizeof(WideNode<8>) / kWideUnit);
+  EXPECT_EQ(wide.bytes(), sizeof(WideNode<8>) + sizeof(TriangleBlock));
+}
+
+TEST(HugePages, LargeArraysStartOnAHugePageAndSmallOnesOnALine) {
+  std::vector<WideUnit, HugePageAllocator<WideUnit>> small(10), large(kHugePageBytes / kWideUnit + 5);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(small.data()) % 64, 0u);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(large.data()) % kHugePageBytes, 0u);
+  // All of it can be written and read back, across a resize that moves it.
+  for (std::size_t i = 0; i < large.size(); ++i) large[i].bytes[i % kWideUnit] = static_cast<unsigned char>(i);
+  large.resize(large.size() * 2);
+  for (std::size_t i = 0; i < large.size() / 2; ++i)
+    ASSERT_EQ(large[i].bytes[i % kWideUnit], static_cast<unsigned char>(i)) << "unit " << i;
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(large.data()) % kHugePageBytes, 0u);
+  large.clear();
+  large.shrink_to_fit();
+  std::vector<double, HugePageAllocator<double>> copy(1000, 2.5);
+  const auto other = copy;
+  EXPECT_EQ(other, copy);
+}
+
+}  // namespace
+}  // namespace sahbench

@@ -37,6 +37,7 @@ void BM_ScalarRayBox(benchmark::State& state) {
 }
 BENCHMARK(BM_ScalarRayBox<RobustRayBox>)->Name("ray_box/scalar/robust");
 BENCHMARK(BM_ScalarRayBox<FastRayBox>)->Name("ray_box/scalar/fast");
+BENCHMARK(BM_ScalarRayBox<FmaRayBox>)->Name("ray_box/scalar/fma");
 
 // Scalar ray/triangle tests.
 template <class TriangleTest>
@@ -84,9 +85,9 @@ std::pair<std::vector<WideNode<N>>, std::vector<TriangleBlock>> wide_parts(const
   return {std::move(nodes), std::move(blocks)};
 }
 
-std::vector<WideRay> wide_rays() {
+std::vector<WideRay> wide_rays(BoxTestKind box = BoxTestKind::kRobust) {
   std::vector<WideRay> out;
-  for (const Ray& r : rays(kRays)) out.push_back(make_wide_ray(r));
+  for (const Ray& r : rays(kRays)) out.push_back(make_wide_ray(r, true, box));
   return out;
 }
 
@@ -95,7 +96,7 @@ void BM_WideNodeVisit(benchmark::State& state, KernelIsa isa, BoxTestKind box) {
   if (!kernel_isa_available(isa)) return state.SkipWithError("ISA not available on this CPU");
   const auto loops = find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box});
   const auto nodes = wide_parts(wide_tree<N>(), 256).first;  // stays in L1/L2: the test, not memory
-  const auto rs = wide_rays();
+  const auto rs = wide_rays(box);
   for (auto _ : state) benchmark::DoNotOptimize(loops.nodes(nodes.data(), nodes.size(), rs.data(), rs.size()));
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * nodes.size() * rs.size()));
 }
@@ -113,7 +114,7 @@ void BM_WideBlockTest(benchmark::State& state, KernelIsa isa, TriangleTestKind t
 const bool registered = [] {
   for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
     const std::string i(to_string(isa));
-    for (BoxTestKind box : {BoxTestKind::kRobust, BoxTestKind::kFast}) {
+    for (BoxTestKind box : {BoxTestKind::kRobust, BoxTestKind::kFast, BoxTestKind::kFma}) {
       const std::string b(to_string(box));
       benchmark::RegisterBenchmark(("node_visit/bvh4/" + i + "/" + b).c_str(), BM_WideNodeVisit<4>, isa, box);
       benchmark::RegisterBenchmark(("node_visit/bvh8/" + i + "/" + b).c_str(), BM_WideNodeVisit<8>, isa, box);

@@ -246,7 +246,7 @@ std::vector<std::string> all_layout_variants() {
   for (const auto& layout : layouts())
     for (const auto tri : {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore,
                            TriangleTestKind::kMollerTrumboreNoEpsilon})
-      for (const auto box : {BoxTestKind::kRobust, BoxTestKind::kFast}) {
+      for (const auto box : {BoxTestKind::kRobust, BoxTestKind::kFast, BoxTestKind::kFma}) {
         LayoutSpec spec;
         spec.name = layout.name;
         spec.variant = {tri, box};

@@ -24,6 +24,7 @@ class WideLayout final : public CompiledLayout {
         triangle_count_(triangle_count),
         isa_(isa),
         shear_(variant.triangle == TriangleTestKind::kWatertight),
+        box_(variant.box),
         stored_order_(stored_order) {
     closest_ = find_wide_kernel(isa, N, variant, false, false);
     any_ = find_wide_kernel(isa, N, variant, true, false);
@@ -68,7 +69,7 @@ class WideLayout final : public CompiledLayout {
       WideRay setup[kWideChunk];
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
-        for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
+        for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_, box_);
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, nullptr, nullptr, nullptr, stored_order_}, i);
       }
     });
@@ -83,7 +84,7 @@ class WideLayout final : public CompiledLayout {
       TraceCounts sum;
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
-        for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_);
+        for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_, box_);
         WideCounts c;
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, hits.data(), occluded.data(), &c, stored_order_});
         sum.rays += c.rays;
@@ -98,6 +99,7 @@ class WideLayout final : public CompiledLayout {
   std::size_t triangle_count_;
   KernelIsa isa_;
   bool shear_;  // the rays need the watertight shear (make_wide_ray)
+  BoxTestKind box_;
   bool stored_order_;  // any hit in slot order (bvh2_traversal.h: any_hit_in_storage_order)
   WideKernel closest_ = nullptr, any_ = nullptr, count_closest_ = nullptr, count_any_ = nullptr;
 };

@@ -11,9 +11,10 @@ constexpr std::array<std::pair<TriangleTestKind, std::string_view>, 3> kTriangle
     {TriangleTestKind::kMollerTrumbore, "mt"},
     {TriangleTestKind::kMollerTrumboreNoEpsilon, "mt0"},
 }};
-constexpr std::array<std::pair<BoxTestKind, std::string_view>, 2> kBoxNames{{
+constexpr std::array<std::pair<BoxTestKind, std::string_view>, 3> kBoxNames{{
     {BoxTestKind::kRobust, "robust"},
     {BoxTestKind::kFast, "fast"},
+    {BoxTestKind::kFma, "fma"},
 }};
 constexpr std::array<std::pair<AnyHitOrder, std::string_view>, 3> kAnyHitOrderNames{{
     {AnyHitOrder::kAuto, "auto"},

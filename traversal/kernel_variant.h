@@ -18,6 +18,7 @@ enum class TriangleTestKind : uint8_t {
 enum class BoxTestKind : uint8_t {
   kRobust,  ///< Ize 2013's conservative slab test (ray_box.h), the default
   kFast,    ///< the plain slab test
+  kFma,     ///< the plain slab test in Embree's form: one fused multiply-subtract per plane (ray_box.h)
 };
 
 /// The order in which any hit (shadow rays) visits the children a ray enters; closest hit always visits

@@ -14,6 +14,7 @@ template <class F>
 decltype(auto) with_test_types(const KernelVariant& variant, F&& f) {
   auto with_box = [&]<class Tri>() -> decltype(auto) {
     if (variant.box == BoxTestKind::kFast) return f.template operator()<Tri, FastRayBox>();
+    if (variant.box == BoxTestKind::kFma) return f.template operator()<Tri, FmaRayBox>();
     return f.template operator()<Tri, RobustRayBox>();
   };
   switch (variant.triangle) {

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "traversal/ray_box.h"
 #include "traversal/triangle_tests.h"
 #include "traversal/wide_kernels_isa.h"
 
@@ -63,13 +64,14 @@ uint32_t blocks_for(uint32_t prims) { return (prims + kBlockWidth - 1) / kBlockW
 
 }  // namespace
 
-WideRay make_wide_ray(const Ray& ray, bool shear) {
+WideRay make_wide_ray(const Ray& ray, bool shear, BoxTestKind box) {
   WideRay r;
   for (uint32_t axis = 0; axis < 3; ++axis) {
     r.org[axis] = ray.org[axis];
     r.dir[axis] = ray.dir[axis];
-    // 1 / +-0 = +-inf, as in ray_box.h.
-    r.inv_dir[axis] = 1.0f / ray.dir[axis];
+    // 1 / +-0 = +-inf, as in ray_box.h; FmaRayBox's reciprocal stays finite.
+    r.inv_dir[axis] = box == BoxTestKind::kFma ? FmaRayBox::reciprocal(ray.dir[axis]) : 1.0f / ray.dir[axis];
+    r.org_inv[axis] = ray.org[axis] * r.inv_dir[axis];
     const bool negative = std::signbit(ray.dir[axis]);
     r.near_plane[axis] = 2 * axis + (negative ? 1 : 0);
     r.far_plane[axis] = 2 * axis + (negative ? 0 : 1);

@@ -60,12 +60,14 @@ struct alignas(16) TriangleBlock {
 static_assert(sizeof(TriangleBlock) == 160, "block format as documented");
 
 /// A ray as the wide kernels read it, set up once per ray outside the kernels (wide_bvh.cpp): origin,
-/// direction, reciprocal direction, the near and far plane index per axis (chosen by the sign bit, so
-/// -0 counts as negative, as in ray_box.h), and the watertight test's shear (triangle_tests.h).
+/// direction, reciprocal direction (the box test's: FmaRayBox keeps it finite) and origin times it, the
+/// near and far plane index per axis (chosen by the sign bit, so -0 counts as negative, as in
+/// ray_box.h), and the watertight test's shear (triangle_tests.h).
 struct WideRay {
   float org[3];
   float dir[3];
   float inv_dir[3];
+  float org_inv[3];
   float tmin, tmax;
   uint32_t near_plane[3];
   uint32_t far_plane[3];
@@ -74,8 +76,8 @@ struct WideRay {
 };
 
 /// `shear`: also the watertight test's shear; the Möller–Trumbore kernels do not read it, and leaving it
-/// out takes 3 divisions and a branchy axis choice off every ray.
-WideRay make_wide_ray(const Ray& ray, bool shear = true);
+/// out takes 3 divisions and a branchy axis choice off every ray. `box`: the box test the ray is for.
+WideRay make_wide_ray(const Ray& ray, bool shear = true, BoxTestKind box = BoxTestKind::kRobust);
 
 /// The arena's unit (wide_bvh.h): references to nodes and blocks count these from the arena's start.
 inline constexpr std::size_t kWideUnit = 32;

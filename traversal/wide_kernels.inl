@@ -20,21 +20,30 @@ inline constexpr float kWideMtEpsilon = kMollerTrumboreEpsilon;
 
 // ---------------------------------------------------------------------------------------------------
 // Ray against the N child boxes of a node: bit i of the result is set when the ray enters child i within
-// [tmin, tmax]; t_entry[i] is then its entry distance. Slab test of Kay and Kajiya; with kRobust the far
-// distances are scaled by Ize 2013's bound, as RobustRayBox does.
+// [tmin, tmax]; t_entry[i] is then its entry distance. Slab test of Kay and Kajiya; for kRobust the far
+// distances are scaled by Ize 2013's bound, as RobustRayBox does, and for kFma each distance is one fused
+// multiply-subtract, as FmaRayBox computes it.
+
+// One plane's distance, as ray_box.h computes it for each box test (FmaRayBox: one fused multiply-subtract
+// with the ray's finite reciprocal; the others: subtract, then multiply).
+template <BoxTestKind kBox>
+inline float plane_distance(float plane, const WideRay& r, uint32_t axis) {
+  if constexpr (kBox == BoxTestKind::kFma) return __builtin_fmaf(plane, r.inv_dir[axis], -r.org_inv[axis]);
+  else return (plane - r.org[axis]) * r.inv_dir[axis];
+}
 
 #if defined(SAHBENCH_WIDE_SCALAR)
 
-template <uint32_t N, bool kRobust>
+template <uint32_t N, BoxTestKind kBox>
 inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
                                    float* t_entry) {
   uint32_t mask = 0;
   for (uint32_t i = 0; i < N; ++i) {
     float t_near = tmin, t_far = tmax;
     for (uint32_t axis = 0; axis < 3; ++axis) {
-      const float t0 = (node.planes[r.near_plane[axis]][i] - r.org[axis]) * r.inv_dir[axis];
-      float t1 = (node.planes[r.far_plane[axis]][i] - r.org[axis]) * r.inv_dir[axis];
-      if constexpr (kRobust) t1 *= kWideFarScale;
+      const float t0 = plane_distance<kBox>(node.planes[r.near_plane[axis]][i], r, axis);
+      float t1 = plane_distance<kBox>(node.planes[r.far_plane[axis]][i], r, axis);
+      if constexpr (kBox == BoxTestKind::kRobust) t1 *= kWideFarScale;
       t_near = t0 > t_near ? t0 : t_near;
       t_far = t1 < t_far ? t1 : t_far;
     }
@@ -49,19 +58,33 @@ inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, fl
 // Four children at a time. _mm_max_ps(a, b) is a > b ? a : b and _mm_min_ps(a, b) is a < b ? a : b,
 // exactly the scalar updates, so a NaN distance (origin on a face plane of a zero direction component)
 // leaves the interval as it is, as in ray_box.h.
-template <bool kRobust>
+// Four planes' distances (plane_distance, lane by lane). SSE has no fused multiply-add: there each lane
+// calls fmaf, which is exact but slow; box=fma is for the AVX2 and AVX-512 kernels.
+template <BoxTestKind kBox>
+inline __m128 plane_distances4(__m128 planes, const WideRay& r, uint32_t axis) {
+  if constexpr (kBox != BoxTestKind::kFma) {
+    return _mm_mul_ps(_mm_sub_ps(planes, _mm_set1_ps(r.org[axis])), _mm_set1_ps(r.inv_dir[axis]));
+  } else {
+#if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
+    return _mm_fmsub_ps(planes, _mm_set1_ps(r.inv_dir[axis]), _mm_set1_ps(r.org_inv[axis]));
+#else
+    alignas(16) float lanes[4];
+    _mm_store_ps(lanes, planes);
+    for (float& lane : lanes) lane = __builtin_fmaf(lane, r.inv_dir[axis], -r.org_inv[axis]);
+    return _mm_load_ps(lanes);
+#endif
+  }
+}
+
+template <BoxTestKind kBox>
 inline uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, float tmin, float tmax,
                                     float* t_entry, uint32_t stride) {
   __m128 t_near = _mm_set1_ps(tmin);
   __m128 t_far = _mm_set1_ps(tmax);
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    const __m128 org = _mm_set1_ps(r.org[axis]);
-    const __m128 inv = _mm_set1_ps(r.inv_dir[axis]);
-    const __m128 near = _mm_load_ps(planes[r.near_plane[axis] * stride]);
-    const __m128 far = _mm_load_ps(planes[r.far_plane[axis] * stride]);
-    const __m128 t0 = _mm_mul_ps(_mm_sub_ps(near, org), inv);
-    __m128 t1 = _mm_mul_ps(_mm_sub_ps(far, org), inv);
-    if constexpr (kRobust) t1 = _mm_mul_ps(t1, _mm_set1_ps(kWideFarScale));
+    const __m128 t0 = plane_distances4<kBox>(_mm_load_ps(planes[r.near_plane[axis] * stride]), r, axis);
+    __m128 t1 = plane_distances4<kBox>(_mm_load_ps(planes[r.far_plane[axis] * stride]), r, axis);
+    if constexpr (kBox == BoxTestKind::kRobust) t1 = _mm_mul_ps(t1, _mm_set1_ps(kWideFarScale));
     t_near = _mm_max_ps(t0, t_near);
     t_far = _mm_min_ps(t1, t_far);
   }
@@ -69,24 +92,31 @@ inline uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, 
   return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmple_ps(t_near, t_far)));
 }
 
-template <uint32_t N, bool kRobust>
+template <uint32_t N, BoxTestKind kBox>
 inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
                                    float* t_entry) {
   if constexpr (N == 4) {
-    return intersect_children4<kRobust>(reinterpret_cast<const float (*)[4]>(node.planes), r, tmin, tmax,
+    return intersect_children4<kBox>(reinterpret_cast<const float (*)[4]>(node.planes), r, tmin, tmax,
                                         t_entry, 1);
   } else {
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
     __m256 t_near = _mm256_set1_ps(tmin);
     __m256 t_far = _mm256_set1_ps(tmax);
     for (uint32_t axis = 0; axis < 3; ++axis) {
-      const __m256 org = _mm256_set1_ps(r.org[axis]);
       const __m256 inv = _mm256_set1_ps(r.inv_dir[axis]);
       const __m256 near = _mm256_load_ps(node.planes[r.near_plane[axis]]);
       const __m256 far = _mm256_load_ps(node.planes[r.far_plane[axis]]);
-      const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(near, org), inv);
-      __m256 t1 = _mm256_mul_ps(_mm256_sub_ps(far, org), inv);
-      if constexpr (kRobust) t1 = _mm256_mul_ps(t1, _mm256_set1_ps(kWideFarScale));
+      __m256 t0, t1;
+      if constexpr (kBox == BoxTestKind::kFma) {
+        const __m256 org_inv = _mm256_set1_ps(r.org_inv[axis]);
+        t0 = _mm256_fmsub_ps(near, inv, org_inv);
+        t1 = _mm256_fmsub_ps(far, inv, org_inv);
+      } else {
+        const __m256 org = _mm256_set1_ps(r.org[axis]);
+        t0 = _mm256_mul_ps(_mm256_sub_ps(near, org), inv);
+        t1 = _mm256_mul_ps(_mm256_sub_ps(far, org), inv);
+      }
+      if constexpr (kBox == BoxTestKind::kRobust) t1 = _mm256_mul_ps(t1, _mm256_set1_ps(kWideFarScale));
       t_near = _mm256_max_ps(t0, t_near);
       t_far = _mm256_min_ps(t1, t_far);
     }
@@ -96,8 +126,8 @@ inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, fl
     // SSE: the two halves of the eight children. planes[p] is 8 floats; as [4]-rows, plane p's first
     // half is row 2p and its second half row 2p + 1.
     const auto* rows = reinterpret_cast<const float (*)[4]>(node.planes);
-    const uint32_t lo = intersect_children4<kRobust>(rows, r, tmin, tmax, t_entry, 2);
-    const uint32_t hi = intersect_children4<kRobust>(rows + 1, r, tmin, tmax, t_entry + 4, 2);
+    const uint32_t lo = intersect_children4<kBox>(rows, r, tmin, tmax, t_entry, 2);
+    const uint32_t hi = intersect_children4<kBox>(rows + 1, r, tmin, tmax, t_entry + 4, 2);
     return lo | (hi << 4);
 #endif
   }
@@ -370,13 +400,13 @@ struct WideStackEntry {
 inline constexpr uint32_t kWideStackCapacity = 7 * kMaxDepth + 1;
 
 // The root's box, one lane: the scalar slab test of intersect_children.
-template <bool kRobust>
+template <BoxTestKind kBox>
 inline bool intersect_root(const float* planes, const WideRay& r, float& t_entry) {
   float t_near = r.tmin, t_far = r.tmax;
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    const float t0 = (planes[r.near_plane[axis]] - r.org[axis]) * r.inv_dir[axis];
-    float t1 = (planes[r.far_plane[axis]] - r.org[axis]) * r.inv_dir[axis];
-    if constexpr (kRobust) t1 *= kWideFarScale;
+    const float t0 = plane_distance<kBox>(planes[r.near_plane[axis]], r, axis);
+    float t1 = plane_distance<kBox>(planes[r.far_plane[axis]], r, axis);
+    if constexpr (kBox == BoxTestKind::kRobust) t1 *= kWideFarScale;
     t_near = t0 > t_near ? t0 : t_near;
     t_far = t1 < t_far ? t1 : t_far;
   }
@@ -475,11 +505,11 @@ inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const floa
   return {node.child[i], node.count[i], t_entry[i]};
 }
 
-template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount, bool kSlotOrder>
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, bool kSlotOrder>
 inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const WideRay& r, WideCounts* counts) {
   Hit best;
   float t_root;
-  if (!intersect_root<kRobust>(root_planes, r, t_root)) return best;
+  if (!intersect_root<kBox>(root_planes, r, t_root)) return best;
   static_assert(kWideStackCapacity >= (N - 1) * kMaxDepth + 1, "wide traversal stack too small");
   WideStackEntry stack[kWideStackCapacity];
   uint32_t size = 0;
@@ -514,7 +544,7 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
       __builtin_prefetch(node.child);
       if constexpr (kCount) ++counts->inner_visits;
       alignas(32) float t_entry[N];
-      uint32_t mask = intersect_children<N, kRobust>(node, r, r.tmin, best_t, t_entry);
+      uint32_t mask = intersect_children<N, kBox>(node, r, r.tmin, best_t, t_entry);
       if (mask != 0) {
         // Continue with the nearest child entered; the others go on the stack, farthest deepest.
         entry = descend<N, kSlotOrder>(node, mask, t_entry, arena, stack, size);
@@ -530,12 +560,12 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
   }
 }
 
-template <uint32_t N, TriangleTestKind kTri, bool kRobust, bool kAnyHit, bool kCount>
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount>
 void trace_batch(const WideBatch& batch) {
   auto run = [&]<bool kSlotOrder>() {
     for (std::size_t i = 0; i < batch.count; ++i) {
       if constexpr (kCount) ++batch.counts->rays;
-      const Hit hit = trace_ray<N, kTri, kRobust, kAnyHit, kCount, kSlotOrder>(batch.root_planes, batch.arena, batch.rays[i],
+      const Hit hit = trace_ray<N, kTri, kBox, kAnyHit, kCount, kSlotOrder>(batch.root_planes, batch.arena, batch.rays[i],
                                                                                 batch.counts);
       if constexpr (kAnyHit) batch.occluded[i] = hit.prim != kInvalidPrim;
       else batch.hits[i] = hit;
@@ -549,9 +579,15 @@ void trace_batch(const WideBatch& batch) {
 template <bool kCount>
 WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
   auto pick = [&]<uint32_t N, TriangleTestKind kTri>() -> WideKernel {
-    if (box == BoxTestKind::kRobust)
-      return any_hit ? &trace_batch<N, kTri, true, true, kCount> : &trace_batch<N, kTri, true, false, kCount>;
-    return any_hit ? &trace_batch<N, kTri, false, true, kCount> : &trace_batch<N, kTri, false, false, kCount>;
+    auto with_box = [&]<BoxTestKind kBox>() -> WideKernel {
+      return any_hit ? &trace_batch<N, kTri, kBox, true, kCount> : &trace_batch<N, kTri, kBox, false, kCount>;
+    };
+    switch (box) {
+      case BoxTestKind::kRobust: return with_box.template operator()<BoxTestKind::kRobust>();
+      case BoxTestKind::kFast: return with_box.template operator()<BoxTestKind::kFast>();
+      case BoxTestKind::kFma: return with_box.template operator()<BoxTestKind::kFma>();
+    }
+    return nullptr;
   };
   auto by_tri = [&]<uint32_t N>() -> WideKernel {
     switch (tri) {
@@ -571,14 +607,14 @@ WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, 
 // Loops for the micro-benchmarks (bench/): every ray against every node, or every block, in turn. The
 // sum of the hit masks and distances is returned so the work cannot be optimised away.
 
-template <uint32_t N, bool kRobust>
+template <uint32_t N, BoxTestKind kBox>
 double node_test_loop(const void* nodes, std::size_t node_count, const WideRay* rays, std::size_t ray_count) {
   const auto* typed = static_cast<const WideNode<N>*>(nodes);
   double sum = 0.0;
   alignas(32) float t_entry[N];
   for (std::size_t r = 0; r < ray_count; ++r)
     for (std::size_t n = 0; n < node_count; ++n)
-      sum += intersect_children<N, kRobust>(typed[n], rays[r], rays[r].tmin, rays[r].tmax, t_entry) + t_entry[0];
+      sum += intersect_children<N, kBox>(typed[n], rays[r], rays[r].tmin, rays[r].tmax, t_entry) + t_entry[0];
   return sum;
 }
 
@@ -594,9 +630,16 @@ double block_test_loop(const TriangleBlock* blocks, std::size_t block_count, con
 
 inline WideBenchLoops select_bench_loops(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
   WideBenchLoops loops{};
-  const bool robust = box == BoxTestKind::kRobust;
-  if (width == 4) loops.nodes = robust ? &node_test_loop<4, true> : &node_test_loop<4, false>;
-  if (width == 8) loops.nodes = robust ? &node_test_loop<8, true> : &node_test_loop<8, false>;
+  auto nodes = [&]<uint32_t N>() -> double (*)(const void*, std::size_t, const WideRay*, std::size_t) {
+    switch (box) {
+      case BoxTestKind::kRobust: return &node_test_loop<N, BoxTestKind::kRobust>;
+      case BoxTestKind::kFast: return &node_test_loop<N, BoxTestKind::kFast>;
+      case BoxTestKind::kFma: return &node_test_loop<N, BoxTestKind::kFma>;
+    }
+    return nullptr;
+  };
+  if (width == 4) loops.nodes = nodes.template operator()<4>();
+  if (width == 8) loops.nodes = nodes.template operator()<8>();
   switch (tri) {
     case TriangleTestKind::kWatertight: loops.blocks = &block_test_loop<TriangleTestKind::kWatertight>; break;
     case TriangleTestKind::kMollerTrumbore: loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumbore>; break;

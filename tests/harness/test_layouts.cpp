@@ -35,14 +35,14 @@ std::vector<std::pair<std::string, ParamOverrides>> builders_for(uint32_t arity)
           {"wide_collapse", {{"arity", a}, {"method", "greedy"}, {"max_leaf", "13"}}}};
 }
 
-// The specs a layout is tested with: its 3 triangle tests x 2 box tests, for SIMD layouts with the scalar
+// The specs a layout is tested with: its 3 triangle tests x 3 box tests, for SIMD layouts with the scalar
 // kernels and with every SIMD set available here (the SIMD sets share one source, so the variants are
 // crossed with the widest and the default variant with the others, to keep the suite quick).
 std::vector<std::string> specs_for(const LayoutInfo& layout) {
   std::vector<std::string> out;
   auto add_variants = [&](const std::string& isa) {
     for (const char* tri : {"watertight", "mt", "mt0"})
-      for (const char* box : {"robust", "fast"}) out.push_back(layout.name + ":tri=" + tri + ",box=" + box + isa);
+      for (const char* box : {"robust", "fast", "fma"}) out.push_back(layout.name + ":tri=" + tri + ",box=" + box + isa);
   };
   if (!layout.has_isa) {
     add_variants("");

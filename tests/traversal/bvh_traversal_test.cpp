@@ -35,7 +35,8 @@ struct Kernel {
 };
 using Kernels =
     ::testing::Types<Kernel<WatertightTriangleTest, RobustRayBox>, Kernel<WatertightTriangleTest, FastRayBox>,
-                     Kernel<MollerTrumboreTest, RobustRayBox>, Kernel<MollerTrumboreTest, FastRayBox>>;
+                     Kernel<MollerTrumboreTest, RobustRayBox>, Kernel<MollerTrumboreTest, FastRayBox>,
+                     Kernel<MollerTrumboreTest, FmaRayBox>>;
 
 // Same hit as the reference, or a tie: the same distance within the tolerance, with the kernel's
 // primitive also hit at that distance by the same triangle test. Returns an explanation, empty if agreed.

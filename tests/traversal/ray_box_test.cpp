@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -23,8 +25,15 @@ Ray make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = kInf) {
 
 template <class BoxTest>
 class TravRayBoxBoth : public ::testing::Test {};
-using BoxTests = ::testing::Types<RobustRayBox, FastRayBox>;
+using BoxTests = ::testing::Types<RobustRayBox, FastRayBox, FmaRayBox>;
 TYPED_TEST_SUITE(TravRayBoxBoth, BoxTests);
+
+// The tests whose (plane - org) / dir is inf or NaN by IEEE rules; FmaRayBox's finite reciprocal treats
+// these rays as Embree does (FmaRayBox.RayInAFacePlaneLeavesThroughTheFaceItsZeroPointsTo).
+template <class BoxTest>
+class TravRayBoxIeee : public ::testing::Test {};
+using IeeeBoxTests = ::testing::Types<RobustRayBox, FastRayBox>;
+TYPED_TEST_SUITE(TravRayBoxIeee, IeeeBoxTests);
 
 template <class BoxTest>
 bool hits(const Ray& ray, const Aabb& box, float* t_entry = nullptr) {
@@ -47,7 +56,7 @@ TYPED_TEST(TravRayBoxBoth, AxisParallelHitAndEntryDistance) {
   EXPECT_FALSE(hits<TypeParam>(make_ray({-1.0f, 0.5f, 0.5f}, {-1.0f, 0.0f, 0.0f}), kUnitBox));
 }
 
-TYPED_TEST(TravRayBoxBoth, OriginOnFacePlaneWithSignedZeroDirection) {
+TYPED_TEST(TravRayBoxIeee, OriginOnFacePlaneWithSignedZeroDirection) {
   // (plane - org) * (1 / +-0) = 0 * inf = NaN on the planes the origin lies on; the NaN must count as
   // inside the slab for every sign combination of the zero components.
   for (float zy : {0.0f, -0.0f}) {
@@ -78,7 +87,7 @@ TYPED_TEST(TravRayBoxBoth, OriginInsideEntersAtTmin) {
   EXPECT_EQ(t, 0.25f);
 }
 
-TYPED_TEST(TravRayBoxBoth, GrazingEdgesAndCornersExactly) {
+TYPED_TEST(TravRayBoxIeee, GrazingEdgesAndCornersExactly) {
   // Along an edge of the box.
   EXPECT_TRUE(hits<TypeParam>(make_ray({-1.0f, 1.0f, 1.0f}, {1.0f, 0.0f, 0.0f}), kUnitBox));
   EXPECT_TRUE(hits<TypeParam>(make_ray({-1.0f, 0.0f, 1.0f}, {1.0f, -0.0f, -0.0f}), kUnitBox));
@@ -90,6 +99,39 @@ TYPED_TEST(TravRayBoxBoth, GrazingEdgesAndCornersExactly) {
   EXPECT_TRUE(hits<TypeParam>(make_ray({2.0f, 0.0f, 2.0f}, {-1.0f, 1.0f, -1.0f}), kUnitBox));
   // Passing just beside that corner.
   EXPECT_FALSE(hits<TypeParam>(make_ray({2.0f, 0.0f, 2.0f}, {-1.0f, 1.0f, -0.99f}), kUnitBox));
+}
+
+// FmaRayBox takes a zero direction component as +-1e-18, keeping its sign: a ray in a face plane,
+// parallel to it, is a ray that leaves the slab at once through the face its zero points to. So it hits
+// the box from the min face with +0 and from the max face with -0, and misses it otherwise, where the
+// IEEE tests above (whose NaN counts as inside) hit in all four cases.
+TEST(FmaRayBox, RayInAFacePlaneLeavesThroughTheFaceItsZeroPointsTo) {
+  for (float zy : {0.0f, -0.0f}) {
+    for (float y : {0.0f, 1.0f}) {
+      SCOPED_TRACE(testing::Message() << "y=" << y << " dy=" << zy);
+      const bool toward_inside = std::signbit(zy) ? y == 1.0f : y == 0.0f;
+      float t = -1.0f;
+      EXPECT_EQ(hits<FmaRayBox>(make_ray({-1.0f, y, 0.5f}, {1.0f, zy, 0.0f}), kUnitBox, &t), toward_inside);
+      if (toward_inside) {
+        EXPECT_EQ(t, 1.0f);
+      }
+    }
+  }
+  // Inside or outside a slab by any margin, a zero component behaves as in the IEEE tests.
+  for (float zy : {0.0f, -0.0f}) {
+    EXPECT_TRUE(hits<FmaRayBox>(make_ray({-1.0f, 0x1p-20f, 0.5f}, {1.0f, zy, 0.0f}), kUnitBox));
+    EXPECT_TRUE(hits<FmaRayBox>(make_ray({-1.0f, 1.0f - 0x1p-20f, 0.5f}, {1.0f, zy, 0.0f}), kUnitBox));
+    EXPECT_FALSE(hits<FmaRayBox>(make_ray({-1.0f, -0x1p-20f, 0.5f}, {1.0f, zy, 0.0f}), kUnitBox));
+    EXPECT_FALSE(hits<FmaRayBox>(make_ray({-1.0f, 1.0f + 0x1p-20f, 0.5f}, {1.0f, zy, 0.0f}), kUnitBox));
+  }
+  // The distances are the fused ones: plane * rdir - org * rdir, rounded once.
+  const Ray ray = make_ray({0.1f, 0.2f, 0.3f}, {0.7f, -0.3f, 0.2f});
+  float t = -1.0f;
+  ASSERT_TRUE(hits<FmaRayBox>(ray, kUnitBox, &t));
+  const float rdir_x = 1.0f / 0.7f, rdir_y = 1.0f / -0.3f, rdir_z = 1.0f / 0.2f;
+  const float near_x = std::fma(0.0f, rdir_x, -(0.1f * rdir_x)), near_y = std::fma(1.0f, rdir_y, -(0.2f * rdir_y)),
+              near_z = std::fma(0.0f, rdir_z, -(0.3f * rdir_z));
+  EXPECT_EQ(t, std::max({0.0f, near_x, near_y, near_z}));
 }
 
 TYPED_TEST(TravRayBoxBoth, FlatBoxIsHit) {

@@ -1,6 +1,6 @@
 // The wide layouts' memory: the arena's depth-first order (wide_bvh.h) and the huge-page allocator
-// under it (core/huge_pages.h). That the kernels find the same hits on it is tested with every layout
-// in tests/harness/test_layouts.cpp.
+// under it (core/huge_pages.h); and their node test against ray_box.h's, distance for distance. That
+// the kernels find the same hits is tested with every layout in tests/harness/test_layouts.cpp.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +11,7 @@
 #include "core/huge_pages.h"
 #include "tests/support/test_scenes.h"
 #include "tests/traversal/median_builder.h"
+#include "traversal/ray_box.h"
 #include "traversal/wide_bvh.h"
 
 namespace sahbench {
@@ -100,6 +101,67 @@ TEST(WideBvh, TreeThatIsOneLeafGetsARootWithOneLeafSlot) {
   EXPECT_EQ(wide.node(0).count[0], 1u);
   EXPECT_EQ(wide.node(0).child[0], sizeof(WideNode<8>) / kWideUnit);
   EXPECT_EQ(wide.bytes(), sizeof(WideNode<8>) + sizeof(TriangleBlock));
+}
+
+// The node test of every instruction set computes ray_box.h's entry distances bit for bit, for each box
+// test: the micro-benchmark loop returns the sum over nodes and rays of the hit mask plus child 0's entry
+// distance, which is summed here from the scalar box tests, child by child. (Hits alone would not tell a
+// fused multiply-subtract from a multiply and a subtract; the distances do.)
+template <class BoxTest, uint32_t N>
+double reference_node_sum(const std::vector<WideNode<N>>& nodes, const std::vector<Ray>& rays) {
+  double sum = 0.0;
+  for (const Ray& ray : rays) {
+    const BoxTest test(ray);
+    for (const WideNode<N>& node : nodes) {
+      uint32_t mask = 0;
+      float t0 = 0.0f;
+      for (uint32_t i = 0; i < N; ++i) {
+        const Aabb box{{node.planes[0][i], node.planes[2][i], node.planes[4][i]},
+                       {node.planes[1][i], node.planes[3][i], node.planes[5][i]}};
+        float t = 0.0f;
+        mask |= static_cast<uint32_t>(test.intersect(box, ray.tmin, ray.tmax, t)) << i;
+        if (i == 0) t0 = t;
+      }
+      sum += mask + t0;
+    }
+  }
+  return sum;
+}
+
+template <uint32_t N>
+void check_node_tests() {
+  const auto scene = test::random_triangles(2000, 11);
+  const WideBvh<N> wide = compile_wide<N>(test::build_median_bvh(scene, N, 4), scene);
+  // The root, its child nodes, theirs...: the first 64 nodes breadth first, boxes of every size.
+  std::vector<WideNode<N>> nodes{wide.node(0)};
+  for (std::size_t k = 0; k < nodes.size() && nodes.size() < 64; ++k)
+    for (uint32_t i = 0; i < N; ++i)
+      if (nodes[k].count[i] == 0 && nodes[k].child[i] != 0) nodes.push_back(wide.node(nodes[k].child[i]));
+  auto rays = test::random_rays(scene, 300, 3);
+  // Tiny and zero direction components, where FmaRayBox's reciprocal differs from 1 / d.
+  for (std::size_t i = 0; i < rays.size(); i += 3) rays[i].dir[i % 3] = (i % 2 ? 1e-20f : -0.0f);
+  std::vector<WideRay> wide_rays;
+  for (BoxTestKind box : {BoxTestKind::kRobust, BoxTestKind::kFast, BoxTestKind::kFma}) {
+    SCOPED_TRACE(std::string(to_string(box)));
+    double expected = 0.0;
+    if (box == BoxTestKind::kRobust) expected = reference_node_sum<RobustRayBox>(nodes, rays);
+    if (box == BoxTestKind::kFast) expected = reference_node_sum<FastRayBox>(nodes, rays);
+    if (box == BoxTestKind::kFma) expected = reference_node_sum<FmaRayBox>(nodes, rays);
+    wide_rays.clear();
+    for (const Ray& ray : rays) wide_rays.push_back(make_wide_ray(ray, false, box));
+    for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
+      if (!kernel_isa_available(isa)) continue;
+      SCOPED_TRACE(std::string(to_string(isa)));
+      const WideBenchLoops loops = find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box});
+      ASSERT_NE(loops.nodes, nullptr);
+      EXPECT_EQ(loops.nodes(nodes.data(), nodes.size(), wide_rays.data(), wide_rays.size()), expected);
+    }
+  }
+}
+
+TEST(WideBvh, NodeTestsOfEveryIsaComputeTheScalarBoxTestsDistances) {
+  check_node_tests<4>();
+  check_node_tests<8>();
 }
 
 TEST(HugePages, LargeArraysStartOnAHugePageAndSmallOnesOnALine) {

@@ -69,7 +69,7 @@ class WideLayout final : public CompiledLayout {
       WideRay setup[kWideChunk];
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
-        for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_, box_);
+        make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, nullptr, nullptr, nullptr, stored_order_}, i);
       }
     });
@@ -84,7 +84,7 @@ class WideLayout final : public CompiledLayout {
       TraceCounts sum;
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
-        for (std::size_t k = 0; k < n; ++k) setup[k] = make_wide_ray(rays[i + k], shear_, box_);
+        make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
         WideCounts c;
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, hits.data(), occluded.data(), &c, stored_order_});
         sum.rays += c.rays;

@@ -131,13 +131,13 @@ class FmaRayBox {
   /// The smallest direction component magnitude taken as it is (Embree's min_rcp_input).
   static constexpr float kMinDirection = 1e-18f;
 
-  /// The reciprocal the test uses for direction component `d`: shared with the wide kernels' ray set-up
+  /// The direction component the test takes the reciprocal of: shared with the wide kernels' ray set-up
   /// (wide_bvh.cpp), so that both compute the same distances.
-  static float reciprocal(float d) { return 1.0f / (std::abs(d) < kMinDirection ? std::copysign(kMinDirection, d) : d); }
+  static float safe_direction(float d) { return std::abs(d) < kMinDirection ? std::copysign(kMinDirection, d) : d; }
 
   explicit FmaRayBox(const Ray& ray) : setup_(ray) {
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      setup_.inv_dir[axis] = reciprocal(ray.dir[axis]);
+      setup_.inv_dir[axis] = 1.0f / safe_direction(ray.dir[axis]);
       org_inv_[axis] = ray.org[axis] * setup_.inv_dir[axis];
     }
   }

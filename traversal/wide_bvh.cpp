@@ -64,40 +64,63 @@ uint32_t blocks_for(uint32_t prims) { return (prims + kBlockWidth - 1) / kBlockW
 
 }  // namespace
 
-WideRay make_wide_ray(const Ray& ray, bool shear, BoxTestKind box) {
-  WideRay r;
+namespace {
+
+// One ray's set-up, with the choices fixed at compile time so that the batch loop below has no branch
+// per ray: set-up is a tenth of a closest-hit ray's time at 10 Mrays/s, and a run-time choice of the
+// reciprocal per axis (box=fma's or IEEE's) cost the closest-hit rays 1-7%.
+template <bool kShear, bool kFma>
+inline void set_up(const Ray& ray, WideRay& r) {
   for (uint32_t axis = 0; axis < 3; ++axis) {
     r.org[axis] = ray.org[axis];
     r.dir[axis] = ray.dir[axis];
     // 1 / +-0 = +-inf, as in ray_box.h; FmaRayBox's reciprocal stays finite.
-    r.inv_dir[axis] = box == BoxTestKind::kFma ? FmaRayBox::reciprocal(ray.dir[axis]) : 1.0f / ray.dir[axis];
+    r.inv_dir[axis] = 1.0f / (kFma ? FmaRayBox::safe_direction(ray.dir[axis]) : ray.dir[axis]);
     r.org_inv[axis] = ray.org[axis] * r.inv_dir[axis];
-    const bool negative = std::signbit(ray.dir[axis]);
-    r.near_plane[axis] = 2 * axis + (negative ? 1 : 0);
-    r.far_plane[axis] = 2 * axis + (negative ? 0 : 1);
+    const uint32_t negative = std::signbit(ray.dir[axis]) ? 1u : 0u;
+    r.near_plane[axis] = 2 * axis + negative;
+    r.far_plane[axis] = 2 * axis + (1u - negative);
   }
   r.tmin = ray.tmin;
   r.tmax = ray.tmax;
   // An untraceable ray (core/ray.h) gets an empty interval, which no box test can widen, NaN or not.
   if (!traceable(ray)) r.tmin = 1.0f, r.tmax = 0.0f;
-  if (!shear) {
+  if constexpr (!kShear) {
     r.kx = 0, r.ky = 1, r.kz = 2;
     r.sx = r.sy = r.sz = 0.0f;
-    return r;
+  } else {
+    // watertight_shear's axes and factors, with selects in place of its branches: the axis of largest
+    // |dir| is as good as random for diffuse rays, and a mispredicted branch per ray cost more than the test.
+    const float ax = std::abs(ray.dir.x), ay = std::abs(ray.dir.y), az = std::abs(ray.dir.z);
+    const bool x_largest = ax >= ay && ax >= az;
+    const uint32_t kz = x_largest ? 0u : (ay >= az ? 1u : 2u);
+    const uint32_t next = kz == 2 ? 0u : kz + 1, after = next == 2 ? 0u : next + 1;
+    const bool swap = ray.dir[kz] < 0.0f;
+    r.kz = kz;
+    r.kx = swap ? after : next;
+    r.ky = swap ? next : after;
+    r.sx = ray.dir[r.kx] / ray.dir[kz];
+    r.sy = ray.dir[r.ky] / ray.dir[kz];
+    r.sz = 1.0f / ray.dir[kz];
   }
-  // watertight_shear's axes and factors, with selects in place of its branches: the axis of largest |dir|
-  // is as good as random for diffuse rays, and a mispredicted branch per ray cost more than the test.
-  const float ax = std::abs(ray.dir.x), ay = std::abs(ray.dir.y), az = std::abs(ray.dir.z);
-  const bool x_largest = ax >= ay && ax >= az;
-  const uint32_t kz = x_largest ? 0u : (ay >= az ? 1u : 2u);
-  const uint32_t next = kz == 2 ? 0u : kz + 1, after = next == 2 ? 0u : next + 1;
-  const bool swap = ray.dir[kz] < 0.0f;
-  r.kz = kz;
-  r.kx = swap ? after : next;
-  r.ky = swap ? next : after;
-  r.sx = ray.dir[r.kx] / ray.dir[kz];
-  r.sy = ray.dir[r.ky] / ray.dir[kz];
-  r.sz = 1.0f / ray.dir[kz];
+}
+
+template <bool kShear, bool kFma>
+void set_up_all(std::span<const Ray> rays, WideRay* out) {
+  for (std::size_t i = 0; i < rays.size(); ++i) set_up<kShear, kFma>(rays[i], out[i]);
+}
+
+}  // namespace
+
+void make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box) {
+  const bool fma = box == BoxTestKind::kFma;
+  if (shear) return fma ? set_up_all<true, true>(rays, out) : set_up_all<true, false>(rays, out);
+  return fma ? set_up_all<false, true>(rays, out) : set_up_all<false, false>(rays, out);
+}
+
+WideRay make_wide_ray(const Ray& ray, bool shear, BoxTestKind box) {
+  WideRay r;
+  make_wide_rays(std::span(&ray, 1), &r, shear, box);
   return r;
 }
 

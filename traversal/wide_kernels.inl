@@ -14,6 +14,14 @@
 // every caller; so the code below calls none (compiler builtins and intrinsics only) and reads only
 // constants and plain structs from those headers.
 
+// Every helper below is inlined into the kernels, whatever the compiler's inlining budget says: with three
+// box tests x three triangle tests x two queries of kernels per instruction set in one file, GCC's
+// unit-growth limit left descend() and sort_keys() out of line, and the closest-hit kernels lost 3-15%.
+// (The watertight test's double-precision finish, rarely run, stays a call.)
+#ifndef SAHBENCH_KERNEL_INLINE
+#define SAHBENCH_KERNEL_INLINE [[gnu::always_inline]] inline
+#endif
+
 // The constants come from the scalar tests so the two cannot drift apart.
 inline constexpr float kWideFarScale = RobustRayBox::kFarScale;
 inline constexpr float kWideMtEpsilon = kMollerTrumboreEpsilon;
@@ -27,7 +35,7 @@ inline constexpr float kWideMtEpsilon = kMollerTrumboreEpsilon;
 // One plane's distance, as ray_box.h computes it for each box test (FmaRayBox: one fused multiply-subtract
 // with the ray's finite reciprocal; the others: subtract, then multiply).
 template <BoxTestKind kBox>
-inline float plane_distance(float plane, const WideRay& r, uint32_t axis) {
+SAHBENCH_KERNEL_INLINE float plane_distance(float plane, const WideRay& r, uint32_t axis) {
   if constexpr (kBox == BoxTestKind::kFma) return __builtin_fmaf(plane, r.inv_dir[axis], -r.org_inv[axis]);
   else return (plane - r.org[axis]) * r.inv_dir[axis];
 }
@@ -35,7 +43,7 @@ inline float plane_distance(float plane, const WideRay& r, uint32_t axis) {
 #if defined(SAHBENCH_WIDE_SCALAR)
 
 template <uint32_t N, BoxTestKind kBox>
-inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
+SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
                                    float* t_entry) {
   uint32_t mask = 0;
   for (uint32_t i = 0; i < N; ++i) {
@@ -61,7 +69,7 @@ inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, fl
 // Four planes' distances (plane_distance, lane by lane). SSE has no fused multiply-add: there each lane
 // calls fmaf, which is exact but slow; box=fma is for the AVX2 and AVX-512 kernels.
 template <BoxTestKind kBox>
-inline __m128 plane_distances4(__m128 planes, const WideRay& r, uint32_t axis) {
+SAHBENCH_KERNEL_INLINE __m128 plane_distances4(__m128 planes, const WideRay& r, uint32_t axis) {
   if constexpr (kBox != BoxTestKind::kFma) {
     return _mm_mul_ps(_mm_sub_ps(planes, _mm_set1_ps(r.org[axis])), _mm_set1_ps(r.inv_dir[axis]));
   } else {
@@ -77,7 +85,7 @@ inline __m128 plane_distances4(__m128 planes, const WideRay& r, uint32_t axis) {
 }
 
 template <BoxTestKind kBox>
-inline uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, float tmin, float tmax,
+SAHBENCH_KERNEL_INLINE uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, float tmin, float tmax,
                                     float* t_entry, uint32_t stride) {
   __m128 t_near = _mm_set1_ps(tmin);
   __m128 t_far = _mm_set1_ps(tmax);
@@ -93,7 +101,7 @@ inline uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, 
 }
 
 template <uint32_t N, BoxTestKind kBox>
-inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
+SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
                                    float* t_entry) {
   if constexpr (N == 4) {
     return intersect_children4<kBox>(reinterpret_cast<const float (*)[4]>(node.planes), r, tmin, tmax,
@@ -103,19 +111,21 @@ inline uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, fl
     __m256 t_near = _mm256_set1_ps(tmin);
     __m256 t_far = _mm256_set1_ps(tmax);
     for (uint32_t axis = 0; axis < 3; ++axis) {
+      if constexpr (kBox == BoxTestKind::kFma) {
+        const __m256 org_inv = _mm256_set1_ps(r.org_inv[axis]);
+        const __m256 inv = _mm256_set1_ps(r.inv_dir[axis]);
+        const __m256 t0 = _mm256_fmsub_ps(_mm256_load_ps(node.planes[r.near_plane[axis]]), inv, org_inv);
+        const __m256 t1 = _mm256_fmsub_ps(_mm256_load_ps(node.planes[r.far_plane[axis]]), inv, org_inv);
+        t_near = _mm256_max_ps(t0, t_near);
+        t_far = _mm256_min_ps(t1, t_far);
+        continue;
+      }
+      const __m256 org = _mm256_set1_ps(r.org[axis]);
       const __m256 inv = _mm256_set1_ps(r.inv_dir[axis]);
       const __m256 near = _mm256_load_ps(node.planes[r.near_plane[axis]]);
       const __m256 far = _mm256_load_ps(node.planes[r.far_plane[axis]]);
-      __m256 t0, t1;
-      if constexpr (kBox == BoxTestKind::kFma) {
-        const __m256 org_inv = _mm256_set1_ps(r.org_inv[axis]);
-        t0 = _mm256_fmsub_ps(near, inv, org_inv);
-        t1 = _mm256_fmsub_ps(far, inv, org_inv);
-      } else {
-        const __m256 org = _mm256_set1_ps(r.org[axis]);
-        t0 = _mm256_mul_ps(_mm256_sub_ps(near, org), inv);
-        t1 = _mm256_mul_ps(_mm256_sub_ps(far, org), inv);
-      }
+      const __m256 t0 = _mm256_mul_ps(_mm256_sub_ps(near, org), inv);
+      __m256 t1 = _mm256_mul_ps(_mm256_sub_ps(far, org), inv);
       if constexpr (kBox == BoxTestKind::kRobust) t1 = _mm256_mul_ps(t1, _mm256_set1_ps(kWideFarScale));
       t_near = _mm256_max_ps(t0, t_near);
       t_far = _mm256_min_ps(t1, t_far);
@@ -155,12 +165,12 @@ inline bool lane_in_double(float ax, float ay, float az, float bx, float by, flo
 }
 
 // triangle_tests.h's watertight_float_ok and watertight_det_ok, for one lane.
-inline bool lane_float_ok(float e0, float e1, float e2) {
+SAHBENCH_KERNEL_INLINE bool lane_float_ok(float e0, float e1, float e2) {
   constexpr float kInf = __builtin_inff();
   return __builtin_fabsf(e0) < kInf && __builtin_fabsf(e1) < kInf && __builtin_fabsf(e2) < kInf && e0 != 0.0f &&
          e1 != 0.0f && e2 != 0.0f;
 }
-inline bool lane_det_ok(float det, float scaled_t) {
+SAHBENCH_KERNEL_INLINE bool lane_det_ok(float det, float scaled_t) {
   constexpr float kInf = __builtin_inff();
   const float abs_det = __builtin_fabsf(det);
   return abs_det >= __FLT_MIN__ && abs_det < kInf && __builtin_fabsf(scaled_t) < kInf;
@@ -173,7 +183,7 @@ inline bool lane_det_ok(float det, float scaled_t) {
 
 #if defined(SAHBENCH_WIDE_SCALAR)
 
-inline float component(const float (&v)[3][kBlockWidth], uint32_t axis, uint32_t lane) { return v[axis][lane]; }
+SAHBENCH_KERNEL_INLINE float component(const float (&v)[3][kBlockWidth], uint32_t axis, uint32_t lane) { return v[axis][lane]; }
 
 inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
                                            float* t_out, float* u_out, float* v_out) {
@@ -215,7 +225,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
   return mask;
 }
 
-inline uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,
                                    float* t_out, float* u_out, float* v_out) {
   uint32_t mask = 0;
   for (uint32_t i = 0; i < kBlockWidth; ++i) {
@@ -248,7 +258,7 @@ inline uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, flo
 
 #else
 
-inline __m128 lanes_valid(const TriangleBlock& b) {
+SAHBENCH_KERNEL_INLINE __m128 lanes_valid(const TriangleBlock& b) {
   const __m128i prim = _mm_load_si128(reinterpret_cast<const __m128i*>(b.prim));
   const __m128i invalid = _mm_cmpeq_epi32(prim, _mm_set1_epi32(-1));
   return _mm_castsi128_ps(_mm_xor_si128(invalid, _mm_set1_epi32(-1)));
@@ -329,7 +339,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
   return mask;
 }
 
-inline uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,
                                    float* t_out, float* u_out, float* v_out) {
   const __m128 valid = lanes_valid(b);
   const __m128 v0x = _mm_load_ps(b.v0[0]), v0y = _mm_load_ps(b.v0[1]), v0z = _mm_load_ps(b.v0[2]);
@@ -368,7 +378,7 @@ inline uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, flo
 #endif
 
 template <TriangleTestKind kTri>
-inline uint32_t intersect_block(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float* t, float* u,
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float* t, float* u,
                                 float* v) {
   if constexpr (kTri == TriangleTestKind::kWatertight) return intersect_block_watertight(b, r, tmin, tmax, t, u, v);
   else if constexpr (kTri == TriangleTestKind::kMollerTrumbore)
@@ -376,7 +386,7 @@ inline uint32_t intersect_block(const TriangleBlock& b, const WideRay& r, float 
   else return intersect_block_mt(b, r, tmin, tmax, 0.0f, t, u, v);
 }
 
-inline uint32_t occupied_lanes(const TriangleBlock& b) {
+SAHBENCH_KERNEL_INLINE uint32_t occupied_lanes(const TriangleBlock& b) {
   uint32_t n = 0;
   for (uint32_t i = 0; i < kBlockWidth; ++i) n += b.prim[i] != kInvalidPrim;
   return n;
@@ -401,11 +411,17 @@ inline constexpr uint32_t kWideStackCapacity = 7 * kMaxDepth + 1;
 
 // The root's box, one lane: the scalar slab test of intersect_children.
 template <BoxTestKind kBox>
-inline bool intersect_root(const float* planes, const WideRay& r, float& t_entry) {
+SAHBENCH_KERNEL_INLINE bool intersect_root(const float* planes, const WideRay& r, float& t_entry) {
   float t_near = r.tmin, t_far = r.tmax;
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    const float t0 = plane_distance<kBox>(planes[r.near_plane[axis]], r, axis);
-    float t1 = plane_distance<kBox>(planes[r.far_plane[axis]], r, axis);
+    float t0, t1;
+    if constexpr (kBox == BoxTestKind::kFma) {
+      t0 = __builtin_fmaf(planes[r.near_plane[axis]], r.inv_dir[axis], -r.org_inv[axis]);
+      t1 = __builtin_fmaf(planes[r.far_plane[axis]], r.inv_dir[axis], -r.org_inv[axis]);
+    } else {
+      t0 = (planes[r.near_plane[axis]] - r.org[axis]) * r.inv_dir[axis];
+      t1 = (planes[r.far_plane[axis]] - r.org[axis]) * r.inv_dir[axis];
+    }
     if constexpr (kBox == BoxTestKind::kRobust) t1 *= kWideFarScale;
     t_near = t0 > t_near ? t0 : t_near;
     t_far = t1 < t_far ? t1 : t_far;
@@ -416,26 +432,27 @@ inline bool intersect_root(const float* planes, const WideRay& r, float& t_entry
 
 // A float's bits as an unsigned integer with the same order (negative values flipped whole, positive
 // ones with the sign bit set), so distances sort as integers.
-inline uint32_t ordered_bits(float x) {
+SAHBENCH_KERNEL_INLINE uint32_t ordered_bits(float x) {
   const uint32_t bits = __builtin_bit_cast(uint32_t, x);
   return bits ^ ((bits >> 31) ? 0xffffffffu : 0x80000000u);
 }
 
-inline void compare_swap(uint64_t& a, uint64_t& b) {
+SAHBENCH_KERNEL_INLINE void compare_swap(uint64_t& a, uint64_t& b) {
   const uint64_t lo = a < b ? a : b, hi = a < b ? b : a;
   a = lo;
   b = hi;
 }
 
-// Sorts keys[0, k) ascending, 2 <= k <= N, without branches on the keys: unused places are filled with
-// the largest key and the whole array goes through a sorting network, Knuth's (TAOCP vol. 3, 5.3.4)
-// optimal ones for 4 (5 comparators) and 8 (19 comparators) inputs. The next node's address waits for
-// this sort, so it is kept short and free of mispredicted branches.
+// The key of an unused place: larger than every real one.
+inline constexpr uint64_t kLastKey = ~uint64_t{0};
+
+// Sorts keys[0, k) ascending, 2 <= k <= N, without branches on the keys: the caller has filled unused
+// places with kLastKey, and the whole array goes through a sorting network, Knuth's (TAOCP vol. 3,
+// 5.3.4) optimal ones for 4 (5 comparators) and 8 (19 comparators) inputs. The next node's address
+// waits for this sort, so it is kept short and free of mispredicted branches.
 template <uint32_t N>
-inline void sort_keys(uint64_t* keys, uint32_t k) {
-  constexpr uint64_t kLast = ~uint64_t{0};
+SAHBENCH_KERNEL_INLINE void sort_keys(uint64_t* keys, uint32_t k) {
   if (N == 4 || k <= 4) {
-    for (uint32_t j = k; j < 4; ++j) keys[j] = kLast;
     compare_swap(keys[0], keys[1]);
     compare_swap(keys[2], keys[3]);
     compare_swap(keys[0], keys[2]);
@@ -444,7 +461,6 @@ inline void sort_keys(uint64_t* keys, uint32_t k) {
     return;
   }
   if constexpr (N == 8) {
-    for (uint32_t j = k; j < 8; ++j) keys[j] = kLast;
     constexpr uint8_t kNetwork[19][2] = {{0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {0, 1}, {2, 3},
                                          {4, 5}, {6, 7}, {2, 4}, {3, 5}, {1, 4}, {3, 6}, {1, 2}, {3, 4}, {5, 6}};
     for (const auto& [a, b] : kNetwork) compare_swap(keys[a], keys[b]);
@@ -453,13 +469,13 @@ inline void sort_keys(uint64_t* keys, uint32_t k) {
 
 // The node or block at arena reference `ref` (wide_bvh.h).
 template <class T>
-inline const T& at(const WideUnit* arena, uint32_t ref) {
+SAHBENCH_KERNEL_INLINE const T& at(const WideUnit* arena, uint32_t ref) {
   return *reinterpret_cast<const T*>(arena + ref);
 }
 
 // A child's node, or its leaf's first block, fetched ahead of its visit.
 template <uint32_t N>
-inline void prefetch_slot(const WideUnit* arena, uint32_t child, uint32_t count) {
+SAHBENCH_KERNEL_INLINE void prefetch_slot(const WideUnit* arena, uint32_t child, uint32_t count) {
   const char* p = reinterpret_cast<const char*>(arena + child);
   __builtin_prefetch(p);
   __builtin_prefetch(p + 64);
@@ -475,7 +491,7 @@ inline void prefetch_slot(const WideUnit* arena, uint32_t child, uint32_t count)
 // hit on a wide tree, bvh2_traversal.h's any_hit_in_storage_order) in slot order instead, which the
 // wide builders make an occlusion order (builders/child_order.h).
 template <uint32_t N, bool kSlotOrder>
-inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry, const WideUnit* arena,
+SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry, const WideUnit* arena,
                               WideStackEntry* stack, uint32_t& size) {
   const uint32_t first = static_cast<uint32_t>(__builtin_ctz(mask));
   if ((mask & (mask - 1)) == 0) return {node.child[first], node.count[first], t_entry[first]};
@@ -488,7 +504,10 @@ inline WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const floa
     }
     return {node.child[first], node.count[first], t_entry[first]};
   }
+  // All places first, with two vector stores (a fill of the places left after the loop became a call
+  // to memset, with a vzeroupper, on the way to the next node).
   uint64_t keys[N < 4 ? 4 : N];
+  for (uint64_t& key : keys) key = kLastKey;
   uint32_t k = 0;
   for (uint32_t m = mask; m; m &= m - 1) {
     const uint32_t i = static_cast<uint32_t>(__builtin_ctz(m));

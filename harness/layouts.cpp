@@ -241,7 +241,7 @@ LayoutSpec parse_layout_spec(std::string_view text) {
       spec.variant.triangle = *kind;
     } else if (key == "box") {
       const auto kind = parse_box_test(value);
-      if (!kind) throw Error(where + ": box = '" + value + "' is not one of robust, fast");
+      if (!kind) throw Error(where + ": box = '" + value + "' is not one of robust, fast, fma");
       spec.variant.box = *kind;
     } else if (key == "anyhit") {
       const auto order = parse_any_hit_order(value);

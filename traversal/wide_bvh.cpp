@@ -145,19 +145,20 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
   // gets a wide node of its own, holding just it.
   struct WidePlan {
     uint32_t first, count, depth;
+    uint32_t ref;  // the wide node's place in the arena
   };
   constexpr uint64_t kNodeUnits = sizeof(WideNode<N>) / kWideUnit, kBlockUnits = sizeof(TriangleBlock) / kWideUnit;
   std::vector<WidePlan> plan;
   std::vector<uint32_t> ref_of(bvh.nodes.size(), 0);  // a common-format node's wide node or first block
-  std::vector<uint32_t> plan_ref;                     // plan[i]'s wide node
   uint64_t used = 0;
-  auto add_node = [&](WidePlan p) {
+  auto add_node = [&](uint32_t first, uint32_t count, uint32_t depth) {
     used = (used + 1) & ~uint64_t{1};  // 64-byte line
-    plan.push_back(p);
-    plan_ref.push_back(static_cast<uint32_t>(used));
+    plan.push_back({first, count, depth, static_cast<uint32_t>(used)});
     used += kNodeUnits;
+    return plan.back().ref;
   };
-  add_node(bvh.root().is_leaf() ? WidePlan{0, 1, 0} : WidePlan{bvh.root().first, bvh.root().child_count, 0});
+  if (bvh.root().is_leaf()) add_node(0, 1, 0);
+  else add_node(bvh.root().first, bvh.root().child_count, 0);
   std::vector<std::size_t> stack{0};
   while (!stack.empty()) {
     const WidePlan p = plan[stack.back()];
@@ -170,14 +171,13 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
     for (uint32_t c = p.first; c < p.first + p.count; ++c) {
       if (!bvh.nodes[c].is_leaf()) continue;
       ref_of[c] = static_cast<uint32_t>(used);
+      out.block_count += blocks_for(bvh.nodes[c].prim_count);
       used += blocks_for(bvh.nodes[c].prim_count) * kBlockUnits;
     }
     const std::size_t first_child = plan.size();
     for (uint32_t c = p.first; c < p.first + p.count; ++c) {
       const Node& child = bvh.nodes[c];
-      if (child.is_leaf()) continue;
-      add_node({child.first, child.child_count, p.depth + 1});
-      ref_of[c] = plan_ref.back();
+      if (!child.is_leaf()) ref_of[c] = add_node(child.first, child.child_count, p.depth + 1);
     }
     // Depth first, first child next.
     for (std::size_t i = plan.size(); i > first_child; --i) stack.push_back(i - 1);
@@ -199,13 +199,10 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
         node.count[slot] = blocks_for(child.prim_count);
         fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count), triangles, &out.block(ref_of[c]));
       }
-      out.node(plan_ref[i]) = node;
+      out.node(plan[i].ref) = node;
     }
   });
   out.node_count = plan.size();
-  for (const WidePlan& p : plan)
-    for (uint32_t c = p.first; c < p.first + p.count; ++c)
-      if (bvh.nodes[c].is_leaf()) out.block_count += blocks_for(bvh.nodes[c].prim_count);
   return out;
 }
 

@@ -16,7 +16,7 @@
 
 // Every helper below is inlined into the kernels, whatever the compiler's inlining budget says: with three
 // box tests x three triangle tests x two queries of kernels per instruction set in one file, GCC's
-// unit-growth limit left descend() and sort_keys() out of line, and the closest-hit kernels lost 3-15%.
+// unit-growth limit left descend() and sort_keys() out of line, and the shadow rays lost 4-8%.
 // (The watertight test's double-precision finish, rarely run, stays a call.)
 #ifndef SAHBENCH_KERNEL_INLINE
 #define SAHBENCH_KERNEL_INLINE [[gnu::always_inline]] inline
@@ -470,14 +470,8 @@ template <BoxTestKind kBox>
 SAHBENCH_KERNEL_INLINE bool intersect_root(const float* planes, const WideRay& r, float& t_entry) {
   float t_near = r.tmin, t_far = r.tmax;
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    float t0, t1;
-    if constexpr (kBox == BoxTestKind::kFma) {
-      t0 = __builtin_fmaf(planes[r.near_plane[axis]], r.inv_dir[axis], -r.org_inv[axis]);
-      t1 = __builtin_fmaf(planes[r.far_plane[axis]], r.inv_dir[axis], -r.org_inv[axis]);
-    } else {
-      t0 = (planes[r.near_plane[axis]] - r.org[axis]) * r.inv_dir[axis];
-      t1 = (planes[r.far_plane[axis]] - r.org[axis]) * r.inv_dir[axis];
-    }
+    const float t0 = plane_distance<kBox>(planes[r.near_plane[axis]], r, axis);
+    float t1 = plane_distance<kBox>(planes[r.far_plane[axis]], r, axis);
     if constexpr (kBox == BoxTestKind::kRobust) t1 *= kWideFarScale;
     t_near = t0 > t_near ? t0 : t_near;
     t_far = t1 < t_far ? t1 : t_far;

@@ -11,6 +11,7 @@
 #include "builders/prim_ref.h"
 #include "builders/top_down.h"
 #include "core/build_input.h"
+#include "core/huge_pages.h"
 
 namespace sahbench {
 
@@ -47,21 +48,9 @@ NodeRange make_prim_refs(const BuildInput& input, std::span<PrimRef> refs);
 /// The range [begin, end) of `refs` with its bounds and centroid bounds, computed as the splitter does.
 NodeRange bounds_of(std::span<const PrimRef> refs, uint32_t begin, uint32_t end);
 
-// Storage for PrimRefs that is left uninitialised on allocation (std::vector would value-initialise it):
-// make_prim_refs (or its caller) writes every element in its parallel loop, so the memory is written once, and the first
-// touch of each page, a page fault per 4 KiB, is taken there, by all threads.
-class PrimRefArray {
- public:
-  explicit PrimRefArray(std::size_t size) : data_(std::allocator<PrimRef>().allocate(size)), size_(size) {}
-  ~PrimRefArray() { std::allocator<PrimRef>().deallocate(data_, size_); }
-  PrimRefArray(const PrimRefArray&) = delete;
-  PrimRefArray& operator=(const PrimRefArray&) = delete;
-
-  std::span<PrimRef> span() const { return {data_, size_}; }
-
- private:
-  PrimRef* data_;
-  std::size_t size_;
-};
+// Storage for PrimRefs, left uninitialised on allocation and on huge pages (core/huge_pages.h):
+// make_prim_refs (or its caller) writes every element in its parallel loop, so the memory is written
+// once, and the first touch of each page is taken there, by all threads.
+using PrimRefArray = HugePageArray<PrimRef>;
 
 }  // namespace sahbench

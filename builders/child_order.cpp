@@ -1,8 +1,12 @@
 #include "builders/child_order.h"
 
+#include <tbb/task_group.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+
+#include "builders/top_down.h"
 
 namespace sahbench {
 
@@ -22,14 +26,20 @@ struct Subtree {
   double weighted_cost = 0.0;
 };
 
+// Post-order over the tree: each node's key, and, with `reorder`, each node's children sorted by their
+// keys once their subtrees are done (moving a child's record moves its subtree, since the record holds
+// its children's and references' positions). The top levels run their children as parallel tasks: the
+// subtrees are disjoint, and every sum is taken in the same order as sequentially.
 class KeyPass {
  public:
-  KeyPass(const Bvh& bvh, std::span<const Triangle> triangles, const SahCost& cost, std::vector<double>& keys)
-      : bvh_(bvh), triangles_(triangles), cost_(cost), keys_(keys) {}
+  /// `reorder` is the same tree as `bvh`, to sort children in, or nullptr to only compute keys.
+  KeyPass(const Bvh& bvh, std::span<const Triangle> triangles, const SahCost& cost, std::vector<double>& keys,
+          Bvh* reorder)
+      : bvh_(bvh), triangles_(triangles), cost_(cost), keys_(keys), reorder_(reorder) {}
 
-  // Post-order; the depth is at most kMaxDepth, which every builder guarantees.
-  Subtree visit(uint32_t index) {
-    const Node& node = bvh_.nodes[index];
+  // The depth is at most kMaxDepth, which every builder guarantees.
+  Subtree visit(uint32_t index, uint32_t depth) {
+    const Node node = bvh_.nodes[index];
     const double half_area = node.bounds.half_area();
     Subtree s;
     if (node.is_leaf()) {
@@ -38,11 +48,20 @@ class KeyPass {
       s.weighted_cost = half_area * cost_.leaf_cost(node.prim_count);
     } else {
       s.weighted_cost = half_area * cost_.c_trav;
-      for (uint32_t c = 0; c < node.child_count; ++c) {
-        const Subtree child = visit(node.first + c);
-        s.triangle_area += child.triangle_area;
-        s.weighted_cost += child.weighted_cost;
+      Subtree children[kMaxArity];
+      if (depth < kParallelDepth) {
+        tbb::task_group group;
+        for (uint32_t c = 0; c < node.child_count; ++c)
+          group.run([this, &children, &node, c, depth] { children[c] = visit(node.first + c, depth + 1); });
+        group.wait();
+      } else {
+        for (uint32_t c = 0; c < node.child_count; ++c) children[c] = visit(node.first + c, depth + 1);
       }
+      for (uint32_t c = 0; c < node.child_count; ++c) {
+        s.triangle_area += children[c].triangle_area;
+        s.weighted_cost += children[c].weighted_cost;
+      }
+      if (reorder_ != nullptr) sort_children(node);
     }
     // P / E[cost] = min(1, A / H) / (weighted / H). A flat box (H = 0) that holds triangles is a wall a
     // ray meets only edge-on: key 0, last.
@@ -53,42 +72,43 @@ class KeyPass {
   }
 
  private:
+  // Levels whose nodes visit their children as parallel tasks: up to 8^3 tasks in an 8-wide tree.
+  static constexpr uint32_t kParallelDepth = 3;
+
+  // Largest key first; stable, so equal keys keep the builder's order.
+  void sort_children(const Node& parent) {
+    const uint32_t count = parent.child_count;
+    uint32_t order[kMaxArity];
+    std::iota(order, order + count, parent.first);
+    std::stable_sort(order, order + count, [&](uint32_t a, uint32_t b) { return keys_[a] > keys_[b]; });
+    Node nodes[kMaxArity];
+    double keys[kMaxArity];
+    for (uint32_t c = 0; c < count; ++c) {
+      nodes[c] = bvh_.nodes[order[c]];
+      keys[c] = keys_[order[c]];
+    }
+    std::copy(nodes, nodes + count, reorder_->nodes.begin() + parent.first);
+    std::copy(keys, keys + count, keys_.begin() + parent.first);
+  }
+
   const Bvh& bvh_;
   std::span<const Triangle> triangles_;
   const SahCost& cost_;
   std::vector<double>& keys_;
+  Bvh* reorder_;
 };
 
 }  // namespace
 
 std::vector<double> occlusion_order_keys(const Bvh& bvh, std::span<const Triangle> triangles, const SahCost& cost) {
   std::vector<double> keys(bvh.nodes.size());
-  if (!bvh.nodes.empty()) KeyPass(bvh, triangles, cost, keys).visit(0);
+  if (!bvh.nodes.empty()) KeyPass(bvh, triangles, cost, keys, nullptr).visit(0, 0);
   return keys;
 }
 
 void order_children_for_occlusion(Bvh& bvh, std::span<const Triangle> triangles, const SahCost& cost) {
-  std::vector<double> keys = occlusion_order_keys(bvh, triangles, cost);
-  std::vector<uint32_t> order;
-  std::vector<Node> nodes;
-  std::vector<double> sorted_keys;
-  for (std::size_t p = 0; p < bvh.nodes.size(); ++p) {
-    const Node parent = bvh.nodes[p];
-    if (parent.is_leaf() || parent.child_count < 2) continue;
-    // A child's record carries its own children and references, so moving the records (with their
-    // keys) moves the subtrees; the parent's range [first, first + child_count) stays the same.
-    order.resize(parent.child_count);
-    std::iota(order.begin(), order.end(), parent.first);
-    std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return keys[a] > keys[b]; });
-    nodes.clear();
-    sorted_keys.clear();
-    for (uint32_t i : order) {
-      nodes.push_back(bvh.nodes[i]);
-      sorted_keys.push_back(keys[i]);
-    }
-    std::copy(nodes.begin(), nodes.end(), bvh.nodes.begin() + parent.first);
-    std::copy(sorted_keys.begin(), sorted_keys.end(), keys.begin() + parent.first);
-  }
+  std::vector<double> keys(bvh.nodes.size());
+  if (!bvh.nodes.empty()) KeyPass(bvh, triangles, cost, keys, &bvh).visit(0, 0);
 }
 
 }  // namespace sahbench

@@ -14,7 +14,7 @@ struct PrimRef {
   uint32_t id = 0;
   uint32_t pad_ = 0;
 
-  /// Box centre, the point the builders bin and sort by (BuildInput::centroids holds the same).
+  /// Box centre, the point the builders bin and sort by.
   Vec3 centroid() const { return bounds.center(); }
 };
 static_assert(sizeof(PrimRef) == 32);

@@ -15,7 +15,7 @@ namespace {
 // Nodes at least this large run their three axes as parallel tasks; only speed depends on it.
 constexpr uint32_t kParallelThreshold = 1u << 14;
 
-// Keeps, for each axis, the primitive ids sorted by (centroid on that axis, id) within every node's
+// Keeps, for each axis, the primitive ids sorted by (box centre on that axis, id) within every node's
 // range. Partitioning a node keeps the three orders sorted by stable-partitioning the two other axes.
 class SweepSplitter {
  public:
@@ -26,7 +26,7 @@ class SweepSplitter {
       order.assign(prims.begin(), prims.end());
       // (centroid, id) is a total order, so the unstable parallel sort is deterministic.
       tbb::parallel_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-        const float ca = input_.centroids[a][axis], cb = input_.centroids[b][axis];
+        const float ca = input_.bounds[a].center()[axis], cb = input_.bounds[b].center()[axis];
         return ca < cb || (ca == cb && a < b);
       });
     };
@@ -60,7 +60,7 @@ class SweepSplitter {
       const bool is_left = i < mid;
       side_[p] = is_left;
       (is_left ? left : right).extend(input_.bounds[p]);
-      (is_left ? left_c : right_c).extend(input_.centroids[p]);
+      (is_left ? left_c : right_c).extend(input_.bounds[p].center());
     }
     auto reorder = [&](int other) {
       if (other != axis) stable_partition(order_[other], range);
@@ -137,7 +137,7 @@ NodeRange root_range(const BuildInput& input, std::span<const uint32_t> prims) {
       [&](const tbb::blocked_range<std::size_t>& r, Bounds acc) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           acc.box.extend(input.bounds[prims[i]]);
-          acc.centroids.extend(input.centroids[prims[i]]);
+          acc.centroids.extend(input.bounds[prims[i]].center());
         }
         return acc;
       },

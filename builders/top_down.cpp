@@ -24,7 +24,7 @@ void check_config(const TopDownConfig& config, std::string_view builder) {
 }
 
 void check_prim_count(std::size_t count, std::string_view builder) {
-  // Slot regions hold 2n - 1 nodes indexed by uint32.
+  // The slot buffer holds 2n - 1 nodes indexed by uint32.
   constexpr std::size_t kMaxPrims = (std::size_t{1} << 31) - 1;
   if (count > kMaxPrims)
     throw Error(std::string(builder) + ": " + std::to_string(count) + " primitives exceed the limit of " +

@@ -4,20 +4,25 @@
 // and the node layout live here (the structure of madmann91/bvh's TopDownSahBuilder and of pbrt-v4's
 // BVHAggregate::buildRecursive).
 //
-// Determinism: every node's descendants are written into a slot region fixed in advance, so tasks never
-// race for node indices and the tree is the same for any thread count. A subtree over n primitives has at
-// most 2n - 1 nodes (a full binary tree with at most n leaves), so a node over n primitives reserves
-// 2n - 2 slots for its descendants: its two children first, then the left child's region (2 n_left - 2),
-// then the right child's. Leaves holding several primitives leave holes, which compact() removes. A wide
-// node with k children uses k + sum(2 n_i - 2) = 2n - k slots, so the same regions hold wide trees.
+// Node slots: a node's children take consecutive slots of one buffer, and compact() then copies the
+// tree into depth-first order, so the slots a node gets do not affect the result, and the tree is the
+// same for any thread count. Nodes large enough to be split by parallel tasks take their children's
+// slots from a shared atomic counter; a task that builds a smaller subtree alone first reserves from it
+// the most slots the subtree can need and then hands them out in order. A subtree over n primitives has
+// at most 2n - 1 nodes (a full binary tree with at most n leaves), so 2n - 2 slots hold its
+// descendants, and the buffer is never larger than 2n - 1 for the root. A wide node with k children
+// uses fewer. Slots are written in order from the front of each reservation, so the pages of the unused
+// rest are never touched (on the 1M-triangle terrain the 244K nodes of the 8-wide tree use 10 MB of the
+// buffer's 80).
 //
 // Builders that split primitives (SBVH) add references as they go. Each node then owns `spare` reference
 // positions after its range, which its splits may fill and which its partition hands on to the children;
-// a node's subtree ends with at most size + spare references, and its slot region is sized for that many.
+// a node's subtree ends with at most size + spare references, and its slot reservation is sized for that many.
 // Positions left unused are holes in the reference order, and compact() gathers the leaves' references.
 
 #include <tbb/task_group.h>
 
+#include <atomic>
 #include <algorithm>
 #include <bit>
 #include <cassert>
@@ -93,15 +98,23 @@ struct Partition {
 
 namespace detail {
 
-// A node in its preassigned slot; trivially constructible so the slot buffer is not zero-filled.
+// A node in its slot. The slot buffer is left uninitialised and is written slot by slot (see above).
 struct SlotNode {
   Aabb bounds;
   uint32_t first;        // children: slot of the first child; leaf: first position in the reference order
-  uint32_t child_count;  // 0 for a leaf
-  uint32_t prim_count;   // 0 for an inner node
+  uint16_t child_count;  // 0 for a leaf
+  uint16_t prim_count;   // 0 for an inner node
+  uint32_t descendants;  // nodes below this one
+  uint32_t references;   // leaf references below this one (or in it)
 };
 
-// Nodes below this many primitives are built by the task that reaches them; above it, the two children
+// The size of a subtree, as build_node returns it; compact() places subtrees by these counts.
+struct SubtreeSize {
+  uint32_t descendants = 0;
+  uint32_t references = 0;
+};
+
+// Nodes below this many primitives are built by the task that reaches them; above it, the children
 // are built as separate TBB tasks. 1024 primitives is tens of microseconds of work, enough to amortise
 // task overhead (the value only affects speed, not the tree).
 inline constexpr uint32_t kSpawnThreshold = 1024;
@@ -116,16 +129,21 @@ template <class Splitter>
 class TopDownBuilder {
  public:
   TopDownBuilder(Splitter& splitter, const TopDownConfig& config, uint32_t capacity)
-      : splitter_(splitter), config_(config), slots_(std::make_unique_for_overwrite<SlotNode[]>(2 * std::size_t{capacity} - 1)) {}
+      // Raw storage from operator new, not huge pages: a 2 MiB page is zeroed in full when any slot on
+      // it is written, and the used slots are spread over the whole buffer.
+      : splitter_(splitter), config_(config),
+        slots_(static_cast<SlotNode*>(::operator new(sizeof(SlotNode) * (2 * std::size_t{capacity} - 1)))) {}
 
   Bvh build(const NodeRange& root) {
-    build_node(root, 0, 1, 0);
-    return compact(root.capacity());
+    build_subtree(root, 0, 0);
+    return compact();
   }
 
  private:
-  void make_leaf(const NodeRange& range, uint32_t slot) {
-    slots_[slot] = {range.bounds, range.begin, 0, range.size()};
+  SubtreeSize make_leaf(const NodeRange& range, uint32_t slot) {
+    const uint32_t n = range.size();
+    std::construct_at(&slots_[slot], SlotNode{range.bounds, range.begin, 0, static_cast<uint16_t>(n), 0, n});
+    return {0, n};
   }
 
   // Decides whether `range` is split and, if so, partitions it into `halves`; false makes it a leaf.
@@ -161,10 +179,24 @@ class TopDownBuilder {
     bool leaf;
   };
 
-  // Builds the node for `range` into `slot`; its descendants go into slots [region, region + 2n - 2):
-  // its k children first, then each child's own region of 2 n_i - 2 slots, which sums to 2n - k
-  // (n the capacities, where primitives are split).
-  void build_node(const NodeRange& range, uint32_t slot, uint32_t region, uint32_t depth) {
+  // Hands out slots to one task's subtree, in order; nullptr `next` means the shared counter.
+  uint32_t take_slots(uint32_t count, uint32_t* next) {
+    if (next == nullptr) return next_slot_.fetch_add(count, std::memory_order_relaxed);
+    const uint32_t first = *next;
+    *next += count;
+    return first;
+  }
+
+  // Builds the node for `range` into `slot`. A node small enough to be built by one task reserves its
+  // descendants' slots and builds them from that reservation.
+  SubtreeSize build_subtree(const NodeRange& range, uint32_t slot, uint32_t depth) {
+    if (range.size() >= kSpawnThreshold) return build_node(range, slot, depth, nullptr);
+    uint32_t next = take_slots(2 * range.capacity() - 2, nullptr);
+    return build_node(range, slot, depth, &next);
+  }
+
+  // Builds the node for `range` into `slot`, taking its children's slots from `next` (see take_slots).
+  SubtreeSize build_node(const NodeRange& range, uint32_t slot, uint32_t depth, uint32_t* next) {
     Partition halves;
     if (!try_split(range, depth, halves)) return make_leaf(range, slot);
 
@@ -194,63 +226,96 @@ class TopDownBuilder {
       ++count;
     }
 
-    slots_[slot] = {range.bounds, region, count, 0};
-    uint32_t child_region = region + count;
-    auto build_child = [&](uint32_t c, uint32_t child_region_begin) {
-      if (children[c].leaf) return make_leaf(children[c].range, region + c);
-      build_node(children[c].range, region + c, child_region_begin, children[c].depth);
-    };
-    if (range.size() >= kSpawnThreshold) {
+    const uint32_t first = take_slots(count, next);
+    SubtreeSize sizes[kMaxArity];
+    if (next == nullptr) {
+      // Every child its own task: each large one spreads further, each small one reserves its slots.
       tbb::task_group group;
-      for (uint32_t c = 0; c + 1 < count; ++c) {
-        group.run([&build_child, c, child_region] { build_child(c, child_region); });
-        child_region += 2 * children[c].range.capacity() - 2;
-      }
-      build_child(count - 1, child_region);
+      for (uint32_t c = 0; c + 1 < count; ++c)
+        group.run([this, &children, &sizes, first, c] { sizes[c] = build_child(children[c], first + c, nullptr); });
+      sizes[count - 1] = build_child(children[count - 1], first + count - 1, nullptr);
       group.wait();
     } else {
-      for (uint32_t c = 0; c < count; ++c) {
-        build_child(c, child_region);
-        child_region += 2 * children[c].range.capacity() - 2;
-      }
+      for (uint32_t c = 0; c < count; ++c) sizes[c] = build_child(children[c], first + c, next);
     }
+    SubtreeSize size{count, 0};
+    for (uint32_t c = 0; c < count; ++c) {
+      size.descendants += sizes[c].descendants;
+      size.references += sizes[c].references;
+    }
+    std::construct_at(&slots_[slot], SlotNode{range.bounds, first, static_cast<uint16_t>(count), 0,
+                                              size.descendants, size.references});
+    return size;
+  }
+
+  SubtreeSize build_child(const Child& child, uint32_t slot, uint32_t* next) {
+    if (child.leaf) return make_leaf(child.range, slot);
+    if (next == nullptr) return build_subtree(child.range, slot, child.depth);
+    return build_node(child.range, slot, child.depth, next);
   }
 
   // Copies the used slots into a dense node array in depth-first order, children kept contiguous, and
   // writes each leaf's references in the splitter's final order, leaves in depth-first order. A child's
   // positions come before its right siblings', so without spare positions the references are the
-  // splitter's order itself.
-  Bvh compact(uint32_t capacity) const {
+  // splitter's order itself. Every subtree's place follows from its left siblings' sizes, so large
+  // subtrees are copied by parallel tasks.
+  Bvh compact() const {
     Bvh bvh;
     bvh.arity = config_.arity;
-    bvh.nodes.reserve(2 * std::size_t{capacity} - 1);
-    bvh.prim_refs.reserve(capacity);
-    bvh.nodes.push_back({slots_[0].bounds, 0, 0, 0});
-    std::vector<std::pair<uint32_t, uint32_t>> stack{{0u, 0u}};  // (slot, index in bvh.nodes)
-    while (!stack.empty()) {
-      const auto [slot, index] = stack.back();
-      stack.pop_back();
-      const SlotNode& s = slots_[slot];
-      Node& node = bvh.nodes[index];
-      if (s.child_count == 0) {
-        node.first = static_cast<uint32_t>(bvh.prim_refs.size());
-        node.prim_count = static_cast<uint16_t>(s.prim_count);
-        for (uint32_t i = s.first; i < s.first + s.prim_count; ++i) bvh.prim_refs.push_back(splitter_.prim_id(i));
-        continue;
-      }
-      node.first = static_cast<uint32_t>(bvh.nodes.size());
-      node.child_count = static_cast<uint16_t>(s.child_count);
-      const uint32_t first_child = node.first;  // `node` may dangle once we push
-      for (uint32_t c = 0; c < s.child_count; ++c) bvh.nodes.push_back({slots_[s.first + c].bounds, 0, 0, 0});
-      // Push the right child first so the left subtree is laid out right after the pair.
-      for (uint32_t c = s.child_count; c-- > 0;) stack.emplace_back(s.first + c, first_child + c);
-    }
+    const SlotNode& root = slots_[0];
+    bvh.nodes.resize(std::size_t{root.descendants} + 1);
+    bvh.prim_refs.resize(root.references);
+    bvh.nodes[0].bounds = root.bounds;
+    place(bvh, 0, 0, 1, 0);
     return bvh;
+  }
+
+  // Writes the node of `slot`, whose record is bvh.nodes[index], and its subtree: its children go to
+  // [children, children + k) and their subtrees right after them, its references from `references` on.
+  void place(Bvh& bvh, uint32_t slot, uint32_t index, uint32_t children, uint32_t references) const {
+    const SlotNode& s = slots_[slot];
+    Node& node = bvh.nodes[index];
+    if (s.child_count == 0) {
+      node.first = references;
+      node.prim_count = s.prim_count;
+      for (uint32_t i = 0; i < s.prim_count; ++i) bvh.prim_refs[references + i] = splitter_.prim_id(s.first + i);
+      return;
+    }
+    node.first = children;
+    node.child_count = s.child_count;
+    uint32_t below = children + s.child_count;  // where the next child's descendants start
+    auto place_child = [&](uint32_t c, auto&& run) {
+      const SlotNode& child = slots_[s.first + c];
+      bvh.nodes[children + c].bounds = child.bounds;
+      run(s.first + c, children + c, below, references, child.descendants);
+      below += child.descendants;
+      references += child.references;
+    };
+    // Subtrees of this many nodes or more are copied by a task of their own.
+    constexpr uint32_t kTaskNodes = 4096;
+    if (s.descendants < kTaskNodes) {
+      for (uint32_t c = 0; c < s.child_count; ++c)
+        place_child(c, [&](uint32_t child_slot, uint32_t at, uint32_t grandchildren, uint32_t refs, uint32_t) {
+          place(bvh, child_slot, at, grandchildren, refs);
+        });
+      return;
+    }
+    tbb::task_group group;
+    for (uint32_t c = 0; c < s.child_count; ++c)
+      place_child(c, [&](uint32_t child_slot, uint32_t at, uint32_t grandchildren, uint32_t refs, uint32_t size) {
+        if (size < kTaskNodes) return place(bvh, child_slot, at, grandchildren, refs);
+        group.run([this, &bvh, child_slot, at, grandchildren, refs] { place(bvh, child_slot, at, grandchildren, refs); });
+      });
+    group.wait();
   }
 
   Splitter& splitter_;
   const TopDownConfig& config_;
-  std::unique_ptr<SlotNode[]> slots_;
+  struct FreeStorage {
+    void operator()(SlotNode* p) const { ::operator delete(p); }
+  };
+  std::unique_ptr<SlotNode[], FreeStorage> slots_;
+  std::atomic<uint32_t> next_slot_{1};  // slot 0 is the root's
 };
 
 }  // namespace detail

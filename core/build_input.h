@@ -1,23 +1,24 @@
 #pragma once
-// What a builder gets: per-primitive bounds and centroids, plus the triangles for builders that clip
+// What a builder gets: per-primitive bounds, plus the triangles for builders that clip
 // them (spatial splits). Computed once per scene and shared by every builder of a run.
 
 #include <span>
-#include <vector>
 
 #include "core/aabb.h"
+#include "core/huge_pages.h"
 #include "core/triangle.h"
 
 namespace sahbench {
 
 struct BuildInput {
-  std::vector<Aabb> bounds;
-  std::vector<Vec3> centroids;
+  /// On huge pages, written once, in parallel, by from_triangles (core/huge_pages.h).
+  HugePageArray<Aabb> bounds;
   std::span<const Triangle> triangles;
 
   std::size_t size() const { return bounds.size(); }
 
-  /// Bounds and centroids of each triangle (in parallel for large inputs).
+  /// Bounds of each triangle (in parallel for large inputs). Builders bin the centres of these boxes,
+  /// not the triangles' centroids, as Wald 2007 and Embree do.
   static BuildInput from_triangles(std::span<const Triangle> triangles);
 };
 

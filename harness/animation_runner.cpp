@@ -21,7 +21,7 @@
 #include "harness/embree_trace.h"
 #include "harness/environment.h"
 #include "harness/layout.h"
-#include "harness/memory_tracker.h"
+#include "core/memory_tracker.h"
 #include "harness/ray_sets.h"
 #include "harness/reference.h"
 #include "harness/result_row.h"

@@ -18,7 +18,7 @@
 #include "harness/embree_scene.h"
 #include "harness/environment.h"
 #include "harness/layout.h"
-#include "harness/memory_tracker.h"
+#include "core/memory_tracker.h"
 #include "harness/ray_sets.h"
 #include "harness/timing.h"
 #include "scenes/scene.h"

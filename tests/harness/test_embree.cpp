@@ -440,7 +440,7 @@ TEST(HarnessEmbreeBvhParams, RegistryDeclaresParametersAndRejectsBadOnes) {
   EXPECT_THROW(build({{"sah_block", "3"}}), Error);
   EXPECT_NO_THROW(build({{"sah_block", "4"}}));
 
-  BuildInput bounds_only = input;
+  BuildInput bounds_only = BuildInput::from_triangles(tris);
   bounds_only.triangles = {};
   EmbreeBvhParams high;
   high.quality = EmbreeQuality::kHigh;

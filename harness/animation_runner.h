@@ -4,7 +4,7 @@
 // frame of the configured times, each of our builders gives two kinds of cells:
 //   builder "refit(NAME)": NAME's tree built on the first frame, refitted (builders/refit.h) to this
 //       frame's triangles; build_ms is the refit alone;
-//   builder "NAME": a fresh build on this frame's triangles (bounds and centroids included, as in a
+//   builder "NAME": a fresh build on this frame's triangles (per-primitive bounds included, as in a
 //       static run);
 // and Embree gives `embree` rows: quality refit is Embree's own refit of its first-frame build (a dynamic
 // scene whose vertex buffer is updated and recommitted; build_ms covers rtcUpdateGeometryBuffer,

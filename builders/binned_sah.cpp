@@ -21,7 +21,7 @@ Bvh build_binned_sah(const BuildInput& input, const BinnedSahParams& params) {
   check_bins(params.bins);
   check_config(params.top_down, "binned_sah");
   check_prim_count(input.size(), "binned_sah");
-  const PrimRefArray refs(input.size());
+  PrimRefArray refs(input.size());
   const NodeRange root = make_prim_refs(input, refs.span());
   BinnedSplitter splitter(refs.span(), params);
   return build_top_down(splitter, params.top_down, root);

@@ -6,8 +6,6 @@
 #include <cmath>
 #include <numeric>
 
-#include "builders/top_down.h"
-
 namespace sahbench {
 
 namespace {
@@ -72,7 +70,9 @@ class KeyPass {
   }
 
  private:
-  // Levels whose nodes visit their children as parallel tasks: up to 8^3 tasks in an 8-wide tree.
+  // Levels whose nodes visit their children as parallel tasks: at most 8 + 64 + 512 tasks in an 8-wide
+  // tree, enough to balance 2 to 16 threads; below them a task's subtree is ~1/512 of the tree (only speed
+  // depends on it).
   static constexpr uint32_t kParallelDepth = 3;
 
   // Largest key first; stable, so equal keys keep the builder's order.

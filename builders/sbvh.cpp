@@ -598,12 +598,12 @@ class SbvhSplitter {
     for (uint32_t i = 0; i < n; ++i) {
       const Placement& p = placed[i];
       if (p.side != Side::kRight) {
-        refs_[l++] = {p.left, old[i].id, 0};
+        std::construct_at(&refs_[l++], PrimRef{p.left, old[i].id, 0});
         left_bounds.extend(p.left);
         left_centroids.extend(p.left.center());
       }
       if (p.side != Side::kLeft) {
-        refs_[r++] = {p.right, old[i].id, 0};
+        std::construct_at(&refs_[r++], PrimRef{p.right, old[i].id, 0});
         right_bounds.extend(p.right);
         right_centroids.extend(p.right.center());
       }
@@ -675,7 +675,7 @@ Bvh build_sbvh(const BuildInput& input, const SbvhParams& params) {
   if (n + spare > kMaxCapacity)
     throw Error(std::string(kName) + ": " + std::to_string(n) + " primitives with max_dup = " +
                 std::to_string(params.max_dup) + " exceed the limit of " + std::to_string(kMaxCapacity) + " references");
-  const PrimRefArray refs(n + spare);
+  PrimRefArray refs(n + spare);
   NodeRange root = make_prim_refs(input, refs.span().first(n));
   root.spare = static_cast<uint32_t>(spare);
   SbvhSplitter splitter(refs.span(), input.triangles, params, root.bounds.half_area());

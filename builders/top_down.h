@@ -10,20 +10,20 @@
 // slots from a shared atomic counter; a task that builds a smaller subtree alone first reserves from it
 // the most slots the subtree can need and then hands them out in order. A subtree over n primitives has
 // at most 2n - 1 nodes (a full binary tree with at most n leaves), so 2n - 2 slots hold its
-// descendants, and the buffer is never larger than 2n - 1 for the root. A wide node with k children
+// descendants, and the slots taken never exceed the buffer's 2n - 1. A wide node with k children
 // uses fewer. Slots are written in order from the front of each reservation, so the pages of the unused
 // rest are never touched (on the 1M-triangle terrain the 244K nodes of the 8-wide tree use 10 MB of the
 // buffer's 80).
 //
 // Builders that split primitives (SBVH) add references as they go. Each node then owns `spare` reference
 // positions after its range, which its splits may fill and which its partition hands on to the children;
-// a node's subtree ends with at most size + spare references, and its slot reservation is sized for that many.
-// Positions left unused are holes in the reference order, and compact() gathers the leaves' references.
+// a node's subtree ends with at most size + spare references, and its slot reservation is sized for that
+// many. Positions left unused are holes in the reference order, and compact() gathers the leaves' references.
 
 #include <tbb/task_group.h>
 
-#include <atomic>
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cassert>
 #include <cstdint>
@@ -39,9 +39,6 @@
 #include "core/sah.h"
 
 namespace sahbench {
-
-/// Most children a node of the common format has (core/bvh.h allows 2 to 8).
-inline constexpr uint32_t kMaxArity = 8;
 
 struct TopDownConfig {
   uint32_t min_leaf = 1;  ///< nodes with this many primitives or fewer become leaves
@@ -136,6 +133,7 @@ class TopDownBuilder {
 
   Bvh build(const NodeRange& root) {
     build_subtree(root, 0, 0);
+    assert(next_slot_.load() <= 2 * root.capacity() - 1);
     return compact();
   }
 
@@ -191,8 +189,12 @@ class TopDownBuilder {
   // descendants' slots and builds them from that reservation.
   SubtreeSize build_subtree(const NodeRange& range, uint32_t slot, uint32_t depth) {
     if (range.size() >= kSpawnThreshold) return build_node(range, slot, depth, nullptr);
-    uint32_t next = take_slots(2 * range.capacity() - 2, nullptr);
-    return build_node(range, slot, depth, &next);
+    const uint32_t reserved = 2 * range.capacity() - 2;
+    uint32_t next = take_slots(reserved, nullptr);
+    [[maybe_unused]] const uint32_t end = next + reserved;
+    const SubtreeSize size = build_node(range, slot, depth, &next);
+    assert(next <= end);
+    return size;
   }
 
   // Builds the node for `range` into `slot`, taking its children's slots from `next` (see take_slots).
@@ -232,7 +234,8 @@ class TopDownBuilder {
       // Every child its own task: each large one spreads further, each small one reserves its slots.
       tbb::task_group group;
       for (uint32_t c = 0; c + 1 < count; ++c)
-        group.run([this, &children, &sizes, first, c] { sizes[c] = build_child(children[c], first + c, nullptr); });
+        group.run(
+            [this, &children, &sizes, first, c] { sizes[c] = build_child(children[c], first + c, nullptr); });
       sizes[count - 1] = build_child(children[count - 1], first + count - 1, nullptr);
       group.wait();
     } else {
@@ -278,34 +281,31 @@ class TopDownBuilder {
     if (s.child_count == 0) {
       node.first = references;
       node.prim_count = s.prim_count;
-      for (uint32_t i = 0; i < s.prim_count; ++i) bvh.prim_refs[references + i] = splitter_.prim_id(s.first + i);
+      for (uint32_t i = 0; i < s.prim_count; ++i)
+        bvh.prim_refs[references + i] = splitter_.prim_id(s.first + i);
       return;
     }
     node.first = children;
     node.child_count = s.child_count;
-    uint32_t below = children + s.child_count;  // where the next child's descendants start
-    auto place_child = [&](uint32_t c, auto&& run) {
-      const SlotNode& child = slots_[s.first + c];
-      bvh.nodes[children + c].bounds = child.bounds;
-      run(s.first + c, children + c, below, references, child.descendants);
-      below += child.descendants;
-      references += child.references;
-    };
-    // Subtrees of this many nodes or more are copied by a task of their own.
+    // Subtrees of this many nodes or more are copied by a task of their own: a few tens of
+    // microseconds of copying, as kSpawnThreshold's primitives are of building (only speed depends on it).
     constexpr uint32_t kTaskNodes = 4096;
-    if (s.descendants < kTaskNodes) {
-      for (uint32_t c = 0; c < s.child_count; ++c)
-        place_child(c, [&](uint32_t child_slot, uint32_t at, uint32_t grandchildren, uint32_t refs, uint32_t) {
+    const bool spawn = s.descendants >= kTaskNodes;
+    tbb::task_group group;
+    uint32_t below = children + s.child_count;  // where the next child's descendants start
+    for (uint32_t c = 0; c < s.child_count; ++c) {
+      const uint32_t child_slot = s.first + c, at = children + c, grandchildren = below, refs = references;
+      const SlotNode& child = slots_[child_slot];
+      bvh.nodes[at].bounds = child.bounds;
+      if (spawn && child.descendants >= kTaskNodes)
+        group.run([this, &bvh, child_slot, at, grandchildren, refs] {
           place(bvh, child_slot, at, grandchildren, refs);
         });
-      return;
+      else
+        place(bvh, child_slot, at, grandchildren, refs);
+      below += child.descendants;
+      references += child.references;
     }
-    tbb::task_group group;
-    for (uint32_t c = 0; c < s.child_count; ++c)
-      place_child(c, [&](uint32_t child_slot, uint32_t at, uint32_t grandchildren, uint32_t refs, uint32_t size) {
-        if (size < kTaskNodes) return place(bvh, child_slot, at, grandchildren, refs);
-        group.run([this, &bvh, child_slot, at, grandchildren, refs] { place(bvh, child_slot, at, grandchildren, refs); });
-      });
     group.wait();
   }
 

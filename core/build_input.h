@@ -11,7 +11,7 @@
 namespace sahbench {
 
 struct BuildInput {
-  /// On huge pages, written once, in parallel, by from_triangles (core/huge_pages.h).
+  /// Written once, in parallel, by from_triangles; on huge pages from 2 MiB (core/huge_pages.h).
   HugePageArray<Aabb> bounds;
   std::span<const Triangle> triangles;
 

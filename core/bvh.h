@@ -36,6 +36,8 @@ struct Bvh {
   friend bool operator==(const Bvh&, const Bvh&) = default;
 };
 
+/// Most children a node of the common format has (Bvh::arity is 2, 4 or 8).
+inline constexpr uint32_t kMaxArity = 8;
 /// Largest leaf a Node can describe (prim_count is 16 bits).
 inline constexpr uint32_t kMaxLeafPrims = 0xFFFFu;
 /// Deepest tree any kernel in this project traverses with a fixed-size stack. Builders check it;

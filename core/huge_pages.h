@@ -11,7 +11,7 @@
 // leaves them as uninitialised as `new T[n]` would, which saves zeroing arrays that are written in full
 // right after. Mapped arrays count as heap in the harness's tracker (core/memory_tracker.h).
 //
-// Builders use it for their large temporary arrays too (primitive bounds, references, node slots), as
+// Builders use it for their large per-primitive arrays too (bounds and references), as
 // Embree's builders get theirs from os_malloc: each 2 MiB page costs the kernel one page fault instead
 // of 512, and on the 1M-triangle terrain page faults had been a tenth of our build's time.
 
@@ -98,7 +98,8 @@ class HugePageArray {
 
  public:
   HugePageArray() = default;
-  explicit HugePageArray(std::size_t size) : data_(size ? HugePageAllocator<T>().allocate(size) : nullptr), size_(size) {}
+  explicit HugePageArray(std::size_t size)
+      : data_(size ? HugePageAllocator<T>().allocate(size) : nullptr), size_(size) {}
   ~HugePageArray() {
     if (data_) HugePageAllocator<T>().deallocate(data_, size_);
   }
@@ -112,11 +113,16 @@ class HugePageArray {
 
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
-  T* data() const { return data_; }
-  T* begin() const { return data_; }
-  T* end() const { return data_ + size_; }
-  T& operator[](std::size_t i) const { return data_[i]; }
-  std::span<T> span() const { return {data_, size_}; }
+  T* data() { return data_; }
+  const T* data() const { return data_; }
+  T* begin() { return data_; }
+  const T* begin() const { return data_; }
+  T* end() { return data_ + size_; }
+  const T* end() const { return data_ + size_; }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
+  std::span<T> span() { return {data_, size_}; }
+  std::span<const T> span() const { return {data_, size_}; }
   operator std::span<const T>() const { return {data_, size_}; }
 
  private:

@@ -22,7 +22,12 @@ bool tracking_enabled() { return detail::g_tracking.load(); }
 int64_t heap_bytes() { return detail::g_heap_bytes.load(); }
 void reset_heap_peak() { detail::g_heap_peak.store(detail::g_heap_bytes.load()); }
 int64_t heap_peak_bytes() { return detail::g_heap_peak.load(); }
-void note_mapped(int64_t bytes) { detail::note_allocation(bytes); }
-void note_unmapped(int64_t bytes) { detail::note_free(bytes); }
+// Only where operator new is counted too, so that tests (no tracking) still see zeros.
+void note_mapped(int64_t bytes) {
+  if (tracking_enabled()) detail::note_allocation(bytes);
+}
+void note_unmapped(int64_t bytes) {
+  if (tracking_enabled()) detail::note_free(bytes);
+}
 
 }  // namespace sahbench

@@ -10,7 +10,7 @@ namespace sahbench {
 
 bool tracking_enabled();
 int64_t heap_bytes();
-/// Starts a new peak window at the current usage; peak_bytes_since_reset() is the most in use since.
+/// Starts a new peak window at the current usage; heap_peak_bytes() is the most in use since.
 void reset_heap_peak();
 int64_t heap_peak_bytes();
 

@@ -110,7 +110,7 @@ class Bvh2Layout final : public CompiledLayout {
   // The same tree with its nodes in depth-first order, each node's children kept together and placed just
   // before the first child's own children, and its references in the order the leaves are met: a ray
   // descending to the nearest leaf then reads nodes that are close in memory, whatever order the builder
-  // wrote them in (the top-down builders fill per-subtree regions, the SBVH another way), so layouts of
+  // wrote them in (the top-down builders hand out slots as their tasks need them), so layouts of
   // the same tree from different builders also trace alike.
   static Bvh depth_first(const Bvh& bvh) {
     Bvh out;

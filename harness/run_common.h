@@ -13,12 +13,12 @@
 #include <vector>
 
 #include "builders/registry.h"
+#include "core/memory_tracker.h"
 #include "harness/config.h"
 #include "harness/csv.h"
 #include "harness/embree_scene.h"
 #include "harness/environment.h"
 #include "harness/layout.h"
-#include "core/memory_tracker.h"
 #include "harness/ray_sets.h"
 #include "harness/timing.h"
 #include "scenes/scene.h"

@@ -51,8 +51,6 @@ inline bool any_hit_in_storage_order(const Bvh& bvh, AnyHitOrder order = AnyHitO
 
 namespace detail {
 
-/// Widest node any kernel here traverses (the common format allows 2..8 children).
-inline constexpr uint32_t kMaxArity = 8;
 
 // Stack bound. Popping an inner node at depth d and pushing its (at most kMaxArity) children leaves at
 // most kMaxArity - 1 entries per level from the root down, and inner nodes lie at depth

@@ -4,6 +4,10 @@
 
 #include <tbb/task_arena.h>
 
+#include <string>
+#include <vector>
+
+#include "builders/binned_sah.h"
 #include "builders/registry.h"
 #include "tests/support/test_scenes.h"
 
@@ -30,6 +34,46 @@ TEST(BuilderDeterminism, SameTreeForAnyThreadCount) {
       EXPECT_TRUE(one == many) << info.name << " differs between 1 and " << threads << " threads";
     }
   }
+}
+
+// Checks the order every top-down build writes its tree in, whichever slots its tasks took while
+// building: each inner node's children side by side, then the first child's subtree, then the second's,
+// and the leaves' references in the order the leaves are met.
+void expect_depth_first(const Bvh& bvh, const std::string& name) {
+  ASSERT_FALSE(bvh.nodes.empty()) << name;
+  uint32_t next_node = 1, next_ref = 0;
+  std::vector<uint32_t> stack{0};
+  while (!stack.empty()) {
+    const Node& node = bvh.nodes[stack.back()];
+    stack.pop_back();
+    if (node.is_leaf()) {
+      ASSERT_EQ(node.first, next_ref) << name;
+      next_ref += node.prim_count;
+      continue;
+    }
+    ASSERT_EQ(node.first, next_node) << name;
+    next_node += node.child_count;
+    for (uint32_t c = node.child_count; c-- > 0;) stack.push_back(node.first + c);
+  }
+  EXPECT_EQ(next_node, bvh.nodes.size()) << name;
+  EXPECT_EQ(next_ref, bvh.prim_refs.size()) << name;
+}
+
+TEST(BuilderLayout, NodesComeOutDepthFirstWithSiblingsTogether) {
+  // 40K triangles give subtrees large enough for the final copy's parallel tasks.
+  const auto tris = test::random_triangles(40000, 5, 100.0f);
+  const BuildInput input = BuildInput::from_triangles(tris);
+  tbb::task_arena arena(4);
+  for (const char* name : {"binned_sah", "sweep_sah", "sbvh"}) {
+    const BuilderInfo& info = find_builder(name);
+    const ParamSet params = resolve_params(info.name, info.params, {});
+    expect_depth_first(arena.execute([&] { return info.build(input, params); }), name);
+  }
+  // The wide builders then reorder each node's children for occlusion rays (builders/child_order.h),
+  // which moves whole subtrees; the wide build itself, before that, is in the same order.
+  BinnedSahParams wide;
+  wide.top_down.arity = 8;
+  expect_depth_first(arena.execute([&] { return build_binned_sah(input, wide); }), "binned SAH, arity 8");
 }
 
 }  // namespace

@@ -6,10 +6,8 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <memory>
 #include <vector>
 
-#include "core/build_input.h"
 #include "core/huge_pages.h"
 #include "tests/support/test_scenes.h"
 #include "tests/traversal/median_builder.h"
@@ -181,27 +179,6 @@ TEST(HugePages, LargeArraysStartOnAHugePageAndSmallOnesOnALine) {
   std::vector<double, HugePageAllocator<double>> copy(1000, 2.5);
   const auto other = copy;
   EXPECT_EQ(other, copy);
-}
-
-TEST(HugePages, ArraysKeepTheirElementsWhenMovedAndBuildInputsUseThem) {
-  HugePageArray<uint64_t> a(kHugePageBytes / sizeof(uint64_t) + 3);
-  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(a.data()) % kHugePageBytes, 0u);
-  for (std::size_t i = 0; i < a.size(); ++i) std::construct_at(&a[i], uint64_t{i} * 7);
-  const uint64_t* data = a.data();
-  HugePageArray<uint64_t> b(std::move(a));
-  EXPECT_TRUE(a.empty());
-  EXPECT_EQ(b.data(), data);
-  HugePageArray<uint64_t> c(5);
-  c = std::move(b);
-  ASSERT_EQ(c.size(), kHugePageBytes / sizeof(uint64_t) + 3);
-  for (std::size_t i = 0; i < c.size(); ++i) ASSERT_EQ(c[i], uint64_t{i} * 7) << i;
-  EXPECT_TRUE(HugePageArray<int>().empty());
-
-  const std::vector<Triangle> tris = {{{0, 0, 0}, {1, 0, 0}, {0, 2, 0}}, {{-1, -1, -1}, {3, 0, 1}, {0, 0, 5}}};
-  const BuildInput input = BuildInput::from_triangles(tris);
-  ASSERT_EQ(input.size(), 2u);
-  EXPECT_EQ(input.bounds[0], tris[0].bounds());
-  EXPECT_EQ(input.bounds[1], tris[1].bounds());
 }
 
 }  // namespace

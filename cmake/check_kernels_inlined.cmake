@@ -1,0 +1,32 @@
+# Fails when a helper of the SIMD wide kernels (traversal/wide_kernels.inl) was compiled out of line.
+# The kernels depend on GCC inlining every helper into the traversal loop; SAHBENCH_KERNEL_INLINE forces
+# it. Without it, a new kernel variant pushed the translation units over GCC's inline-unit-growth limit
+# and the kernels lost 6-15% with nothing else to show for it (issue 4's note, stop 12).
+# Usage: cmake -DNM=nm -DLIBRARY=libsahbench_traversal.a -P check_kernels_inlined.cmake
+execute_process(COMMAND ${NM} -C ${LIBRARY} OUTPUT_VARIABLE symbols RESULT_VARIABLE status)
+if(NOT status EQUAL 0)
+  message(FATAL_ERROR "${NM} -C ${LIBRARY} failed (${status})")
+endif()
+# Functions of the SIMD kernels' namespaces that are meant to be called: the entry points, the
+# per-ray loop body, the benchmark loops and the watertight block test (kept as a call on purpose).
+set(allowed "trace_batch|trace_ray|node_test_loop|block_test_loop|intersect_block_watertight")
+string(REPLACE "\n" ";" lines "${symbols}")
+set(found 0)
+set(offending "")
+foreach(line IN LISTS lines)
+  if(line MATCHES " [tTwW] (.*sahbench::wide_(sse|avx2|avx512)::([A-Za-z_0-9]+).*)$")
+    set(symbol "${CMAKE_MATCH_1}")
+    set(function "${CMAKE_MATCH_3}")
+    math(EXPR found "${found} + 1")
+    if(NOT function MATCHES "^(${allowed})$")
+      string(APPEND offending "  ${symbol}\n")
+    endif()
+  endif()
+endforeach()
+if(found EQUAL 0)
+  message(FATAL_ERROR "no symbol of the SIMD kernels found in ${LIBRARY}: is it the right library?")
+endif()
+if(NOT offending STREQUAL "")
+  message(FATAL_ERROR "kernel helpers compiled out of line (mark them SAHBENCH_KERNEL_INLINE):\n${offending}")
+endif()
+message(STATUS "${found} kernel functions, all entry points")

@@ -29,6 +29,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string_view>
 #include <vector>
@@ -290,15 +291,17 @@ class TopDownBuilder {
     // Subtrees of this many nodes or more are copied by a task of their own: a few tens of
     // microseconds of copying, as kSpawnThreshold's primitives are of building (only speed depends on it).
     constexpr uint32_t kTaskNodes = 4096;
-    const bool spawn = s.descendants >= kTaskNodes;
-    tbb::task_group group;
+    // A group only where a child can be that large (it is never larger than its parent): most nodes are
+    // small, and a task group costs its construction and wait on each.
+    std::optional<tbb::task_group> group;
+    if (s.descendants >= kTaskNodes) group.emplace();
     uint32_t below = children + s.child_count;  // where the next child's descendants start
     for (uint32_t c = 0; c < s.child_count; ++c) {
       const uint32_t child_slot = s.first + c, at = children + c, grandchildren = below, refs = references;
       const SlotNode& child = slots_[child_slot];
       bvh.nodes[at].bounds = child.bounds;
-      if (spawn && child.descendants >= kTaskNodes)
-        group.run([this, &bvh, child_slot, at, grandchildren, refs] {
+      if (child.descendants >= kTaskNodes)
+        group->run([this, &bvh, child_slot, at, grandchildren, refs] {
           place(bvh, child_slot, at, grandchildren, refs);
         });
       else
@@ -306,7 +309,7 @@ class TopDownBuilder {
       below += child.descendants;
       references += child.references;
     }
-    group.wait();
+    if (group) group->wait();
   }
 
   Splitter& splitter_;

@@ -62,9 +62,8 @@ BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNoEpsilonTest>)->Name("ray_triangle
 // The wide kernels' node test (N boxes at once, one node visit) and block test (4 triangles at once),
 // per instruction set available here. Items are node visits, or triangles.
 template <uint32_t N>
-const WideBvh<N>& wide_tree() {
-  static const WideBvh<N> tree = compile_wide<N>(collapse_greedy(binary_tree(kPrims * 16), N), soup(kPrims * 16));
-  return tree;
+WideBvh<N> wide_tree(BlockForm form = BlockForm::kVertices) {
+  return compile_wide<N>(collapse_greedy(binary_tree(kPrims * 16), N), soup(kPrims * 16), form);
 }
 
 // The first `limit` nodes and blocks of a tree, breadth first from the root, copied into arrays for the
@@ -104,7 +103,7 @@ void BM_WideNodeVisit(benchmark::State& state, KernelIsa isa, BoxTestKind box) {
 void BM_WideBlockTest(benchmark::State& state, KernelIsa isa, TriangleTestKind tri) {
   if (!kernel_isa_available(isa)) return state.SkipWithError("ISA not available on this CPU");
   const auto loops = find_wide_bench_loops(isa, 8, {tri, BoxTestKind::kRobust});
-  const auto blocks = wide_parts(wide_tree<8>(), 256).second;
+  const auto blocks = wide_parts(wide_tree<8>(block_form_for(tri)), 256).second;
   const auto rs = wide_rays();
   for (auto _ : state) benchmark::DoNotOptimize(loops.blocks(blocks.data(), blocks.size(), rs.data(), rs.size()));
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * blocks.size() * kBlockWidth * rs.size()));

@@ -26,6 +26,9 @@ class WideLayout final : public CompiledLayout {
         shear_(variant.triangle == TriangleTestKind::kWatertight),
         box_(variant.box),
         stored_order_(stored_order) {
+    if (bvh_.form != block_form_for(variant.triangle))
+      throw Error("layout bvh" + std::to_string(N) + ": blocks compiled in the wrong form for the " +
+                  std::string(to_string(variant.triangle)) + " test");
     closest_ = find_wide_kernel(isa, N, variant, false, false);
     any_ = find_wide_kernel(isa, N, variant, true, false);
     count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
@@ -114,10 +117,13 @@ std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& b
                 " is not available on this CPU or build (auto would pick " +
                 std::string(to_string(preferred_kernel_isa())) + ")");
   const bool stored_order = any_hit_in_storage_order(bvh, spec.variant.any_hit);
+  const BlockForm form = block_form_for(spec.variant.triangle);
   if (width == 4)
-    return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles), triangles.size(), isa, spec.variant, stored_order);
+    return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles, form), triangles.size(), isa, spec.variant,
+                                           stored_order);
   if (width == 8)
-    return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles), triangles.size(), isa, spec.variant, stored_order);
+    return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles, form), triangles.size(), isa, spec.variant,
+                                           stored_order);
   throw Error("no " + std::to_string(width) + "-wide layout");
 }
 

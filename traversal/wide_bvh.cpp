@@ -43,19 +43,26 @@ void set_box(WideNode<N>& node, uint32_t slot, const Aabb& box) {
   }
 }
 
+// Writes triangle t into lane `lane` of `block`, in `form`.
+void set_lane(TriangleBlock& block, uint32_t lane, const Triangle& t, BlockForm form) {
+  const bool edges = form == BlockForm::kEdges;
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    block.v0[axis][lane] = t.v0[axis];
+    block.v1[axis][lane] = edges ? t.v1[axis] - t.v0[axis] : t.v1[axis];
+    block.v2[axis][lane] = edges ? t.v2[axis] - t.v0[axis] : t.v2[axis];
+  }
+}
+
 // Writes the triangles of references [first, first + count) into blocks starting at `block`.
-void fill_blocks(std::span<const uint32_t> refs, std::span<const Triangle> triangles, TriangleBlock* block) {
+void fill_blocks(std::span<const uint32_t> refs, std::span<const Triangle> triangles, BlockForm form,
+                 TriangleBlock* block) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
+  const Triangle unused{{nan, nan, nan}, {nan, nan, nan}, {nan, nan, nan}};
   for (std::size_t i = 0; i < refs.size(); i += kBlockWidth, ++block) {
     for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
       const bool used = i + lane < refs.size();
-      const uint32_t prim = used ? refs[i + lane] : kInvalidPrim;
-      block->prim[lane] = prim;
-      for (uint32_t axis = 0; axis < 3; ++axis) {
-        block->v0[axis][lane] = used ? triangles[prim].v0[axis] : nan;
-        block->v1[axis][lane] = used ? triangles[prim].v1[axis] : nan;
-        block->v2[axis][lane] = used ? triangles[prim].v2[axis] : nan;
-      }
+      block->prim[lane] = used ? refs[i + lane] : kInvalidPrim;
+      set_lane(*block, lane, used ? triangles[refs[i + lane]] : unused, form);
     }
   }
 }
@@ -124,12 +131,17 @@ WideRay make_wide_ray(const Ray& ray, bool shear, BoxTestKind box) {
   return r;
 }
 
+BlockForm block_form_for(TriangleTestKind test) {
+  return test == TriangleTestKind::kWatertight ? BlockForm::kVertices : BlockForm::kEdges;
+}
+
 template <uint32_t N>
-WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
+WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, BlockForm form) {
   if (bvh.arity > N)
     throw Error("layout bvh" + std::to_string(N) + " takes trees of arity " + std::to_string(N) +
                 " or less; this tree has arity " + std::to_string(bvh.arity));
   WideBvh<N> out;
+  out.form = form;
   if (bvh.nodes.empty()) return out;
   for (uint32_t ref : bvh.prim_refs)
     if (ref >= triangles.size())
@@ -197,7 +209,8 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles) {
         node.child[slot] = ref_of[c];
         if (!child.is_leaf()) continue;
         node.count[slot] = blocks_for(child.prim_count);
-        fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count), triangles, &out.block(ref_of[c]));
+        fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count), triangles, form,
+                    &out.block(ref_of[c]));
       }
       out.node(plan[i].ref) = node;
     }
@@ -253,11 +266,7 @@ class WideRefitter {
       for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
         if (block->prim[lane] == kInvalidPrim) continue;
         const Triangle& t = triangles_[block->prim[lane]];
-        for (uint32_t axis = 0; axis < 3; ++axis) {
-          block->v0[axis][lane] = t.v0[axis];
-          block->v1[axis][lane] = t.v1[axis];
-          block->v2[axis][lane] = t.v2[axis];
-        }
+        set_lane(*block, lane, t, wide_.form);
         box.extend(t.bounds());
       }
     }
@@ -285,8 +294,8 @@ void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles) {
   }
 }
 
-template WideBvh<4> compile_wide<4>(const Bvh&, std::span<const Triangle>);
-template WideBvh<8> compile_wide<8>(const Bvh&, std::span<const Triangle>);
+template WideBvh<4> compile_wide<4>(const Bvh&, std::span<const Triangle>, BlockForm);
+template WideBvh<8> compile_wide<8>(const Bvh&, std::span<const Triangle>, BlockForm);
 template void refit_wide<4>(WideBvh<4>&, std::span<const Triangle>);
 template void refit_wide<8>(WideBvh<8>&, std::span<const Triangle>);
 

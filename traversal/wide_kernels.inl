@@ -178,8 +178,8 @@ SAHBENCH_KERNEL_INLINE bool lane_det_ok(float det, float scaled_t) {
 
 // ---------------------------------------------------------------------------------------------------
 // Ray against the four triangles of a block: bit i is set when lane i is hit within [tmin, tmax], with
-// its t, u, v in the arrays. Watertight: Woop et al. 2013 as WatertightTriangleTest; Möller–Trumbore as
-// MollerTrumboreTest with `epsilon`.
+// its t, u, v in the arrays. Watertight: Woop et al. 2013 as WatertightTriangleTest, on blocks in vertex
+// form; Möller–Trumbore as MollerTrumboreTest with `epsilon`, on blocks in edge form (wide_bvh.h).
 
 #if defined(SAHBENCH_WIDE_SCALAR)
 
@@ -230,8 +230,9 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const
   uint32_t mask = 0;
   for (uint32_t i = 0; i < kBlockWidth; ++i) {
     if (b.prim[i] == kInvalidPrim) continue;
-    const float e1x = b.v1[0][i] - b.v0[0][i], e1y = b.v1[1][i] - b.v0[1][i], e1z = b.v1[2][i] - b.v0[2][i];
-    const float e2x = b.v2[0][i] - b.v0[0][i], e2y = b.v2[1][i] - b.v0[1][i], e2z = b.v2[2][i] - b.v0[2][i];
+    // The block is in edge form (BlockForm::kEdges).
+    const float e1x = b.v1[0][i], e1y = b.v1[1][i], e1z = b.v1[2][i];
+    const float e2x = b.v2[0][i], e2y = b.v2[1][i], e2z = b.v2[2][i];
     const float px = r.dir[1] * e2z - r.dir[2] * e2y;
     const float py = r.dir[2] * e2x - r.dir[0] * e2z;
     const float pz = r.dir[0] * e2y - r.dir[1] * e2x;
@@ -343,10 +344,9 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const
                                    float* t_out, float* u_out, float* v_out) {
   const __m128 valid = lanes_valid(b);
   const __m128 v0x = _mm_load_ps(b.v0[0]), v0y = _mm_load_ps(b.v0[1]), v0z = _mm_load_ps(b.v0[2]);
-  const __m128 e1x = _mm_sub_ps(_mm_load_ps(b.v1[0]), v0x), e1y = _mm_sub_ps(_mm_load_ps(b.v1[1]), v0y),
-               e1z = _mm_sub_ps(_mm_load_ps(b.v1[2]), v0z);
-  const __m128 e2x = _mm_sub_ps(_mm_load_ps(b.v2[0]), v0x), e2y = _mm_sub_ps(_mm_load_ps(b.v2[1]), v0y),
-               e2z = _mm_sub_ps(_mm_load_ps(b.v2[2]), v0z);
+  // The block is in edge form (BlockForm::kEdges).
+  const __m128 e1x = _mm_load_ps(b.v1[0]), e1y = _mm_load_ps(b.v1[1]), e1z = _mm_load_ps(b.v1[2]);
+  const __m128 e2x = _mm_load_ps(b.v2[0]), e2y = _mm_load_ps(b.v2[1]), e2z = _mm_load_ps(b.v2[2]);
   const __m128 dx = _mm_set1_ps(r.dir[0]), dy = _mm_set1_ps(r.dir[1]), dz = _mm_set1_ps(r.dir[2]);
   // p = dir x edge2, det = edge1 . p (vec3.h's cross and dot, term for term).
   const __m128 px = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(dz, e2y));
@@ -393,12 +393,10 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, 
       _mm256_xor_si256(_mm256_cmpeq_epi32(prim, _mm256_set1_epi32(-1)), _mm256_set1_epi32(-1)));
   const __m256 v0x = load_pair(b[0].v0[0], b[1].v0[0]), v0y = load_pair(b[0].v0[1], b[1].v0[1]),
                v0z = load_pair(b[0].v0[2], b[1].v0[2]);
-  const __m256 e1x = _mm256_sub_ps(load_pair(b[0].v1[0], b[1].v1[0]), v0x),
-               e1y = _mm256_sub_ps(load_pair(b[0].v1[1], b[1].v1[1]), v0y),
-               e1z = _mm256_sub_ps(load_pair(b[0].v1[2], b[1].v1[2]), v0z);
-  const __m256 e2x = _mm256_sub_ps(load_pair(b[0].v2[0], b[1].v2[0]), v0x),
-               e2y = _mm256_sub_ps(load_pair(b[0].v2[1], b[1].v2[1]), v0y),
-               e2z = _mm256_sub_ps(load_pair(b[0].v2[2], b[1].v2[2]), v0z);
+  const __m256 e1x = load_pair(b[0].v1[0], b[1].v1[0]), e1y = load_pair(b[0].v1[1], b[1].v1[1]),
+               e1z = load_pair(b[0].v1[2], b[1].v1[2]);
+  const __m256 e2x = load_pair(b[0].v2[0], b[1].v2[0]), e2y = load_pair(b[0].v2[1], b[1].v2[1]),
+               e2z = load_pair(b[0].v2[2], b[1].v2[2]);
   const __m256 dx = _mm256_set1_ps(r.dir[0]), dy = _mm256_set1_ps(r.dir[1]), dz = _mm256_set1_ps(r.dir[2]);
   const __m256 px = _mm256_sub_ps(_mm256_mul_ps(dy, e2z), _mm256_mul_ps(dz, e2y));
   const __m256 py = _mm256_sub_ps(_mm256_mul_ps(dz, e2x), _mm256_mul_ps(dx, e2z));

@@ -202,8 +202,10 @@ TEST(Layouts, RefitLayoutsMatchBruteForceOnDeformedGeometry) {
     std::vector<std::string> specs{"bvh2", "bvh2_packed"};
     if (arity > 2) {
       specs.clear();
+      // The robust default (blocks of vertices) and Möller–Trumbore (blocks of edges, wide_bvh.h).
       for (KernelIsa isa : {KernelIsa::kScalar, best_kernel_isa()})
-        specs.push_back("bvh" + std::to_string(arity) + ":isa=" + std::string(to_string(isa)));
+        for (const char* tri : {"watertight", "mt0"})
+          specs.push_back("bvh" + std::to_string(arity) + ":tri=" + tri + ",isa=" + std::string(to_string(isa)));
     }
     for (const std::string& spec : specs) {
       SCOPED_TRACE(spec);

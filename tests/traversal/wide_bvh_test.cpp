@@ -103,6 +103,54 @@ TEST(WideBvh, TreeThatIsOneLeafGetsARootWithOneLeafSlot) {
   EXPECT_EQ(wide.bytes(), sizeof(WideNode<8>) + sizeof(TriangleBlock));
 }
 
+// In edge form a block holds v0 and the edges v1 - v0, v2 - v0 as the Möller–Trumbore test computes
+// them, bit for bit, at compile time and after a refit; in vertex form the vertices themselves.
+TEST(WideBvh, BlocksHoldVerticesOrTheEdgesTheTriangleTestReads) {
+  const auto scene = test::random_triangles(300, 5);
+  auto moved = scene;
+  for (Triangle& t : moved) t = {t.v1 * 1.5f, t.v2 - Vec3{0.25f, 0.0f, 1.0f}, t.v0 + Vec3{3.0f, 1.0f, 0.5f}};
+  auto check = [](const WideBvh<4>& wide, const std::vector<Triangle>& tris) {
+    std::size_t lanes = 0;
+    std::vector<uint32_t> stack{0};  // every node, and through its leaf slots every block
+    while (!stack.empty()) {
+      const WideNode<4>& node = wide.node(stack.back());
+      stack.pop_back();
+      for (uint32_t i = 0; i < 4; ++i) {
+        if (node.count[i] == 0) {
+          if (node.child[i] != 0) stack.push_back(node.child[i]);
+          continue;
+        }
+        for (uint32_t b = 0; b < node.count[i]; ++b) {
+          const TriangleBlock& block = wide.block(node.child[i], b);
+          for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
+            if (block.prim[lane] == kInvalidPrim) continue;
+            const Triangle& t = tris[block.prim[lane]];
+            const bool edges = wide.form == BlockForm::kEdges;
+            for (uint32_t a = 0; a < 3; ++a) {
+              ASSERT_EQ(block.v0[a][lane], t.v0[a]);
+              ASSERT_EQ(block.v1[a][lane], edges ? t.v1[a] - t.v0[a] : t.v1[a]);
+              ASSERT_EQ(block.v2[a][lane], edges ? t.v2[a] - t.v0[a] : t.v2[a]);
+            }
+            ++lanes;
+          }
+        }
+      }
+    }
+    EXPECT_EQ(lanes, tris.size());
+  };
+  for (BlockForm form : {BlockForm::kVertices, BlockForm::kEdges}) {
+    SCOPED_TRACE(form == BlockForm::kEdges ? "edges" : "vertices");
+    WideBvh<4> wide = compile_wide<4>(test::build_median_bvh(scene, 4, 4), scene, form);
+    EXPECT_EQ(wide.form, form);
+    check(wide, scene);
+    refit_wide(wide, moved);
+    check(wide, moved);
+  }
+  EXPECT_EQ(block_form_for(TriangleTestKind::kWatertight), BlockForm::kVertices);
+  EXPECT_EQ(block_form_for(TriangleTestKind::kMollerTrumbore), BlockForm::kEdges);
+  EXPECT_EQ(block_form_for(TriangleTestKind::kMollerTrumboreNoEpsilon), BlockForm::kEdges);
+}
+
 // The node test of every instruction set computes ray_box.h's entry distances bit for bit, for each box
 // test: the micro-benchmark loop returns the sum over nodes and rays of the hit mask plus child 0's entry
 // distance, which is summed here from the scalar box tests, child by child. (Hits alone would not tell a

@@ -150,8 +150,8 @@ SbvhParams sbvh_params(const ParamSet& p) {
 BuilderInfo sbvh_info() {
   auto params = top_down_params();
   const SbvhParams defaults;
-  // alpha and max_dup as doubles, so the CSV shows 1e-05 and 0.3 rather than their float roundings.
-  constexpr double kDefaultAlpha = 1e-5, kDefaultNodeOverlap = 0.1, kDefaultMaxDup = 0.3;
+  // alpha and max_dup as doubles, so the CSV shows 1e-05 and 0.5 rather than their float roundings.
+  constexpr double kDefaultAlpha = 1e-5, kDefaultNodeOverlap = 0.1, kDefaultMaxDup = 0.5;
   static_assert(float(kDefaultAlpha) == SbvhParams{}.alpha && float(kDefaultNodeOverlap) == SbvhParams{}.node_overlap &&
                 float(kDefaultMaxDup) == SbvhParams{}.max_dup);
   params.insert(params.begin(),

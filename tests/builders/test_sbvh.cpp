@@ -51,10 +51,10 @@ TEST(Sbvh, NeedlesSameHitsAsBruteForceWithSplitsWithinBudget) {
   const ValidationReport report = validate(sbvh, std::span<const Triangle>(tris));
   ASSERT_TRUE(report.ok()) << report.summary();
   EXPECT_TRUE(test::leaves_hold_parts_of_their_triangles(sbvh, tris));
-  // Spatial splits happened, within the default budget of 0.3 n extra references, and paid off; more
+  // Spatial splits happened, within the default budget of 0.5 n extra references, and paid off; more
   // so with a larger budget (these needles overlap so much that the default budget runs out early).
   EXPECT_GT(sbvh.prim_refs.size(), tris.size());
-  EXPECT_LE(sbvh.prim_refs.size(), static_cast<std::size_t>(std::floor(1.3 * double(tris.size()))));
+  EXPECT_LE(sbvh.prim_refs.size(), static_cast<std::size_t>(std::floor(1.5 * double(tris.size()))));
   const SahCost cost;
   EXPECT_LT(sah_cost(sbvh, cost), 0.95 * sah_cost(binned, cost));
   EXPECT_LT(sah_cost(build("sbvh", tris, {{"max_dup", "1"}}), cost), 0.75 * sah_cost(binned, cost));

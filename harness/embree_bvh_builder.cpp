@@ -306,15 +306,16 @@ Bvh build_embree_bvh(const BuildInput& input, const EmbreeBvhParams& params) {
 
 static_assert(static_cast<int>(EmbreeQuality::kLow) == 0 && static_cast<int>(EmbreeQuality::kMedium) == 1 &&
                   static_cast<int>(EmbreeQuality::kHigh) == 2,
-              "the quality parameter's values 0, 1, 2 are EmbreeQuality's");
+              "the quality parameter's choices low, medium, high are EmbreeQuality's values 0, 1, 2");
 
 void register_embree_builders() {
   for (const auto& b : builders())
     if (b.name == kBuilderName) return;
   const EmbreeBvhParams defaults;
   std::vector<ParamSpec> params = {
-      {"quality", ParamType::kInt, double(static_cast<int>(defaults.quality)), 0, 2,
-       "0: low (Morton codes), 1: medium (binned SAH), 2: high (binned SAH with spatial splits)"},
+      // Named as for the `embree` builder (rtcCommitScene), so one config can ask both for "high".
+      choice_param("quality", {"low", "medium", "high"}, static_cast<uint32_t>(defaults.quality),
+                   "low (Morton codes), medium (binned SAH), high (binned SAH with spatial splits)"),
       {"min_leaf", ParamType::kInt, double(defaults.min_leaf), 1, kEmbreeMaxLeafPrims,
        "minLeafSize: nodes with this many primitives or fewer become leaves"},
       {"max_leaf", ParamType::kInt, double(defaults.max_leaf), 1, kEmbreeMaxLeafPrims,

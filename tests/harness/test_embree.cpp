@@ -313,12 +313,14 @@ TEST(HarnessEmbreeIsa, InferredIsaMatchesEmbreesVerboseReport) {
 // ---------------------------------------------------------------------------------------------------
 // Embree's generic builder writing the common format
 
+constexpr const char* kQualityNames[] = {"low", "medium", "high"};
+
 class HarnessEmbreeBvh : public ::testing::TestWithParam<int> {
  protected:
   static void SetUpTestSuite() { register_embree_builders(); }
   static ParamSet params(ParamOverrides extra = {}) {
     const BuilderInfo& info = find_builder("embree_bvh");
-    extra.emplace_back("quality", std::to_string(GetParam()));
+    extra.emplace_back("quality", kQualityNames[GetParam()]);
     return resolve_params(info.name, info.params, extra);
   }
 };
@@ -383,7 +385,7 @@ TEST_P(HarnessEmbreeBvh, LeafSizesRespectedAndTreesValidUnderAnyThreadLimit) {
       ASSERT_TRUE(report.ok()) << report.summary();
       const BvhStats stats = compute_stats(bvh, tris.size(), sah_cost_of(p));
       EXPECT_LE(stats.max_leaf_size, p.get_uint("max_leaf"));
-      std::cout << "[ embree   ] quality " << GetParam() << " min_leaf " << min_leaf << " max_leaf " << max_leaf
+      std::cout << "[ embree   ] quality " << kQualityNames[GetParam()] << " min_leaf " << min_leaf << " max_leaf " << max_leaf
                 << ", " << threads << " thread(s): leaves " << stats.leaves << ", mean leaf " << stats.mean_leaf_size
                 << ", sah " << stats.sah_cost << "\n";
     }
@@ -394,7 +396,7 @@ TEST_P(HarnessEmbreeBvh, LeafSizesRespectedAndTreesValidUnderAnyThreadLimit) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Qualities, HarnessEmbreeBvh, ::testing::Values(0, 1, 2),
-                         [](const auto& info) { return std::string(info.param == 0 ? "low" : info.param == 1 ? "medium" : "high"); });
+                         [](const auto& info) { return std::string(kQualityNames[info.param]); });
 
 TEST(HarnessEmbreeBvhSpatial, SplitsAddReferencesAndKeepTreesCorrect) {
   // Long diagonal needles: their boxes overlap everything, the case spatial splits exist for.
@@ -431,6 +433,10 @@ TEST(HarnessEmbreeBvhParams, RegistryDeclaresParametersAndRejectsBadOnes) {
   const ParamSet p = resolve_params(info.name, info.params, {{"c_trav", "2"}, {"c_isect", "3"}});
   EXPECT_EQ(sah_cost_of(p), (SahCost{2.0f, 3.0f}));
   EXPECT_THROW(resolve_params(info.name, info.params, {{"quality", "3"}}), Error);
+  EXPECT_THROW(resolve_params(info.name, info.params, {{"quality", "best"}}), Error);
+  // Named as the embree builder's quality, and written so in the CSV.
+  EXPECT_EQ(resolve_params(info.name, info.params, {{"quality", "high"}}).get_choice("quality"), "high");
+  EXPECT_NE(resolve_params(info.name, info.params, {}).to_string().find("quality=medium"), std::string::npos);
   EXPECT_THROW(resolve_params(info.name, info.params, {{"max_leaf", "33"}}), Error);
 
   const auto tris = test::random_triangles(100, 9);

@@ -552,6 +552,18 @@ SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t 
     }
     return {node.child[first], node.count[first], t_entry[first]};
   }
+  // Two children, the most common case after one: the nearer goes on, the other on the stack (ties to
+  // the higher slot, as the keys below order them).
+  const uint32_t rest = mask & (mask - 1);
+  if ((rest & (rest - 1)) == 0) {
+    const uint32_t second = static_cast<uint32_t>(__builtin_ctz(rest));
+    const bool second_first = t_entry[second] <= t_entry[first];
+    const uint32_t near = second_first ? second : first, far = second_first ? first : second;
+    prefetch_slot<N>(arena, node.child[near], node.count[near]);
+    prefetch_slot<N>(arena, node.child[far], node.count[far]);
+    stack[size++] = {node.child[far], node.count[far], t_entry[far]};
+    return {node.child[near], node.count[near], t_entry[near]};
+  }
   // All places first, with two vector stores (a fill of the places left after the loop became a call
   // to memset, with a vzeroupper, on the way to the next node).
   uint64_t keys[N < 4 ? 4 : N];

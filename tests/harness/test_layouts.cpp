@@ -383,6 +383,32 @@ TEST(Layouts, WideLayoutsRejectWiderTreesAndReportTheirIsa) {
   EXPECT_GT(compiled->bytes(), 0u);
 }
 
+// On a binary tree the wide kernels take the binary kernel's path: the same nodes in the same order
+// (nearest first, ties to the higher slot), so the same counts, for every box and triangle test. A
+// change to the order of one kernel (descend()'s shortcuts) and not the other fails here.
+TEST(Layouts, WideKernelsVisitTheBinaryKernelsNodesOnABinaryTree) {
+  const auto tris = test::random_triangles(3000, 21);
+  const BuilderInfo& info = find_builder("binned_sah");
+  const Bvh binary = info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
+  auto rays = test::random_rays(tris, 2000, 5);
+  for (std::size_t i = 0; i < rays.size(); i += 7) rays[i].dir[i % 3] = -0.0f;  // ties between boxes
+  for (const char* variant : {"tri=watertight,box=robust", "tri=mt0,box=fma", "tri=mt,box=fast"}) {
+    SCOPED_TRACE(variant);
+    const auto reference = compile_layout(std::string("bvh2:") + variant, binary, tris);
+    const TraceCounts closest = reference->count_closest(rays), any = reference->count_any(rays);
+    ASSERT_GT(closest.nodes_visited, 2 * rays.size());
+    for (const char* width : {"bvh4:", "bvh8:"}) {
+      SCOPED_TRACE(width);
+      const auto wide = compile_layout(std::string(width) + variant + ",anyhit=nearest", binary, tris);
+      const TraceCounts c = wide->count_closest(rays), a = wide->count_any(rays);
+      EXPECT_EQ(c.nodes_visited, closest.nodes_visited);
+      EXPECT_EQ(c.prims_tested, closest.prims_tested);
+      EXPECT_EQ(a.nodes_visited, any.nodes_visited);
+      EXPECT_EQ(a.prims_tested, any.prims_tested);
+    }
+  }
+}
+
 TEST(Layouts, WideRaySetupHasTheScalarWatertightShear) {
   // make_wide_ray picks the shear axes without branches; it must agree with watertight_shear bit for bit
   // (the kernels' hits are compared with the scalar test's), ties and signed zeros included.

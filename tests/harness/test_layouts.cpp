@@ -409,6 +409,32 @@ TEST(Layouts, WideKernelsVisitTheBinaryKernelsNodesOnABinaryTree) {
   }
 }
 
+// On a wide tree, the wide kernels' any hit visits the nodes that bvh2_traversal.h's visits, in every
+// child order: the two implement each order the same way, and a change to one alone fails here (the
+// order decides which nodes are visited before the first hit).
+TEST(Layouts, WideAnyHitVisitsTheReferenceTraversalsNodesInEveryOrder) {
+  const auto tris = test::random_triangles(3000, 23);
+  const BuilderInfo& info = find_builder("wide_binned_sah");
+  auto rays = test::random_rays(tris, 2000, 6);
+  for (std::size_t i = 0; i < rays.size(); i += 7) rays[i].dir[i % 3] = -0.0f;
+  for (uint32_t arity : {4u, 8u}) {
+    const Bvh wide = info.build(BuildInput::from_triangles(tris),
+                                resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
+    for (AnyHitOrder order : {AnyHitOrder::kAuto, AnyHitOrder::kNearest, AnyHitOrder::kStored}) {
+      const std::string spec = "bvh" + std::to_string(arity) + ":anyhit=" + std::string(to_string(order)) + ",isa=scalar";
+      SCOPED_TRACE(spec);
+      TraversalCounters reference;
+      std::size_t occluded = 0;
+      for (const Ray& ray : rays) occluded += any_hit_counted(wide, tris, ray, reference, order);
+      ASSERT_GT(occluded, rays.size() / 10);
+      const TraceCounts counts = compile_layout(spec, wide, tris)->count_any(rays);
+      // Nodes only: the reference counts a leaf's primitives whole, the kernels the blocks they tested
+      // before the first hit.
+      EXPECT_EQ(counts.nodes_visited, reference.inner_visits + reference.leaf_visits);
+    }
+  }
+}
+
 TEST(Layouts, WideRaySetupHasTheScalarWatertightShear) {
   // make_wide_ray picks the shear axes without branches; it must agree with watertight_shear bit for bit
   // (the kernels' hits are compared with the scalar test's), ties and signed zeros included.

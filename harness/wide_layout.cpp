@@ -19,13 +19,14 @@ constexpr std::size_t kWideChunk = 256;
 template <uint32_t N>
 class WideLayout final : public CompiledLayout {
  public:
-  WideLayout(WideBvh<N> bvh, std::size_t triangle_count, KernelIsa isa, const KernelVariant& variant, bool stored_order)
+  WideLayout(WideBvh<N> bvh, std::size_t triangle_count, KernelIsa isa, const KernelVariant& variant,
+             AnyHitOrder any_hit_order)
       : bvh_(std::move(bvh)),
         triangle_count_(triangle_count),
         isa_(isa),
         shear_(variant.triangle == TriangleTestKind::kWatertight),
         box_(variant.box),
-        stored_order_(stored_order) {
+        any_hit_order_(any_hit_order) {
     if (bvh_.form != block_form_for(variant.triangle))
       throw Error("layout bvh" + std::to_string(N) + ": blocks compiled in the wrong form for the " +
                   std::string(to_string(variant.triangle)) + " test");
@@ -73,7 +74,7 @@ class WideLayout final : public CompiledLayout {
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
         make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
-        kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, nullptr, nullptr, nullptr, stored_order_}, i);
+        kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, nullptr, nullptr, nullptr, any_hit_order_}, i);
       }
     });
   }
@@ -89,7 +90,7 @@ class WideLayout final : public CompiledLayout {
         const std::size_t n = std::min(kWideChunk, end - i);
         make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
         WideCounts c;
-        kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, hits.data(), occluded.data(), &c, stored_order_});
+        kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, hits.data(), occluded.data(), &c, any_hit_order_});
         sum.rays += c.rays;
         sum.nodes_visited += c.inner_visits + c.leaf_visits;
         sum.prims_tested += c.prim_tests;
@@ -103,7 +104,7 @@ class WideLayout final : public CompiledLayout {
   KernelIsa isa_;
   bool shear_;  // the rays need the watertight shear (make_wide_ray)
   BoxTestKind box_;
-  bool stored_order_;  // any hit in slot order (bvh2_traversal.h: any_hit_in_storage_order)
+  AnyHitOrder any_hit_order_;  // resolved (bvh2_traversal.h: resolve_any_hit_order)
   WideKernel closest_ = nullptr, any_ = nullptr, count_closest_ = nullptr, count_any_ = nullptr;
 };
 
@@ -116,14 +117,14 @@ std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& b
     throw Error("layout '" + spec.text() + "': isa " + std::string(to_string(isa)) +
                 " is not available on this CPU or build (auto would pick " +
                 std::string(to_string(preferred_kernel_isa())) + ")");
-  const bool stored_order = any_hit_in_storage_order(bvh, spec.variant.any_hit);
+  const AnyHitOrder any_hit_order = resolve_any_hit_order(bvh, spec.variant.any_hit);
   const BlockForm form = block_form_for(spec.variant.triangle);
   if (width == 4)
     return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles, form), triangles.size(), isa, spec.variant,
-                                           stored_order);
+                                           any_hit_order);
   if (width == 8)
     return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles, form), triangles.size(), isa, spec.variant,
-                                           stored_order);
+                                           any_hit_order);
   throw Error("no " + std::to_string(width) + "-wide layout");
 }
 

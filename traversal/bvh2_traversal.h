@@ -3,6 +3,7 @@
 // The ray/box and ray/triangle tests are template parameters, so each combination is its own kernel
 // with no indirect calls, and the statistics kernels are separate instantiations of the same body.
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 
@@ -38,15 +39,19 @@ struct TraversalCounters {
   friend bool operator==(const TraversalCounters&, const TraversalCounters&) = default;
 };
 
-/// Whether any hit visits a node's children in storage order rather than nearest first. `order` kAuto:
-/// on wide trees (arity above 2), whose builders store first the children likeliest to hold an occluder
-/// per unit of cost (builders/child_order.h); the 8-wide kernels' shadow rays gained that way (no sort on
-/// the way to the next node, and a better order than the distance for occlusion), on Sponza most.
-/// Binary trees stay nearest first: storage order cost their shadow rays 10 to 16% (measured against
-/// Embree in one run; notes of issue 4). The layout option anyhit=nearest|stored overrides it.
-inline bool any_hit_in_storage_order(const Bvh& bvh, AnyHitOrder order = AnyHitOrder::kAuto) {
-  if (order == AnyHitOrder::kAuto) return bvh.arity > 2;
-  return order == AnyHitOrder::kStored;
+/// The order in which any hit visits a node's children on `bvh`: `order`, with kAuto resolved.
+/// - Wide trees (arity above 2): kNearestStored. Their builders store first the children likeliest to
+///   hold an occluder per unit of cost (builders/child_order.h); storage order beat nearest first on the
+///   8-wide kernels' shadow rays (no sort on the way to the next node), on Sponza most. Going first to
+///   the nearest child and then in storage order visited fewer nodes than either, and traced the bunny's
+///   and the 1M terrain's shadow rays 5-6% faster than storage order, the dragon's 1% faster and
+///   Sponza's 5% slower (A/B, 2 x 3 rounds, `bvh8:tri=mt0,box=fma`; notes of issue 4).
+/// - Binary trees: kNearest. Storage order cost their shadow rays 10 to 16% (measured against Embree in
+///   one run; notes of issue 4).
+/// The layout option anyhit=nearest|stored|nearest_stored overrides it.
+inline AnyHitOrder resolve_any_hit_order(const Bvh& bvh, AnyHitOrder order = AnyHitOrder::kAuto) {
+  if (order != AnyHitOrder::kAuto) return order;
+  return bvh.arity > 2 ? AnyHitOrder::kNearestStored : AnyHitOrder::kNearest;
 }
 
 namespace detail {
@@ -75,8 +80,8 @@ struct StackEntry {
 //
 // Order: the children hit are pushed sorted so that the nearest entry is popped first (for two children
 // one compare and swap), and closest hit skips a popped node entered beyond the current closest hit.
-// Any hit sorts too on binary trees, but visits the children of wide trees in storage order
-// (any_hit_in_storage_order), as the wide kernels do.
+// Any hit sorts too on binary trees, but visits the children of wide trees in storage order, or the
+// nearest first and then the rest in storage order (resolve_any_hit_order), as the wide kernels do.
 //
 // Ties: a hit at exactly the current closest t replaces it only when its primitive index is lower, so
 // among hits at the same float t the lowest index wins, as in the brute-force reference.
@@ -97,7 +102,7 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
 
   Hit best;
   float best_t = ray.tmax;
-  const bool stored_order = kAnyHit && any_hit_in_storage_order(bvh, order);
+  const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
   while (size > 0) {
     const StackEntry entry = stack[--size];
     if constexpr (!kAnyHit) {
@@ -137,10 +142,21 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
       throw_stack_overflow(entry.node, node.child_count);
     const uint32_t end = node.first + node.child_count;
     const uint32_t base = size;
-    if (stored_order) {
+    if (any_order == AnyHitOrder::kStored) {
       // Storage order: pushed last child first, so the first child entered is popped first.
       for (uint32_t child = end; child-- > node.first;)
         if (box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) stack[size++] = {child, t_entry};
+      continue;
+    }
+    if (any_order == AnyHitOrder::kNearestStored) {
+      // As storage order, then the nearest child entered (ties to the later one) moved to the top.
+      uint32_t nearest = size;
+      for (uint32_t child = end; child-- > node.first;) {
+        if (!box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) continue;
+        if (nearest == size || t_entry < stack[nearest].t_entry) nearest = size;
+        stack[size++] = {child, t_entry};
+      }
+      if (nearest + 1 < size) std::rotate(stack + nearest, stack + nearest + 1, stack + size);
       continue;
     }
     for (uint32_t child = node.first; child < end; ++child) {
@@ -170,7 +186,7 @@ Hit closest_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& 
 }
 
 /// Whether any triangle is hit within [ray.tmin, ray.tmax] (shadow rays): stops at the first hit found.
-/// Children are visited in `order` (any_hit_in_storage_order).
+/// Children are visited in `order` (resolve_any_hit_order).
 template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
 bool any_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
              AnyHitOrder order = AnyHitOrder::kAuto) {

@@ -24,9 +24,12 @@ enum class BoxTestKind : uint8_t {
 /// The order in which any hit (shadow rays) visits the children a ray enters; closest hit always visits
 /// them nearest first.
 enum class AnyHitOrder : uint8_t {
-  kAuto,     ///< kStored on wide trees (arity above 2), kNearest on binary ones: the faster of the two there
+  kAuto,     ///< kNearestStored on wide trees (arity above 2), kNearest on binary ones (bvh2_traversal.h)
   kNearest,  ///< nearest entry distance first, as closest hit
   kStored,   ///< the tree's child order (the wide builders store an occlusion order: builders/child_order.h)
+  /// The nearest child entered first (ties to the later slot), then the others in the tree's order: the
+  /// first step of nearest first without its sort, and the occlusion order for the rest.
+  kNearestStored,
 };
 
 /// The instruction set a SIMD kernel is compiled for. kAuto picks the widest one that is both compiled

@@ -165,9 +165,9 @@ struct WideBatch {
   Hit* hits;
   uint8_t* occluded;
   WideCounts* counts;
-  /// Any hit visits children in slot order rather than nearest first (bvh2_traversal.h:
-  /// any_hit_in_storage_order, resolved by the layout from its anyhit option and the tree).
-  bool any_hit_in_storage_order;
+  /// The order in which any hit visits children: kNearest, kStored or kNearestStored, resolved by the
+  /// layout from its anyhit option and the tree (bvh2_traversal.h: resolve_any_hit_order).
+  AnyHitOrder any_hit_order;
 };
 
 using WideKernel = void (*)(const WideBatch&);

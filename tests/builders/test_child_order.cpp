@@ -81,7 +81,8 @@ TEST(ChildOrder, PutsTheLikeliestOccluderPerCostFirst) {
 }
 
 // The wide builders store children in this order, the order in which any hit visits a wide tree's
-// children (bvh2_traversal.h: any_hit_in_storage_order); binary trees keep their builders' order.
+// children after the nearest (bvh2_traversal.h: resolve_any_hit_order); binary trees keep their
+// builders' order.
 TEST(ChildOrder, EveryWideBuilderWritesTheOcclusionOrder) {
   const auto tris = test::random_triangles(2000, 8);
   int wide_builders = 0;
@@ -90,7 +91,7 @@ TEST(ChildOrder, EveryWideBuilderWritesTheOcclusionOrder) {
     const ParamSet params = resolve_params(info.name, info.params, {});
     const Bvh bvh = info.build(BuildInput::from_triangles(tris), params);
     ASSERT_TRUE(validate(bvh, tris).ok()) << validate(bvh, tris).summary();
-    EXPECT_EQ(any_hit_in_storage_order(bvh), bvh.arity > 2);
+    EXPECT_EQ(resolve_any_hit_order(bvh), bvh.arity > 2 ? AnyHitOrder::kNearestStored : AnyHitOrder::kNearest);
     if (bvh.arity <= 2) continue;
     ++wide_builders;
     expect_ordered(bvh, tris, sah_cost_of(params));

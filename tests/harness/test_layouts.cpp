@@ -46,14 +46,14 @@ std::vector<std::string> specs_for(const LayoutInfo& layout) {
   };
   if (!layout.has_isa) {
     add_variants("");
-    for (const char* order : {"nearest", "stored"}) out.push_back(layout.name + ":anyhit=" + order);
+    for (const char* order : {"nearest", "stored", "nearest_stored"}) out.push_back(layout.name + ":anyhit=" + order);
     return out;
   }
   const KernelIsa best = best_kernel_isa();
   add_variants(",isa=scalar");
   if (best != KernelIsa::kScalar) add_variants(",isa=" + std::string(to_string(best)));
-  // Both any-hit orders, whichever the tree's arity picks by default.
-  for (const char* order : {"nearest", "stored"}) {
+  // Every any-hit order, whichever the tree's arity picks by default.
+  for (const char* order : {"nearest", "stored", "nearest_stored"}) {
     out.push_back(layout.name + ":anyhit=" + order + ",isa=scalar");
     out.push_back(layout.name + ":tri=mt0,box=fast,anyhit=" + order + ",isa=" + std::string(to_string(best)));
   }
@@ -363,7 +363,7 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
     return std::string("no error");
   };
   EXPECT_NE(error_of("bvh9").find("unknown layout 'bvh9'"), std::string::npos);
-  EXPECT_NE(error_of("bvh8:anyhit=first").find("anyhit = 'first' is not one of auto, nearest, stored"), std::string::npos);
+  EXPECT_NE(error_of("bvh8:anyhit=first").find("anyhit = 'first' is not one of auto, nearest, stored, nearest_stored"), std::string::npos);
   EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0"), std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);
@@ -420,7 +420,8 @@ TEST(Layouts, WideAnyHitVisitsTheReferenceTraversalsNodesInEveryOrder) {
   for (uint32_t arity : {4u, 8u}) {
     const Bvh wide = info.build(BuildInput::from_triangles(tris),
                                 resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
-    for (AnyHitOrder order : {AnyHitOrder::kAuto, AnyHitOrder::kNearest, AnyHitOrder::kStored}) {
+    for (AnyHitOrder order :
+         {AnyHitOrder::kAuto, AnyHitOrder::kNearest, AnyHitOrder::kStored, AnyHitOrder::kNearestStored}) {
       const std::string spec = "bvh" + std::to_string(arity) + ":anyhit=" + std::string(to_string(order)) + ",isa=scalar";
       SCOPED_TRACE(spec);
       TraversalCounters reference;

@@ -184,13 +184,15 @@ class RefClipper {
     return std::clamp(grid.slab_from_below(axis, x), first, last);
   }
 
-  // Adds vertex i to its slab, and to the slab below when it lies on their common plane; returns its slab.
+  // Adds vertex i to its slab, and to every slab below whose upper plane it lies on: where float
+  // rounding made several planes equal, the slabs between them are empty and the vertex is a corner of
+  // the part in the slab below all of them (it was left out of that part once, and the leaves of a
+  // spatial split then missed a sliver of the triangle). Returns its slab.
   uint32_t add_vertex(const SlabGrid& grid, int axis, uint32_t first, uint32_t last, int i, Box4* parts) const {
     const double x = polygon_.v[i][axis];
     const uint32_t s = slab_of(grid, axis, first, last, x);
     parts[s].extend(point_[i]);
-    const uint32_t below = s > first && grid.plane(axis, s) == x ? s - 1 : s;
-    parts[below].extend(point_[i]);
+    for (uint32_t below = s; below > first && grid.plane(axis, below) == x; --below) parts[below - 1].extend(point_[i]);
     return s;
   }
 

@@ -43,9 +43,10 @@ struct TraversalCounters {
 /// - Wide trees (arity above 2): kNearestStored. Their builders store first the children likeliest to
 ///   hold an occluder per unit of cost (builders/child_order.h); storage order beat nearest first on the
 ///   8-wide kernels' shadow rays (no sort on the way to the next node), on Sponza most. Going first to
-///   the nearest child and then in storage order visited fewer nodes than either, and traced the bunny's
-///   and the 1M terrain's shadow rays 5-6% faster than storage order, the dragon's 1% faster and
-///   Sponza's 5% slower (A/B, 2 x 3 rounds, `bvh8:tri=mt0,box=fma`; notes of issue 4).
+///   the nearest child (ties to the earlier) and then in storage order visited fewer nodes than either
+///   and, against storage order, traced the 1M terrain's shadow rays 1-7% faster, the bunny's 1-6%
+///   faster, and the dragon's and Sponza's within 2% either way (medians of 4 runs, single runs -5% to
+///   +10%), for both wide builders (`bvh8:tri=mt0,box=fma`; notes of issue 4).
 /// - Binary trees: kNearest. Storage order cost their shadow rays 10 to 16% (measured against Embree in
 ///   one run; notes of issue 4).
 /// The layout option anyhit=nearest|stored|nearest_stored overrides it.
@@ -149,11 +150,11 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
       continue;
     }
     if (any_order == AnyHitOrder::kNearestStored) {
-      // As storage order, then the nearest child entered (ties to the later one) moved to the top.
+      // As storage order, then the nearest child entered (ties to the earlier one) moved to the top.
       uint32_t nearest = size;
       for (uint32_t child = end; child-- > node.first;) {
         if (!box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) continue;
-        if (nearest == size || t_entry < stack[nearest].t_entry) nearest = size;
+        if (nearest == size || t_entry <= stack[nearest].t_entry) nearest = size;
         stack[size++] = {child, t_entry};
       }
       if (nearest + 1 < size) std::rotate(stack + nearest, stack + nearest + 1, stack + size);

@@ -27,8 +27,9 @@ enum class AnyHitOrder : uint8_t {
   kAuto,     ///< kNearestStored on wide trees (arity above 2), kNearest on binary ones (bvh2_traversal.h)
   kNearest,  ///< nearest entry distance first, as closest hit
   kStored,   ///< the tree's child order (the wide builders store an occlusion order: builders/child_order.h)
-  /// The nearest child entered first (ties to the later slot), then the others in the tree's order: the
-  /// first step of nearest first without its sort, and the occlusion order for the rest.
+  /// The nearest child entered first (ties to the earlier slot, the tree's choice), then the others in
+  /// the tree's order: the first step of nearest first without its sort, and the occlusion order for the
+  /// rest.
   kNearestStored,
 };
 

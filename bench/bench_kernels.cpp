@@ -62,8 +62,10 @@ BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNoEpsilonTest>)->Name("ray_triangle
 // The wide kernels' node test (N boxes at once, one node visit) and block test (4 triangles at once),
 // per instruction set available here. Items are node visits, or triangles.
 template <uint32_t N>
-WideBvh<N> wide_tree(BlockForm form = BlockForm::kVertices) {
-  return compile_wide<N>(collapse_greedy(binary_tree(kPrims * 16), N), soup(kPrims * 16), form);
+const WideBvh<N>& wide_tree(BlockForm form = BlockForm::kVertices) {
+  auto make = [](BlockForm f) { return compile_wide<N>(collapse_greedy(binary_tree(kPrims * 16), N), soup(kPrims * 16), f); };
+  static const WideBvh<N> vertices = make(BlockForm::kVertices), edges = make(BlockForm::kEdges);
+  return form == BlockForm::kEdges ? edges : vertices;
 }
 
 // The first `limit` nodes and blocks of a tree, breadth first from the root, copied into arrays for the

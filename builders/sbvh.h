@@ -41,8 +41,8 @@ struct SbvhParams {
   /// The tree holds at most floor((1 + max_dup) n) references. Stich et al. report 1.1 to 1.5 references
   /// per primitive; Embree allows 1.2 (max_spatial_split_replications). With 0.3 the needles (100K long
   /// thin triangles) ran out of budget at 1.21 references and traced 8-16% faster than binned SAH; with 0.5
-  /// they take 1.48 and trace 24-33% faster. Scenes that need fewer references do not take more (Sponza
-  /// 1.14 -> 1.18, its rays/second the same), and the build costs 8% more on Sponza.
+  /// they take 1.48 and trace 16-33% faster (four runs). Scenes that need fewer references take few more
+  /// (Sponza 1.14 -> 1.18, its rays/second the same), and the build costs 8% more on Sponza.
   float max_dup = 0.5f;
   bool unsplit = true;  ///< reference unsplitting (section 4.4)
   TopDownConfig top_down;

@@ -58,32 +58,44 @@ void BM_ScalarRayTriangle(benchmark::State& state) {
 BENCHMARK(BM_ScalarRayTriangle<WatertightTriangleTest>)->Name("ray_triangle/scalar/watertight");
 BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreTest>)->Name("ray_triangle/scalar/mt");
 BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNoEpsilonTest>)->Name("ray_triangle/scalar/mt0");
+BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNormalTest>)->Name("ray_triangle/scalar/mtn");
 
 // The wide kernels' node test (N boxes at once, one node visit) and block test (4 triangles at once),
 // per instruction set available here. Items are node visits, or triangles.
 template <uint32_t N>
 const WideBvh<N>& wide_tree(BlockForm form = BlockForm::kVertices) {
   auto make = [](BlockForm f) { return compile_wide<N>(collapse_greedy(binary_tree(kPrims * 16), N), soup(kPrims * 16), f); };
-  static const WideBvh<N> vertices = make(BlockForm::kVertices), edges = make(BlockForm::kEdges);
-  return form == BlockForm::kEdges ? edges : vertices;
+  static const WideBvh<N> vertices = make(BlockForm::kVertices), edges = make(BlockForm::kEdges),
+                          normals = make(BlockForm::kEdgesNormals);
+  return form == BlockForm::kEdges ? edges : form == BlockForm::kEdgesNormals ? normals : vertices;
 }
 
 // The first `limit` nodes and blocks of a tree, breadth first from the root, copied into arrays for the
-// test loops.
+// test loops: the blocks as arena units, each block_units(tree.form) long.
 template <uint32_t N>
-std::pair<std::vector<WideNode<N>>, std::vector<TriangleBlock>> wide_parts(const WideBvh<N>& tree, std::size_t limit) {
+struct WideParts {
   std::vector<WideNode<N>> nodes;
-  std::vector<TriangleBlock> blocks;
+  std::vector<WideUnit> blocks;
+  std::size_t block_count = 0;
+};
+
+template <uint32_t N>
+WideParts<N> wide_parts(const WideBvh<N>& tree, std::size_t limit) {
+  WideParts<N> parts;
+  const uint32_t units = block_units(tree.form);
   std::vector<uint32_t> queue{0};
-  for (std::size_t q = 0; q < queue.size() && (nodes.size() < limit || blocks.size() < limit); ++q) {
+  for (std::size_t q = 0; q < queue.size() && (parts.nodes.size() < limit || parts.block_count < limit); ++q) {
     const WideNode<N>& node = tree.node(queue[q]);
-    if (nodes.size() < limit) nodes.push_back(node);
+    if (parts.nodes.size() < limit) parts.nodes.push_back(node);
     for (uint32_t i = 0; i < N; ++i) {
       if (node.count[i] == 0 && node.child[i] != 0) queue.push_back(node.child[i]);
-      for (uint32_t b = 0; b < node.count[i] && blocks.size() < limit; ++b) blocks.push_back(tree.block(node.child[i], b));
+      for (uint32_t b = 0; b < node.count[i] && parts.block_count < limit; ++b, ++parts.block_count) {
+        const auto* first = reinterpret_cast<const WideUnit*>(&tree.block(node.child[i], b));
+        parts.blocks.insert(parts.blocks.end(), first, first + units);
+      }
     }
   }
-  return {std::move(nodes), std::move(blocks)};
+  return parts;
 }
 
 std::vector<WideRay> wide_rays(BoxTestKind box = BoxTestKind::kRobust) {
@@ -96,7 +108,7 @@ template <uint32_t N>
 void BM_WideNodeVisit(benchmark::State& state, KernelIsa isa, BoxTestKind box) {
   if (!kernel_isa_available(isa)) return state.SkipWithError("ISA not available on this CPU");
   const auto loops = find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box});
-  const auto nodes = wide_parts(wide_tree<N>(), 256).first;  // stays in L1/L2: the test, not memory
+  const auto nodes = wide_parts(wide_tree<N>(), 256).nodes;  // stays in L1/L2: the test, not memory
   const auto rs = wide_rays(box);
   for (auto _ : state) benchmark::DoNotOptimize(loops.nodes(nodes.data(), nodes.size(), rs.data(), rs.size()));
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * nodes.size() * rs.size()));
@@ -105,10 +117,11 @@ void BM_WideNodeVisit(benchmark::State& state, KernelIsa isa, BoxTestKind box) {
 void BM_WideBlockTest(benchmark::State& state, KernelIsa isa, TriangleTestKind tri) {
   if (!kernel_isa_available(isa)) return state.SkipWithError("ISA not available on this CPU");
   const auto loops = find_wide_bench_loops(isa, 8, {tri, BoxTestKind::kRobust});
-  const auto blocks = wide_parts(wide_tree<8>(block_form_for(tri)), 256).second;
+  const auto parts = wide_parts(wide_tree<8>(block_form_for(tri)), 256);
   const auto rs = wide_rays();
-  for (auto _ : state) benchmark::DoNotOptimize(loops.blocks(blocks.data(), blocks.size(), rs.data(), rs.size()));
-  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * blocks.size() * kBlockWidth * rs.size()));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(loops.blocks(parts.blocks.data(), parts.block_count, rs.data(), rs.size()));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * parts.block_count * kBlockWidth * rs.size()));
 }
 
 // Registers every width x box test x ISA, and every triangle test x ISA.
@@ -121,7 +134,8 @@ const bool registered = [] {
       benchmark::RegisterBenchmark(("node_visit/bvh8/" + i + "/" + b).c_str(), BM_WideNodeVisit<8>, isa, box);
     }
     for (TriangleTestKind tri :
-         {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore, TriangleTestKind::kMollerTrumboreNoEpsilon})
+         {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore, TriangleTestKind::kMollerTrumboreNoEpsilon,
+          TriangleTestKind::kMollerTrumboreNormal})
       benchmark::RegisterBenchmark(("ray_triangle/block4/" + i + "/" + std::string(to_string(tri))).c_str(),
                                    BM_WideBlockTest, isa, tri);
   }

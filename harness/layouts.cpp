@@ -237,7 +237,7 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     seen.push_back(key);
     if (key == "tri") {
       const auto kind = parse_triangle_test(value);
-      if (!kind) throw Error(where + ": tri = '" + value + "' is not one of watertight, mt, mt0");
+      if (!kind) throw Error(where + ": tri = '" + value + "' is not one of watertight, mt, mt0, mtn");
       spec.variant.triangle = *kind;
     } else if (key == "box") {
       const auto kind = parse_box_test(value);

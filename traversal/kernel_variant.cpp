@@ -6,10 +6,11 @@
 namespace sahbench {
 namespace {
 
-constexpr std::array<std::pair<TriangleTestKind, std::string_view>, 3> kTriangleNames{{
+constexpr std::array<std::pair<TriangleTestKind, std::string_view>, 4> kTriangleNames{{
     {TriangleTestKind::kWatertight, "watertight"},
     {TriangleTestKind::kMollerTrumbore, "mt"},
     {TriangleTestKind::kMollerTrumboreNoEpsilon, "mt0"},
+    {TriangleTestKind::kMollerTrumboreNormal, "mtn"},
 }};
 constexpr std::array<std::pair<BoxTestKind, std::string_view>, 3> kBoxNames{{
     {BoxTestKind::kRobust, "robust"},

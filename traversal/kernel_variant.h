@@ -13,6 +13,9 @@ enum class TriangleTestKind : uint8_t {
   kWatertight,               ///< Woop et al. 2013 (triangle_tests.h), the default
   kMollerTrumbore,           ///< Möller and Trumbore 1997 with its epsilon of 1e-6
   kMollerTrumboreNoEpsilon,  ///< the same with epsilon 0: only det == 0 is rejected
+  /// Möller–Trumbore in the form of Embree's Triangle4 test, the geometric normal stored with the
+  /// triangle and the division left for hits (MollerTrumboreNormalTest, triangle_tests.h)
+  kMollerTrumboreNormal,
 };
 
 enum class BoxTestKind : uint8_t {

@@ -204,4 +204,64 @@ class MollerTrumboreNoEpsilonTest : public MollerTrumboreTest {
   explicit MollerTrumboreNoEpsilonTest(const Ray& ray) : MollerTrumboreTest(ray, 0.0f) {}
 };
 
+/// The geometric normal e1 x e2 of the edges e1 = v1 - v0, e2 = v2 - v0, as MollerTrumboreNormalTest
+/// computes it and as the wide layouts store it (wide_bvh.h, BlockForm::kEdgesNormals): the same float
+/// operations, so the stored normal is the one the test would compute.
+inline Vec3 stored_normal(Vec3 edge1, Vec3 edge2) { return cross(edge1, edge2); }
+
+/// Möller–Trumbore in the form Embree's Triangle4 intersector uses (Embree 3,
+/// kernels/geometry/triangle_intersector_moeller.h; Wald et al. 2014, "Embree: A Kernel Framework for
+/// Efficient CPU Ray Tracing"): the same Cramer's rule as MollerTrumboreTest, rearranged around the
+/// geometric normal n = e1 x e2, which the wide layouts store with the triangle. With c = v0 - org and
+/// r = dir x c, the determinant is dir . n, u = -(e2 . r) / det, v = (e1 . r) / det and t = (c . n) / det:
+/// one cross product and four dot products per triangle where MollerTrumboreTest takes two and three.
+/// u, v and t are compared multiplied by |det| (0 <= u, 0 <= v, u + v <= |det|, |det| tmin <= t <=
+/// |det| tmax), so the division waits for a hit; the hit's t is then checked again as divided, as this
+/// header's contract says. Only det == 0 (and NaN) is rejected, as in mt0. Not watertight.
+///
+/// The cross and dot products use fused multiply-adds in a fixed order (std::fma here, FMA instructions
+/// in the SIMD kernels, wide_kernels.inl), so every kernel computes the same floats; without FMA
+/// hardware std::fma is exact but slow.
+class MollerTrumboreNormalTest {
+ public:
+  explicit MollerTrumboreNormalTest(const Ray& ray) : org_(ray.org), dir_(ray.dir) {}
+
+  bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
+    const Vec3 edge1 = tri.v1 - tri.v0;
+    const Vec3 edge2 = tri.v2 - tri.v0;
+    return intersect(tri.v0, edge1, edge2, stored_normal(edge1, edge2), tmin, tmax, t, u, v);
+  }
+
+  /// The test from what the wide layouts store: v0, the edges and the normal.
+  bool intersect(Vec3 v0, Vec3 edge1, Vec3 edge2, Vec3 normal, float tmin, float tmax, float& t, float& u,
+                 float& v) const {
+    const Vec3 c = v0 - org_;
+    const Vec3 d = dir_;
+    const Vec3 r{std::fma(d.y, c.z, -(d.z * c.y)), std::fma(d.z, c.x, -(d.x * c.z)), std::fma(d.x, c.y, -(d.y * c.x))};
+    const float det = dot_fma(d, normal);
+    // The sign of det moved onto u, v and t by flipping sign bits, as the SIMD kernels do.
+    const uint32_t sign = std::bit_cast<uint32_t>(det) & 0x80000000u;
+    const float abs_det = std::bit_cast<float>(std::bit_cast<uint32_t>(det) ^ sign);
+    const float su = flip(dot_fma(edge2, r), sign ^ 0x80000000u);
+    const float sv = flip(dot_fma(edge1, r), sign);
+    // Written so that a NaN is a miss.
+    if (!(abs_det > 0.0f && su >= 0.0f && sv >= 0.0f && su + sv <= abs_det)) return false;
+    const float st = flip(dot_fma(c, normal), sign);
+    if (!(st >= abs_det * tmin && st <= abs_det * tmax)) return false;
+    const float inv_det = 1.0f / abs_det;
+    t = st * inv_det;
+    u = su * inv_det;
+    v = sv * inv_det;
+    return t >= tmin && t <= tmax;
+  }
+
+ private:
+  // a . b as fma(a.x, b.x, fma(a.y, b.y, a.z * b.z)).
+  static float dot_fma(Vec3 a, Vec3 b) { return std::fma(a.x, b.x, std::fma(a.y, b.y, a.z * b.z)); }
+  static float flip(float x, uint32_t sign) { return std::bit_cast<float>(std::bit_cast<uint32_t>(x) ^ sign); }
+
+  Vec3 org_;
+  Vec3 dir_;
+};
+
 }  // namespace sahbench

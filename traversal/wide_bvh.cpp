@@ -43,27 +43,34 @@ void set_box(WideNode<N>& node, uint32_t slot, const Aabb& box) {
   }
 }
 
-// Writes triangle t into lane `lane` of `block`, in `form`.
+// Writes triangle t into lane `lane` of `block`, in `form` (a NormalBlock for kEdgesNormals).
 void set_lane(TriangleBlock& block, uint32_t lane, const Triangle& t, BlockForm form) {
-  const bool edges = form == BlockForm::kEdges;
+  const bool edges = form != BlockForm::kVertices;
+  const Vec3 e1 = t.v1 - t.v0, e2 = t.v2 - t.v0;
   for (uint32_t axis = 0; axis < 3; ++axis) {
     block.v0[axis][lane] = t.v0[axis];
-    block.v1[axis][lane] = edges ? t.v1[axis] - t.v0[axis] : t.v1[axis];
-    block.v2[axis][lane] = edges ? t.v2[axis] - t.v0[axis] : t.v2[axis];
+    block.v1[axis][lane] = edges ? e1[axis] : t.v1[axis];
+    block.v2[axis][lane] = edges ? e2[axis] : t.v2[axis];
   }
+  if (form != BlockForm::kEdgesNormals) return;
+  const Vec3 n = stored_normal(e1, e2);
+  for (uint32_t axis = 0; axis < 3; ++axis) reinterpret_cast<NormalBlock&>(block).normal[axis][lane] = n[axis];
 }
 
-// Writes the triangles of references [first, first + count) into blocks starting at `block`.
+// Writes the triangles of `refs` into consecutive blocks of `form` starting at `first`.
 void fill_blocks(std::span<const uint32_t> refs, std::span<const Triangle> triangles, BlockForm form,
-                 TriangleBlock* block) {
+                 WideUnit* first) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const Triangle unused{{nan, nan, nan}, {nan, nan, nan}, {nan, nan, nan}};
-  for (std::size_t i = 0; i < refs.size(); i += kBlockWidth, ++block) {
+  for (std::size_t i = 0; i < refs.size(); i += kBlockWidth, first += block_units(form)) {
+    auto& block = *reinterpret_cast<TriangleBlock*>(first);
     for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
       const bool used = i + lane < refs.size();
-      block->prim[lane] = used ? refs[i + lane] : kInvalidPrim;
-      set_lane(*block, lane, used ? triangles[refs[i + lane]] : unused, form);
+      block.prim[lane] = used ? refs[i + lane] : kInvalidPrim;
+      set_lane(block, lane, used ? triangles[refs[i + lane]] : unused, form);
     }
+    if (form == BlockForm::kEdgesNormals)
+      for (uint32_t& u : reinterpret_cast<NormalBlock&>(block).unused) u = 0;
   }
 }
 
@@ -132,7 +139,13 @@ WideRay make_wide_ray(const Ray& ray, bool shear, BoxTestKind box) {
 }
 
 BlockForm block_form_for(TriangleTestKind test) {
-  return test == TriangleTestKind::kWatertight ? BlockForm::kVertices : BlockForm::kEdges;
+  switch (test) {
+    case TriangleTestKind::kWatertight: return BlockForm::kVertices;
+    case TriangleTestKind::kMollerTrumboreNormal: return BlockForm::kEdgesNormals;
+    case TriangleTestKind::kMollerTrumbore:
+    case TriangleTestKind::kMollerTrumboreNoEpsilon: break;
+  }
+  return BlockForm::kEdges;
 }
 
 template <uint32_t N>
@@ -159,7 +172,8 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
     uint32_t first, count, depth;
     uint32_t ref;  // the wide node's place in the arena
   };
-  constexpr uint64_t kNodeUnits = sizeof(WideNode<N>) / kWideUnit, kBlockUnits = sizeof(TriangleBlock) / kWideUnit;
+  constexpr uint64_t kNodeUnits = sizeof(WideNode<N>) / kWideUnit;
+  const uint64_t units_per_block = block_units(form);
   std::vector<WidePlan> plan;
   std::vector<uint32_t> ref_of(bvh.nodes.size(), 0);  // a common-format node's wide node or first block
   uint64_t used = 0;
@@ -184,7 +198,7 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
       if (!bvh.nodes[c].is_leaf()) continue;
       ref_of[c] = static_cast<uint32_t>(used);
       out.block_count += blocks_for(bvh.nodes[c].prim_count);
-      used += blocks_for(bvh.nodes[c].prim_count) * kBlockUnits;
+      used += blocks_for(bvh.nodes[c].prim_count) * units_per_block;
     }
     const std::size_t first_child = plan.size();
     for (uint32_t c = p.first; c < p.first + p.count; ++c) {
@@ -210,7 +224,7 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
         if (!child.is_leaf()) continue;
         node.count[slot] = blocks_for(child.prim_count);
         fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count), triangles, form,
-                    &out.block(ref_of[c]));
+                    out.arena.data() + ref_of[c]);
       }
       out.node(plan[i].ref) = node;
     }

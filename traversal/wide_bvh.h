@@ -16,6 +16,8 @@
 // TriangleBlock: v0, v1, v2 as [component][lane] floats (144) + prim[4] (16) = 160 bytes per 4 triangles;
 // unused lanes have prim = kInvalidPrim and NaN vertices, which no test can hit. In the edge form, which
 // the Möller–Trumbore layouts use, v1 and v2 hold the edges v1 - v0 and v2 - v0 instead (BlockForm).
+// NormalBlock (tri=mtn): a TriangleBlock in edge form + the normals e1 x e2 as [component][lane] floats
+// (48) + 16 unused bytes = 224 bytes per 4 triangles, as Embree's Triangle4 stores v0, e1, e2 and Ng.
 //
 // Nodes and blocks share one array, the arena, and a reference counts 32-byte units from its start.
 // Its order is depth first, as a recursive builder allocating from one pool lays out its tree (Embree's
@@ -59,8 +61,9 @@ inline constexpr uint32_t kBlockWidth = 4;
 /// box=fma`), the bunny and the dragon within 1% either way.
 /// The watertight test needs the vertices themselves: v0 + (v1 - v0) is not v1 in float.
 enum class BlockForm : uint8_t {
-  kVertices,  ///< v1, v2 are the triangle's second and third vertices
-  kEdges,     ///< v1, v2 are the edges v1 - v0 and v2 - v0
+  kVertices,      ///< v1, v2 are the triangle's second and third vertices
+  kEdges,         ///< v1, v2 are the edges v1 - v0 and v2 - v0
+  kEdgesNormals,  ///< kEdges in a NormalBlock, with each triangle's normal (stored_normal, triangle_tests.h)
 };
 
 /// The form the kernels of triangle test `test` read.
@@ -73,6 +76,16 @@ struct alignas(16) TriangleBlock {
   uint32_t prim[kBlockWidth];
 };
 static_assert(sizeof(TriangleBlock) == 160, "block format as documented");
+
+/// The block of BlockForm::kEdgesNormals: MollerTrumboreNormalTest reads the normal where the other
+/// Möller–Trumbore tests compute a second cross product. The 16 bytes at the end keep blocks whole
+/// arena units.
+struct alignas(16) NormalBlock {
+  TriangleBlock tri;  ///< in edge form
+  float normal[3][kBlockWidth];
+  uint32_t unused[kBlockWidth];
+};
+static_assert(sizeof(NormalBlock) == 224, "block format as documented");
 
 /// A ray as the wide kernels read it, set up once per ray outside the kernels (wide_bvh.cpp): origin,
 /// direction, reciprocal direction (the box test's: FmaRayBox keeps it finite) and origin times it, the
@@ -102,8 +115,14 @@ inline constexpr std::size_t kWideUnit = 32;
 struct alignas(kWideUnit) WideUnit {
   unsigned char bytes[kWideUnit];
 };
-static_assert(sizeof(TriangleBlock) % kWideUnit == 0 && sizeof(WideNode<4>) % kWideUnit == 0,
+static_assert(sizeof(TriangleBlock) % kWideUnit == 0 && sizeof(NormalBlock) % kWideUnit == 0 &&
+                  sizeof(WideNode<4>) % kWideUnit == 0,
               "blocks and nodes are whole units");
+
+/// The arena units of one block in `form`.
+constexpr uint32_t block_units(BlockForm form) {
+  return (form == BlockForm::kEdgesNormals ? sizeof(NormalBlock) : sizeof(TriangleBlock)) / kWideUnit;
+}
 
 /// A compiled wide tree. The root node is at reference 0 (always an inner node: a tree that is a single
 /// leaf gets a root with one leaf slot); children come after their parents.
@@ -121,12 +140,17 @@ struct WideBvh {
   std::size_t bytes() const { return arena.size() * sizeof(WideUnit); }
   WideNode<N>& node(uint32_t ref) { return *reinterpret_cast<WideNode<N>*>(arena.data() + ref); }
   const WideNode<N>& node(uint32_t ref) const { return *reinterpret_cast<const WideNode<N>*>(arena.data() + ref); }
-  /// Block `i` of the leaf whose first block is at `ref`.
+  /// Block `i` of the leaf whose first block is at `ref` (in every form; a NormalBlock starts with it).
   TriangleBlock& block(uint32_t ref, uint32_t i = 0) {
-    return *reinterpret_cast<TriangleBlock*>(arena.data() + ref + i * (sizeof(TriangleBlock) / kWideUnit));
+    return *reinterpret_cast<TriangleBlock*>(arena.data() + ref + i * block_units(form));
   }
   const TriangleBlock& block(uint32_t ref, uint32_t i = 0) const {
-    return *reinterpret_cast<const TriangleBlock*>(arena.data() + ref + i * (sizeof(TriangleBlock) / kWideUnit));
+    return *reinterpret_cast<const TriangleBlock*>(arena.data() + ref + i * block_units(form));
+  }
+  /// The same block as a NormalBlock: form kEdgesNormals only.
+  NormalBlock& normal_block(uint32_t ref, uint32_t i = 0) { return reinterpret_cast<NormalBlock&>(block(ref, i)); }
+  const NormalBlock& normal_block(uint32_t ref, uint32_t i = 0) const {
+    return reinterpret_cast<const NormalBlock&>(block(ref, i));
   }
 };
 
@@ -181,7 +205,8 @@ WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& 
 /// triangle blocks in turn, returning a checksum.
 struct WideBenchLoops {
   double (*nodes)(const void* nodes, std::size_t count, const WideRay* rays, std::size_t ray_count);
-  double (*blocks)(const TriangleBlock* blocks, std::size_t count, const WideRay* rays, std::size_t ray_count);
+  /// `blocks`: `count` consecutive blocks of the form block_form_for(the variant's triangle test).
+  double (*blocks)(const void* blocks, std::size_t count, const WideRay* rays, std::size_t ray_count);
 };
 
 /// The loops compiled for `isa` (not kAuto); both null when that set is not compiled in.

@@ -179,7 +179,48 @@ SAHBENCH_KERNEL_INLINE bool lane_det_ok(float det, float scaled_t) {
 // ---------------------------------------------------------------------------------------------------
 // Ray against the four triangles of a block: bit i is set when lane i is hit within [tmin, tmax], with
 // its t, u, v in the arrays. Watertight: Woop et al. 2013 as WatertightTriangleTest, on blocks in vertex
-// form; Möller–Trumbore as MollerTrumboreTest with `epsilon`, on blocks in edge form (wide_bvh.h).
+// form; Möller–Trumbore as MollerTrumboreTest with `epsilon`, on blocks in edge form (wide_bvh.h);
+// tri=mtn as MollerTrumboreNormalTest, on NormalBlocks.
+
+// One lane of MollerTrumboreNormalTest: the scalar kernels' test, and the SSE kernels' (SSE has no fused
+// multiply-add; fmaf is exact there, and slow). The same operations as triangle_tests.h, in the same order.
+SAHBENCH_KERNEL_INLINE float flip_sign(float x, uint32_t sign) {
+  return __builtin_bit_cast(float, __builtin_bit_cast(uint32_t, x) ^ sign);
+}
+
+SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const WideRay& r, float tmin, float tmax,
+                                     float& t_out, float& u_out, float& v_out) {
+  const TriangleBlock& e = b.tri;  // edge form
+  const float cx = e.v0[0][i] - r.org[0], cy = e.v0[1][i] - r.org[1], cz = e.v0[2][i] - r.org[2];
+  const float dx = r.dir[0], dy = r.dir[1], dz = r.dir[2];
+  const float nx = b.normal[0][i], ny = b.normal[1][i], nz = b.normal[2][i];
+  const float rx = __builtin_fmaf(dy, cz, -(dz * cy)), ry = __builtin_fmaf(dz, cx, -(dx * cz)),
+              rz = __builtin_fmaf(dx, cy, -(dy * cx));
+  const float det = __builtin_fmaf(dx, nx, __builtin_fmaf(dy, ny, dz * nz));
+  const uint32_t sign = __builtin_bit_cast(uint32_t, det) & 0x80000000u;
+  const float abs_det = flip_sign(det, sign);
+  const float su = flip_sign(__builtin_fmaf(e.v2[0][i], rx, __builtin_fmaf(e.v2[1][i], ry, e.v2[2][i] * rz)),
+                             sign ^ 0x80000000u);
+  const float sv = flip_sign(__builtin_fmaf(e.v1[0][i], rx, __builtin_fmaf(e.v1[1][i], ry, e.v1[2][i] * rz)), sign);
+  if (!(abs_det > 0.0f && su >= 0.0f && sv >= 0.0f && su + sv <= abs_det)) return false;
+  const float st = flip_sign(__builtin_fmaf(cx, nx, __builtin_fmaf(cy, ny, cz * nz)), sign);
+  if (!(st >= abs_det * tmin && st <= abs_det * tmax)) return false;
+  const float inv_det = 1.0f / abs_det;
+  t_out = st * inv_det;
+  u_out = su * inv_det;
+  v_out = sv * inv_det;
+  return t_out >= tmin && t_out <= tmax;
+}
+
+#if !defined(SAHBENCH_WIDE_AVX2) && !defined(SAHBENCH_WIDE_AVX512)
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const WideRay& r, float tmin, float tmax,
+                                                    float* t_out, float* u_out, float* v_out) {
+  uint32_t mask = 0;
+  for (uint32_t i = 0; i < kBlockWidth; ++i)
+    if (b.tri.prim[i] != kInvalidPrim && mtn_lane(b, i, r, tmin, tmax, t_out[i], u_out[i], v_out[i])) mask |= 1u << i;
+  return mask;
+}
+#endif
 
 #if defined(SAHBENCH_WIDE_SCALAR)
 
@@ -431,13 +472,115 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, 
 }
 #endif
 
+#if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
+// MollerTrumboreNormalTest on 4 or 8 lanes (V = __m128 or __m256, the lanes loaded by `load`): mtn_lane
+// lane for lane, with FMA instructions where it calls fmaf. The three divisions wait for a lane to pass,
+// so a ray that hits nothing in the block divides nothing; t is checked again once divided.
+template <class V, class Ops, class Load>
+SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const WideRay& r, float tmin, float tmax,
+                                                    float* t_out, float* u_out, float* v_out) {
+  const V dx = Ops::set1(r.dir[0]), dy = Ops::set1(r.dir[1]), dz = Ops::set1(r.dir[2]);
+  const V cx = Ops::sub(load(0, 0), Ops::set1(r.org[0])), cy = Ops::sub(load(0, 1), Ops::set1(r.org[1])),
+          cz = Ops::sub(load(0, 2), Ops::set1(r.org[2]));
+  const V nx = load(3, 0), ny = load(3, 1), nz = load(3, 2);
+  const V rx = Ops::fmsub(dy, cz, Ops::mul(dz, cy)), ry = Ops::fmsub(dz, cx, Ops::mul(dx, cz)),
+          rz = Ops::fmsub(dx, cy, Ops::mul(dy, cx));
+  const V det = Ops::fmadd(dx, nx, Ops::fmadd(dy, ny, Ops::mul(dz, nz)));
+  const V sign_bit = Ops::set1(-0.0f);
+  const V sign = Ops::and_(det, sign_bit);
+  const V abs_det = Ops::xor_(det, sign);
+  const V su = Ops::xor_(Ops::fmadd(load(2, 0), rx, Ops::fmadd(load(2, 1), ry, Ops::mul(load(2, 2), rz))),
+                         Ops::xor_(sign, sign_bit));
+  const V sv = Ops::xor_(Ops::fmadd(load(1, 0), rx, Ops::fmadd(load(1, 1), ry, Ops::mul(load(1, 2), rz))), sign);
+  const V zero = Ops::set1(0.0f);
+  V hit = Ops::and_(valid, Ops::and_(Ops::gt(abs_det, zero), Ops::and_(Ops::ge(su, zero), Ops::ge(sv, zero))));
+  hit = Ops::and_(hit, Ops::le(Ops::add(su, sv), abs_det));
+  const V st = Ops::xor_(Ops::fmadd(cx, nx, Ops::fmadd(cy, ny, Ops::mul(cz, nz))), sign);
+  hit = Ops::and_(hit, Ops::and_(Ops::ge(st, Ops::mul(abs_det, Ops::set1(tmin))),
+                                 Ops::le(st, Ops::mul(abs_det, Ops::set1(tmax)))));
+  if (!Ops::movemask(hit)) return 0;
+  const V inv_det = Ops::div(Ops::set1(1.0f), abs_det);
+  const V t = Ops::mul(st, inv_det);
+  hit = Ops::and_(hit, Ops::and_(Ops::ge(t, Ops::set1(tmin)), Ops::le(t, Ops::set1(tmax))));
+  Ops::store(t_out, t);
+  Ops::store(u_out, Ops::mul(su, inv_det));
+  Ops::store(v_out, Ops::mul(sv, inv_det));
+  return static_cast<uint32_t>(Ops::movemask(hit));
+}
+
+struct Ops128 {
+  SAHBENCH_KERNEL_INLINE static __m128 set1(float x) { return _mm_set1_ps(x); }
+  SAHBENCH_KERNEL_INLINE static __m128 add(__m128 a, __m128 b) { return _mm_add_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m128 sub(__m128 a, __m128 b) { return _mm_sub_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m128 mul(__m128 a, __m128 b) { return _mm_mul_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m128 div(__m128 a, __m128 b) { return _mm_div_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m128 fmadd(__m128 a, __m128 b, __m128 c) { return _mm_fmadd_ps(a, b, c); }
+  SAHBENCH_KERNEL_INLINE static __m128 fmsub(__m128 a, __m128 b, __m128 c) { return _mm_fmsub_ps(a, b, c); }
+  SAHBENCH_KERNEL_INLINE static __m128 and_(__m128 a, __m128 b) { return _mm_and_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m128 xor_(__m128 a, __m128 b) { return _mm_xor_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m128 gt(__m128 a, __m128 b) { return _mm_cmp_ps(a, b, _CMP_GT_OQ); }
+  SAHBENCH_KERNEL_INLINE static __m128 ge(__m128 a, __m128 b) { return _mm_cmp_ps(a, b, _CMP_GE_OQ); }
+  SAHBENCH_KERNEL_INLINE static __m128 le(__m128 a, __m128 b) { return _mm_cmp_ps(a, b, _CMP_LE_OQ); }
+  SAHBENCH_KERNEL_INLINE static int movemask(__m128 a) { return _mm_movemask_ps(a); }
+  SAHBENCH_KERNEL_INLINE static void store(float* p, __m128 a) { _mm_storeu_ps(p, a); }
+};
+
+struct Ops256 {
+  SAHBENCH_KERNEL_INLINE static __m256 set1(float x) { return _mm256_set1_ps(x); }
+  SAHBENCH_KERNEL_INLINE static __m256 add(__m256 a, __m256 b) { return _mm256_add_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m256 sub(__m256 a, __m256 b) { return _mm256_sub_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m256 mul(__m256 a, __m256 b) { return _mm256_mul_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m256 div(__m256 a, __m256 b) { return _mm256_div_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m256 fmadd(__m256 a, __m256 b, __m256 c) { return _mm256_fmadd_ps(a, b, c); }
+  SAHBENCH_KERNEL_INLINE static __m256 fmsub(__m256 a, __m256 b, __m256 c) { return _mm256_fmsub_ps(a, b, c); }
+  SAHBENCH_KERNEL_INLINE static __m256 and_(__m256 a, __m256 b) { return _mm256_and_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m256 xor_(__m256 a, __m256 b) { return _mm256_xor_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m256 gt(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
+  SAHBENCH_KERNEL_INLINE static __m256 ge(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
+  SAHBENCH_KERNEL_INLINE static __m256 le(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_LE_OQ); }
+  SAHBENCH_KERNEL_INLINE static int movemask(__m256 a) { return _mm256_movemask_ps(a); }
+  SAHBENCH_KERNEL_INLINE static void store(float* p, __m256 a) { _mm256_storeu_ps(p, a); }
+};
+
+// The [component][lane] array `part` of a NormalBlock: 0 v0, 1 e1, 2 e2, 3 the normal.
+SAHBENCH_KERNEL_INLINE const float (*mtn_part(const NormalBlock& b, int part))[kBlockWidth] {
+  return part == 0 ? b.tri.v0 : part == 1 ? b.tri.v1 : part == 2 ? b.tri.v2 : b.normal;
+}
+
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const WideRay& r, float tmin, float tmax,
+                                                    float* t_out, float* u_out, float* v_out) {
+  auto load = [&](int part, int axis) __attribute__((always_inline)) { return _mm_load_ps(mtn_part(b, part)[axis]); };
+  return intersect_mtn_lanes<__m128, Ops128>(lanes_valid(b.tri), load, r, tmin, tmax, t_out, u_out, v_out);
+}
+
+// Two consecutive blocks, 8 lanes: bits 0-3 are the first block's lanes, 4-7 the second's.
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, const WideRay& r, float tmin, float tmax,
+                                                         float* t_out, float* u_out, float* v_out) {
+  const __m256i prim = _mm256_insertf128_si256(
+      _mm256_castsi128_si256(_mm_load_si128(reinterpret_cast<const __m128i*>(b[0].tri.prim))),
+      _mm_load_si128(reinterpret_cast<const __m128i*>(b[1].tri.prim)), 1);
+  const __m256 valid = _mm256_castsi256_ps(
+      _mm256_xor_si256(_mm256_cmpeq_epi32(prim, _mm256_set1_epi32(-1)), _mm256_set1_epi32(-1)));
+  auto load = [&](int part, int axis) __attribute__((always_inline)) { return load_pair(mtn_part(b[0], part)[axis], mtn_part(b[1], part)[axis]); };
+  return intersect_mtn_lanes<__m256, Ops256>(valid, load, r, tmin, tmax, t_out, u_out, v_out);
+}
+#endif
+
+// The block a layout of triangle test kTri stores (wide_bvh.h: BlockForm), and its TriangleBlock part.
 template <TriangleTestKind kTri>
-SAHBENCH_KERNEL_INLINE uint32_t intersect_block(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float* t, float* u,
-                                float* v) {
+using BlockOf = std::conditional_t<kTri == TriangleTestKind::kMollerTrumboreNormal, NormalBlock, TriangleBlock>;
+SAHBENCH_KERNEL_INLINE const TriangleBlock& tri_part(const TriangleBlock& b) { return b; }
+SAHBENCH_KERNEL_INLINE const TriangleBlock& tri_part(const NormalBlock& b) { return b.tri; }
+
+template <TriangleTestKind kTri>
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block(const BlockOf<kTri>& b, const WideRay& r, float tmin, float tmax, float* t,
+                                                float* u, float* v) {
   if constexpr (kTri == TriangleTestKind::kWatertight) return intersect_block_watertight(b, r, tmin, tmax, t, u, v);
   else if constexpr (kTri == TriangleTestKind::kMollerTrumbore)
     return intersect_block_mt(b, r, tmin, tmax, kWideMtEpsilon, t, u, v);
-  else return intersect_block_mt(b, r, tmin, tmax, 0.0f, t, u, v);
+  else if constexpr (kTri == TriangleTestKind::kMollerTrumboreNoEpsilon)
+    return intersect_block_mt(b, r, tmin, tmax, 0.0f, t, u, v);
+  else return intersect_block_mtn(b, r, tmin, tmax, t, u, v);
 }
 
 SAHBENCH_KERNEL_INLINE uint32_t occupied_lanes(const TriangleBlock& b) {
@@ -613,7 +756,7 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
   while (true) {
     if (entry.count != 0) {
       if constexpr (kCount) ++counts->leaf_visits;
-      const TriangleBlock* blocks = &at<TriangleBlock>(arena, entry.child);
+      const BlockOf<kTri>* blocks = &at<BlockOf<kTri>>(arena, entry.child);
       uint32_t b = 0;
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
       if constexpr (kTri != TriangleTestKind::kWatertight && !kAnyHit && !kCount) {
@@ -623,11 +766,16 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
         // first block often ends the ray, and the second's test was then wasted (-1% on two scenes).
         for (; b + 1 < entry.count; b += 2) {
           alignas(32) float t[8], u[8], v[8];
-          const float eps = kTri == TriangleTestKind::kMollerTrumbore ? kWideMtEpsilon : 0.0f;
-          for (uint32_t lanes = intersect_block_pair_mt(blocks + b, r, r.tmin, best_t, eps, t, u, v); lanes;
-               lanes &= lanes - 1) {
+          uint32_t lanes;
+          if constexpr (kTri == TriangleTestKind::kMollerTrumboreNormal) {
+            lanes = intersect_block_pair_mtn(blocks + b, r, r.tmin, best_t, t, u, v);
+          } else {
+            const float eps = kTri == TriangleTestKind::kMollerTrumbore ? kWideMtEpsilon : 0.0f;
+            lanes = intersect_block_pair_mt(blocks + b, r, r.tmin, best_t, eps, t, u, v);
+          }
+          for (; lanes; lanes &= lanes - 1) {
             const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
-            const uint32_t prim = blocks[b + i / 4].prim[i % 4];
+            const uint32_t prim = tri_part(blocks[b + i / 4]).prim[i % 4];
             if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
               best = {prim, t[i], u[i], v[i]};
               best_t = t[i];
@@ -639,14 +787,15 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
       for (; b < entry.count; ++b) {
         alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
         uint32_t lanes = intersect_block<kTri>(blocks[b], r, r.tmin, best_t, t, u, v);
-        if constexpr (kCount) counts->prim_tests += occupied_lanes(blocks[b]);
+        const TriangleBlock& block = tri_part(blocks[b]);
+        if constexpr (kCount) counts->prim_tests += occupied_lanes(block);
         if constexpr (kAnyHit) {
-          if (lanes) return {blocks[b].prim[__builtin_ctz(lanes)], t[__builtin_ctz(lanes)], 0.0f, 0.0f};
+          if (lanes) return {block.prim[__builtin_ctz(lanes)], t[__builtin_ctz(lanes)], 0.0f, 0.0f};
         } else {
           // Closer, or as close with a lower primitive index (the tie rule of bvh2_traversal.h).
           for (; lanes; lanes &= lanes - 1) {
             const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
-            const uint32_t prim = blocks[b].prim[i];
+            const uint32_t prim = block.prim[i];
             if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
               best = {prim, t[i], u[i], v[i]};
               best_t = t[i];
@@ -715,6 +864,8 @@ WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, 
       case TriangleTestKind::kMollerTrumbore: return pick.template operator()<N, TriangleTestKind::kMollerTrumbore>();
       case TriangleTestKind::kMollerTrumboreNoEpsilon:
         return pick.template operator()<N, TriangleTestKind::kMollerTrumboreNoEpsilon>();
+      case TriangleTestKind::kMollerTrumboreNormal:
+        return pick.template operator()<N, TriangleTestKind::kMollerTrumboreNormal>();
     }
     return nullptr;
   };
@@ -739,7 +890,8 @@ double node_test_loop(const void* nodes, std::size_t node_count, const WideRay* 
 }
 
 template <TriangleTestKind kTri>
-double block_test_loop(const TriangleBlock* blocks, std::size_t block_count, const WideRay* rays, std::size_t ray_count) {
+double block_test_loop(const void* data, std::size_t block_count, const WideRay* rays, std::size_t ray_count) {
+  const auto* blocks = static_cast<const BlockOf<kTri>*>(data);
   double sum = 0.0;
   alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
   for (std::size_t r = 0; r < ray_count; ++r)
@@ -765,6 +917,9 @@ inline WideBenchLoops select_bench_loops(uint32_t width, TriangleTestKind tri, B
     case TriangleTestKind::kMollerTrumbore: loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumbore>; break;
     case TriangleTestKind::kMollerTrumboreNoEpsilon:
       loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumboreNoEpsilon>;
+      break;
+    case TriangleTestKind::kMollerTrumboreNormal:
+      loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumboreNormal>;
       break;
   }
   return loops;

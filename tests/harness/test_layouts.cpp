@@ -35,13 +35,13 @@ std::vector<std::pair<std::string, ParamOverrides>> builders_for(uint32_t arity)
           {"wide_collapse", {{"arity", a}, {"method", "greedy"}, {"max_leaf", "13"}}}};
 }
 
-// The specs a layout is tested with: its 3 triangle tests x 3 box tests, for SIMD layouts with the scalar
+// The specs a layout is tested with: its 4 triangle tests x 3 box tests, for SIMD layouts with the scalar
 // kernels and with every SIMD set available here (the SIMD sets share one source, so the variants are
 // crossed with the widest and the default variant with the others, to keep the suite quick).
 std::vector<std::string> specs_for(const LayoutInfo& layout) {
   std::vector<std::string> out;
   auto add_variants = [&](const std::string& isa) {
-    for (const char* tri : {"watertight", "mt", "mt0"})
+    for (const char* tri : {"watertight", "mt", "mt0", "mtn"})
       for (const char* box : {"robust", "fast", "fma"}) out.push_back(layout.name + ":tri=" + tri + ",box=" + box + isa);
   };
   if (!layout.has_isa) {
@@ -56,9 +56,15 @@ std::vector<std::string> specs_for(const LayoutInfo& layout) {
   for (const char* order : {"nearest", "stored", "nearest_stored"}) {
     out.push_back(layout.name + ":anyhit=" + order + ",isa=scalar");
     out.push_back(layout.name + ":tri=mt0,box=fast,anyhit=" + order + ",isa=" + std::string(to_string(best)));
+    out.push_back(layout.name + ":tri=mtn,box=fma,anyhit=" + order + ",isa=" + std::string(to_string(best)));
   }
-  for (KernelIsa isa : {KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
-    if (isa != best && kernel_isa_available(isa)) out.push_back(layout.name + ":isa=" + std::string(to_string(isa)));
+  // The other sets with the default variant, and with tri=mtn and box=fma, the two tests written with
+  // FMA instructions (fmaf on SSE).
+  for (KernelIsa isa : {KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
+    if (isa == best || !kernel_isa_available(isa)) continue;
+    out.push_back(layout.name + ":isa=" + std::string(to_string(isa)));
+    out.push_back(layout.name + ":tri=mtn,box=fma,isa=" + std::string(to_string(isa)));
+  }
   return out;
 }
 
@@ -202,9 +208,10 @@ TEST(Layouts, RefitLayoutsMatchBruteForceOnDeformedGeometry) {
     std::vector<std::string> specs{"bvh2", "bvh2_packed"};
     if (arity > 2) {
       specs.clear();
-      // The robust default (blocks of vertices) and Möller–Trumbore (blocks of edges, wide_bvh.h).
+      // The robust default (blocks of vertices) and Möller–Trumbore (blocks of edges, and of edges and
+      // normals: wide_bvh.h).
       for (KernelIsa isa : {KernelIsa::kScalar, best_kernel_isa()})
-        for (const char* tri : {"watertight", "mt0"})
+        for (const char* tri : {"watertight", "mt0", "mtn"})
           specs.push_back("bvh" + std::to_string(arity) + ":tri=" + tri + ",isa=" + std::string(to_string(isa)));
     }
     for (const std::string& spec : specs) {
@@ -364,7 +371,7 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
   };
   EXPECT_NE(error_of("bvh9").find("unknown layout 'bvh9'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:anyhit=first").find("anyhit = 'first' is not one of auto, nearest, stored, nearest_stored"), std::string::npos);
-  EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0"), std::string::npos);
+  EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0, mtn"), std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:box").find("'box' is not of the form key=value"), std::string::npos);
@@ -392,7 +399,7 @@ TEST(Layouts, WideKernelsVisitTheBinaryKernelsNodesOnABinaryTree) {
   const Bvh binary = info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
   auto rays = test::random_rays(tris, 2000, 5);
   for (std::size_t i = 0; i < rays.size(); i += 7) rays[i].dir[i % 3] = -0.0f;  // ties between boxes
-  for (const char* variant : {"tri=watertight,box=robust", "tri=mt0,box=fma", "tri=mt,box=fast"}) {
+  for (const char* variant : {"tri=watertight,box=robust", "tri=mt0,box=fma", "tri=mt,box=fast", "tri=mtn,box=fma"}) {
     SCOPED_TRACE(variant);
     const auto reference = compile_layout(std::string("bvh2:") + variant, binary, tris);
     const TraceCounts closest = reference->count_closest(rays), any = reference->count_any(rays);

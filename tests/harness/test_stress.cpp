@@ -179,12 +179,13 @@ TEST(HarnessStressConfig, DefaultsCoverEveryBuilderLayoutAndVariant) {
   for (const BuilderInfo& b : builders())
     EXPECT_NE(std::find(specs.begin(), specs.end(), b.name), specs.end()) << b.name;
   const std::vector<std::string> variants = all_layout_variants();
-  EXPECT_EQ(variants.size(), layouts().size() * 9);  // 3 triangle tests x 3 box tests
+  EXPECT_EQ(variants.size(), layouts().size() * 12);  // 4 triangle tests x 3 box tests
   for (const LayoutInfo& l : layouts()) {
     EXPECT_NE(std::find(variants.begin(), variants.end(), l.name), variants.end()) << l.name;
     EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mt0,box=fast"), variants.end())
         << l.name;
     EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mt0,box=fma"), variants.end()) << l.name;
+    EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mtn,box=fma"), variants.end()) << l.name;
   }
 }
 

@@ -104,7 +104,8 @@ TEST(WideBvh, TreeThatIsOneLeafGetsARootWithOneLeafSlot) {
 }
 
 // In edge form a block holds v0 and the edges v1 - v0, v2 - v0 as the Möller–Trumbore test computes
-// them, bit for bit, at compile time and after a refit; in vertex form the vertices themselves.
+// them, bit for bit, at compile time and after a refit; in vertex form the vertices themselves; in the
+// form of tri=mtn also the normals, as MollerTrumboreNormalTest computes them.
 TEST(WideBvh, BlocksHoldVerticesOrTheEdgesTheTriangleTestReads) {
   const auto scene = test::random_triangles(300, 5);
   auto moved = scene;
@@ -125,11 +126,15 @@ TEST(WideBvh, BlocksHoldVerticesOrTheEdgesTheTriangleTestReads) {
           for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
             if (block.prim[lane] == kInvalidPrim) continue;
             const Triangle& t = tris[block.prim[lane]];
-            const bool edges = wide.form == BlockForm::kEdges;
+            const bool edges = wide.form != BlockForm::kVertices;
+            const Vec3 normal = cross(t.v1 - t.v0, t.v2 - t.v0);
             for (uint32_t a = 0; a < 3; ++a) {
               ASSERT_EQ(block.v0[a][lane], t.v0[a]);
               ASSERT_EQ(block.v1[a][lane], edges ? t.v1[a] - t.v0[a] : t.v1[a]);
               ASSERT_EQ(block.v2[a][lane], edges ? t.v2[a] - t.v0[a] : t.v2[a]);
+              if (wide.form == BlockForm::kEdgesNormals) {
+                ASSERT_EQ(wide.normal_block(node.child[i], b).normal[a][lane], normal[a]);
+              }
             }
             ++lanes;
           }
@@ -138,10 +143,15 @@ TEST(WideBvh, BlocksHoldVerticesOrTheEdgesTheTriangleTestReads) {
     }
     EXPECT_EQ(lanes, tris.size());
   };
-  for (BlockForm form : {BlockForm::kVertices, BlockForm::kEdges}) {
-    SCOPED_TRACE(form == BlockForm::kEdges ? "edges" : "vertices");
+  for (BlockForm form : {BlockForm::kVertices, BlockForm::kEdges, BlockForm::kEdgesNormals}) {
+    SCOPED_TRACE(static_cast<int>(form));
     WideBvh<4> wide = compile_wide<4>(test::build_median_bvh(scene, 4, 4), scene, form);
     EXPECT_EQ(wide.form, form);
+    // Blocks of 160 or 224 bytes; a node may wait one 32-byte unit for its 64-byte line.
+    const std::size_t parts = wide.node_count * sizeof(WideNode<4>) +
+                              wide.block_count * (form == BlockForm::kEdgesNormals ? 224 : 160);
+    EXPECT_GE(wide.bytes(), parts);
+    EXPECT_LE(wide.bytes(), parts + wide.node_count * kWideUnit);
     check(wide, scene);
     refit_wide(wide, moved);
     check(wide, moved);
@@ -149,6 +159,7 @@ TEST(WideBvh, BlocksHoldVerticesOrTheEdgesTheTriangleTestReads) {
   EXPECT_EQ(block_form_for(TriangleTestKind::kWatertight), BlockForm::kVertices);
   EXPECT_EQ(block_form_for(TriangleTestKind::kMollerTrumbore), BlockForm::kEdges);
   EXPECT_EQ(block_form_for(TriangleTestKind::kMollerTrumboreNoEpsilon), BlockForm::kEdges);
+  EXPECT_EQ(block_form_for(TriangleTestKind::kMollerTrumboreNormal), BlockForm::kEdgesNormals);
 }
 
 // The node test of every instruction set computes ray_box.h's entry distances bit for bit, for each box

@@ -15,7 +15,7 @@
 // constants and plain structs from those headers.
 
 // Every helper below is inlined into the kernels, whatever the compiler's inlining budget says: with three
-// box tests x three triangle tests x two queries of kernels per instruction set in one file, GCC's
+// box tests x four triangle tests x two queries of kernels per instruction set in one file, GCC's
 // unit-growth limit left descend() and sort_keys() out of line, and the shadow rays lost 4-8%.
 // (The watertight test's double-precision finish, rarely run, stays a call.)
 #ifndef SAHBENCH_KERNEL_INLINE

@@ -84,7 +84,8 @@ WideParts<N> wide_parts(const WideBvh<N>& tree, std::size_t limit) {
   WideParts<N> parts;
   const uint32_t units = block_units(tree.form);
   std::vector<uint32_t> queue{0};
-  for (std::size_t q = 0; q < queue.size() && (parts.nodes.size() < limit || parts.block_count < limit); ++q) {
+  for (std::size_t q = 0; q < queue.size() && (parts.nodes.size() < limit || parts.block_count < limit);
+       ++q) {
     const WideNode<N>& node = tree.node(queue[q]);
     if (parts.nodes.size() < limit) parts.nodes.push_back(node);
     for (uint32_t i = 0; i < N; ++i) {
@@ -121,7 +122,8 @@ void BM_WideBlockTest(benchmark::State& state, KernelIsa isa, TriangleTestKind t
   const auto rs = wide_rays();
   for (auto _ : state)
     benchmark::DoNotOptimize(loops.blocks(parts.blocks.data(), parts.block_count, rs.data(), rs.size()));
-  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * parts.block_count * kBlockWidth * rs.size()));
+  state.SetItemsProcessed(
+      static_cast<int64_t>(state.iterations() * parts.block_count * kBlockWidth * rs.size()));
 }
 
 // Registers every width x box test x ISA, and every triangle test x ISA.
@@ -134,8 +136,8 @@ const bool registered = [] {
       benchmark::RegisterBenchmark(("node_visit/bvh8/" + i + "/" + b).c_str(), BM_WideNodeVisit<8>, isa, box);
     }
     for (TriangleTestKind tri :
-         {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore, TriangleTestKind::kMollerTrumboreNoEpsilon,
-          TriangleTestKind::kMollerTrumboreNormal})
+         {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore,
+          TriangleTestKind::kMollerTrumboreNoEpsilon, TriangleTestKind::kMollerTrumboreNormal})
       benchmark::RegisterBenchmark(("ray_triangle/block4/" + i + "/" + std::string(to_string(tri))).c_str(),
                                    BM_WideBlockTest, isa, tri);
   }

@@ -49,8 +49,8 @@ class CompiledLayout {
 
 /// A layout and its options, as a config or the CLI names it: `NAME[:key=value,...]` with the keys
 ///   tri = watertight | mt | mt0 | mtn   (triangle test; mt0 is Möller–Trumbore with epsilon 0, mtn
-///                                       Möller–Trumbore with a stored normal, as Embree's Triangle4)
-///   box = robust | fast           (ray/box test)
+///                                        Möller–Trumbore with a stored normal, as Embree's Triangle4)
+///   box = robust | fast | fma           (ray/box test)
 ///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto = the widest the CPU runs)
 /// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2".
 struct LayoutSpec {

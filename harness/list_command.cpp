@@ -31,7 +31,9 @@ void print_catalogue(std::ostream& out) {
   fmt::print(out, "  {:<14} {}\n", "embree_medium", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_MEDIUM");
   fmt::print(out, "  {:<14} {}\n", "embree_high", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_HIGH (spatial splits)");
 
-  fmt::print(out, "\nlayouts (config: layouts = [\"NAME[:tri=watertight|mt|mt0|mtn,box=robust|fast|fma,anyhit=...,isa=...]\"]):\n");
+  fmt::print(out,
+             "\nlayouts (config: layouts = "
+             "[\"NAME[:tri=watertight|mt|mt0|mtn,box=robust|fast|fma,anyhit=...,isa=...]\"]):\n");
   for (const auto& l : layouts())
     fmt::print(out, "  {:<14} arity {}{}  {}\n", l.name, l.arity, l.has_isa ? ", isa option" : "", l.summary);
   fmt::print(out, "  kernel ISAs available here:");

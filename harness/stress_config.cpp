@@ -244,8 +244,9 @@ std::vector<std::string> all_builder_specs() {
 std::vector<std::string> all_layout_variants() {
   std::vector<std::string> out;
   for (const auto& layout : layouts())
-    for (const auto tri : {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore,
-                           TriangleTestKind::kMollerTrumboreNoEpsilon, TriangleTestKind::kMollerTrumboreNormal})
+    for (const auto tri :
+         {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore,
+          TriangleTestKind::kMollerTrumboreNoEpsilon, TriangleTestKind::kMollerTrumboreNormal})
       for (const auto box : {BoxTestKind::kRobust, BoxTestKind::kFast, BoxTestKind::kFma}) {
         LayoutSpec spec;
         spec.name = layout.name;

@@ -36,5 +36,7 @@ template Hit brute_force_closest<WatertightTriangleTest>(std::span<const Triangl
 template Hit brute_force_closest<MollerTrumboreTest>(std::span<const Triangle>, const Ray&);
 template bool brute_force_any<WatertightTriangleTest>(std::span<const Triangle>, const Ray&);
 template bool brute_force_any<MollerTrumboreTest>(std::span<const Triangle>, const Ray&);
+template Hit brute_force_closest<MollerTrumboreNormalTest>(std::span<const Triangle>, const Ray&);
+template bool brute_force_any<MollerTrumboreNormalTest>(std::span<const Triangle>, const Ray&);
 
 }  // namespace sahbench

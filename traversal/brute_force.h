@@ -13,7 +13,7 @@ namespace sahbench {
 /// Closest hit of `ray` within [ray.tmin, ray.tmax] (closed) among `triangles`, by testing all of them in
 /// index order. Ties: among hits at the same float t, the lowest primitive index wins (a later hit
 /// replaces the current one only when strictly closer). Instantiated for WatertightTriangleTest (the
-/// reference) and MollerTrumboreTest with its default epsilon.
+/// reference), MollerTrumboreTest with its default epsilon and MollerTrumboreNormalTest.
 template <class TriangleTest = WatertightTriangleTest>
 Hit brute_force_closest(std::span<const Triangle> triangles, const Ray& ray);
 
@@ -25,5 +25,7 @@ extern template Hit brute_force_closest<WatertightTriangleTest>(std::span<const 
 extern template Hit brute_force_closest<MollerTrumboreTest>(std::span<const Triangle>, const Ray&);
 extern template bool brute_force_any<WatertightTriangleTest>(std::span<const Triangle>, const Ray&);
 extern template bool brute_force_any<MollerTrumboreTest>(std::span<const Triangle>, const Ray&);
+extern template Hit brute_force_closest<MollerTrumboreNormalTest>(std::span<const Triangle>, const Ray&);
+extern template bool brute_force_any<MollerTrumboreNormalTest>(std::span<const Triangle>, const Ray&);
 
 }  // namespace sahbench

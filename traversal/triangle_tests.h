@@ -1,5 +1,5 @@
 #pragma once
-// Ray/triangle tests, set up once per ray and run once per primitive. Both share one contract:
+// Ray/triangle tests, set up once per ray and run once per primitive. All share one contract:
 //
 //   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const
 //
@@ -207,21 +207,25 @@ class MollerTrumboreNoEpsilonTest : public MollerTrumboreTest {
 /// The geometric normal e1 x e2 of the edges e1 = v1 - v0, e2 = v2 - v0, as MollerTrumboreNormalTest
 /// computes it and as the wide layouts store it (wide_bvh.h, BlockForm::kEdgesNormals): the same float
 /// operations, so the stored normal is the one the test would compute.
-inline Vec3 stored_normal(Vec3 edge1, Vec3 edge2) { return cross(edge1, edge2); }
+inline Vec3 stored_normal(Vec3 edge1, Vec3 edge2) {
+  return cross(edge1, edge2);
+}
 
 /// Möller–Trumbore in the form Embree's Triangle4 intersector uses (Embree 3,
 /// kernels/geometry/triangle_intersector_moeller.h; Wald et al. 2014, "Embree: A Kernel Framework for
 /// Efficient CPU Ray Tracing"): the same Cramer's rule as MollerTrumboreTest, rearranged around the
 /// geometric normal n = e1 x e2, which the wide layouts store with the triangle. With c = v0 - org and
 /// r = dir x c, the determinant is dir . n, u = -(e2 . r) / det, v = (e1 . r) / det and t = (c . n) / det:
-/// one cross product and four dot products per triangle where MollerTrumboreTest takes two and three.
-/// u, v and t are compared multiplied by |det| (0 <= u, 0 <= v, u + v <= |det|, |det| tmin <= t <=
-/// |det| tmax), so the division waits for a hit; the hit's t is then checked again as divided, as this
-/// header's contract says. Only det == 0 (and NaN) is rejected, as in mt0. Not watertight.
+/// one cross product and four dot products per triangle where MollerTrumboreTest takes two of each and
+/// a subtraction more. u, v and t are compared multiplied by |det| (0 <= u, 0 <= v, u + v <= |det|,
+/// |det| tmin <= t <= |det| tmax), so the division waits for a hit; the hit's t is then checked again as
+/// divided, as this header's contract says. |det| must be a normal float, so that 1 / |det| is finite (a
+/// subnormal one, from a triangle of edge ~1e-19 or less, made hits at t = inf); an infinite det misses
+/// too (|det| tmin is NaN at tmin = 0). There is no epsilon, as in mt0. Not watertight.
 ///
-/// The cross and dot products use fused multiply-adds in a fixed order (std::fma here, FMA instructions
-/// in the SIMD kernels, wide_kernels.inl), so every kernel computes the same floats; without FMA
-/// hardware std::fma is exact but slow.
+/// r, det and the dot products use fused multiply-adds in a fixed order (std::fma here, FMA
+/// instructions in the SIMD kernels, wide_kernels.inl), so every kernel computes the same floats;
+/// without FMA hardware std::fma is exact but slow. The stored normal is a plain (unfused) cross product.
 class MollerTrumboreNormalTest {
  public:
   explicit MollerTrumboreNormalTest(const Ray& ray) : org_(ray.org), dir_(ray.dir) {}
@@ -237,7 +241,8 @@ class MollerTrumboreNormalTest {
                  float& v) const {
     const Vec3 c = v0 - org_;
     const Vec3 d = dir_;
-    const Vec3 r{std::fma(d.y, c.z, -(d.z * c.y)), std::fma(d.z, c.x, -(d.x * c.z)), std::fma(d.x, c.y, -(d.y * c.x))};
+    const Vec3 r{std::fma(d.y, c.z, -(d.z * c.y)), std::fma(d.z, c.x, -(d.x * c.z)),
+                 std::fma(d.x, c.y, -(d.y * c.x))};
     const float det = dot_fma(d, normal);
     // The sign of det moved onto u, v and t by flipping sign bits, as the SIMD kernels do.
     const uint32_t sign = std::bit_cast<uint32_t>(det) & 0x80000000u;
@@ -245,7 +250,8 @@ class MollerTrumboreNormalTest {
     const float su = flip(dot_fma(edge2, r), sign ^ 0x80000000u);
     const float sv = flip(dot_fma(edge1, r), sign);
     // Written so that a NaN is a miss.
-    if (!(abs_det > 0.0f && su >= 0.0f && sv >= 0.0f && su + sv <= abs_det)) return false;
+    if (!(abs_det >= std::numeric_limits<float>::min() && su >= 0.0f && sv >= 0.0f && su + sv <= abs_det))
+      return false;
     const float st = flip(dot_fma(c, normal), sign);
     if (!(st >= abs_det * tmin && st <= abs_det * tmax)) return false;
     const float inv_det = 1.0f / abs_det;
@@ -258,7 +264,9 @@ class MollerTrumboreNormalTest {
  private:
   // a . b as fma(a.x, b.x, fma(a.y, b.y, a.z * b.z)).
   static float dot_fma(Vec3 a, Vec3 b) { return std::fma(a.x, b.x, std::fma(a.y, b.y, a.z * b.z)); }
-  static float flip(float x, uint32_t sign) { return std::bit_cast<float>(std::bit_cast<uint32_t>(x) ^ sign); }
+  static float flip(float x, uint32_t sign) {
+    return std::bit_cast<float>(std::bit_cast<uint32_t>(x) ^ sign);
+  }
 
   Vec3 org_;
   Vec3 dir_;

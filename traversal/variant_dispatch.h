@@ -21,7 +21,8 @@ decltype(auto) with_test_types(const KernelVariant& variant, F&& f) {
     case TriangleTestKind::kMollerTrumbore: return with_box.template operator()<MollerTrumboreTest>();
     case TriangleTestKind::kMollerTrumboreNoEpsilon:
       return with_box.template operator()<MollerTrumboreNoEpsilonTest>();
-    case TriangleTestKind::kMollerTrumboreNormal: return with_box.template operator()<MollerTrumboreNormalTest>();
+    case TriangleTestKind::kMollerTrumboreNormal:
+      return with_box.template operator()<MollerTrumboreNormalTest>();
     case TriangleTestKind::kWatertight: break;
   }
   return with_box.template operator()<WatertightTriangleTest>();

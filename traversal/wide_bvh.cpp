@@ -54,7 +54,8 @@ void set_lane(TriangleBlock& block, uint32_t lane, const Triangle& t, BlockForm 
   }
   if (form != BlockForm::kEdgesNormals) return;
   const Vec3 n = stored_normal(e1, e2);
-  for (uint32_t axis = 0; axis < 3; ++axis) reinterpret_cast<NormalBlock&>(block).normal[axis][lane] = n[axis];
+  for (uint32_t axis = 0; axis < 3; ++axis)
+    reinterpret_cast<NormalBlock&>(block).normal[axis][lane] = n[axis];
 }
 
 // Writes the triangles of `refs` into consecutive blocks of `form` starting at `first`.
@@ -140,10 +141,13 @@ WideRay make_wide_ray(const Ray& ray, bool shear, BoxTestKind box) {
 
 BlockForm block_form_for(TriangleTestKind test) {
   switch (test) {
-    case TriangleTestKind::kWatertight: return BlockForm::kVertices;
-    case TriangleTestKind::kMollerTrumboreNormal: return BlockForm::kEdgesNormals;
+    case TriangleTestKind::kWatertight:
+      return BlockForm::kVertices;
+    case TriangleTestKind::kMollerTrumboreNormal:
+      return BlockForm::kEdgesNormals;
     case TriangleTestKind::kMollerTrumbore:
-    case TriangleTestKind::kMollerTrumboreNoEpsilon: break;
+    case TriangleTestKind::kMollerTrumboreNoEpsilon:
+      break;
   }
   return BlockForm::kEdges;
 }

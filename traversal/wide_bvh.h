@@ -11,7 +11,8 @@
 // planes[] holds min x, max x, min y, max y, min z, max z of each child, so a ray picks its near and
 // far plane per axis by index (2 axis + sign). A child slot is
 //   inner: count = 0, child = reference of its WideNode;
-//   leaf:  count = number of TriangleBlocks, child = reference of the first (the others follow it);
+//   leaf:  count = number of blocks (TriangleBlocks, or NormalBlocks for tri=mtn), child = reference of
+//          the first (the others follow it);
 //   empty: count = 0, child = 0, and an inverted box (min +inf, max -inf) that no ray can enter.
 // TriangleBlock: v0, v1, v2 as [component][lane] floats (144) + prim[4] (16) = 160 bytes per 4 triangles;
 // unused lanes have prim = kInvalidPrim and NaN vertices, which no test can hit. In the edge form, which
@@ -31,6 +32,7 @@
 // (wide_kernels_*.cpp), so the types here are plain data: no functions a kernel might share with
 // another instruction set's translation unit (the kernels call none of WideBvh's accessors).
 
+#include <cassert>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -148,8 +150,12 @@ struct WideBvh {
     return *reinterpret_cast<const TriangleBlock*>(arena.data() + ref + i * block_units(form));
   }
   /// The same block as a NormalBlock: form kEdgesNormals only.
-  NormalBlock& normal_block(uint32_t ref, uint32_t i = 0) { return reinterpret_cast<NormalBlock&>(block(ref, i)); }
+  NormalBlock& normal_block(uint32_t ref, uint32_t i = 0) {
+    assert(form == BlockForm::kEdgesNormals);
+    return reinterpret_cast<NormalBlock&>(block(ref, i));
+  }
   const NormalBlock& normal_block(uint32_t ref, uint32_t i = 0) const {
+    assert(form == BlockForm::kEdgesNormals);
     return reinterpret_cast<const NormalBlock&>(block(ref, i));
   }
 };

@@ -5,8 +5,9 @@
 //
 // Every lane computes exactly what the scalar kernels of ray_box.h and triangle_tests.h compute, in the
 // same order and with the same IEEE operations (min/max with the same NaN rule, no reciprocal
-// approximations, no fused multiply-add: the project builds with -ffp-contract=off), so every
-// instruction set returns the same hits, and visits the same nodes in the same order, as the scalar one.
+// approximations, and fused multiply-adds only where the scalar test calls fmaf: the project builds with
+// -ffp-contract=off), so every instruction set returns the same hits, and visits the same nodes in the
+// same order, as the scalar one.
 
 // The including file includes wide_kernels_isa.h (and <immintrin.h> for the SIMD sets) first: no
 // header may be included inside a namespace. Inline functions and templates from shared headers would
@@ -182,11 +183,13 @@ SAHBENCH_KERNEL_INLINE bool lane_det_ok(float det, float scaled_t) {
 // form; Möller–Trumbore as MollerTrumboreTest with `epsilon`, on blocks in edge form (wide_bvh.h);
 // tri=mtn as MollerTrumboreNormalTest, on NormalBlocks.
 
-// One lane of MollerTrumboreNormalTest: the scalar kernels' test, and the SSE kernels' (SSE has no fused
-// multiply-add; fmaf is exact there, and slow). The same operations as triangle_tests.h, in the same order.
+// x with its sign bit xor `sign`.
 SAHBENCH_KERNEL_INLINE float flip_sign(float x, uint32_t sign) {
   return __builtin_bit_cast(float, __builtin_bit_cast(uint32_t, x) ^ sign);
 }
+
+// One lane of MollerTrumboreNormalTest: the scalar kernels' test, and the SSE kernels' (SSE has no fused
+// multiply-add; fmaf is exact there, and slow). The same operations as triangle_tests.h, in the same order.
 
 SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const WideRay& r, float tmin, float tmax,
                                      float& t_out, float& u_out, float& v_out) {
@@ -202,7 +205,7 @@ SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const Wid
   const float su = flip_sign(__builtin_fmaf(e.v2[0][i], rx, __builtin_fmaf(e.v2[1][i], ry, e.v2[2][i] * rz)),
                              sign ^ 0x80000000u);
   const float sv = flip_sign(__builtin_fmaf(e.v1[0][i], rx, __builtin_fmaf(e.v1[1][i], ry, e.v1[2][i] * rz)), sign);
-  if (!(abs_det > 0.0f && su >= 0.0f && sv >= 0.0f && su + sv <= abs_det)) return false;
+  if (!(abs_det >= __FLT_MIN__ && su >= 0.0f && sv >= 0.0f && su + sv <= abs_det)) return false;
   const float st = flip_sign(__builtin_fmaf(cx, nx, __builtin_fmaf(cy, ny, cz * nz)), sign);
   if (!(st >= abs_det * tmin && st <= abs_det * tmax)) return false;
   const float inv_det = 1.0f / abs_det;
@@ -474,8 +477,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, 
 
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
 // MollerTrumboreNormalTest on 4 or 8 lanes (V = __m128 or __m256, the lanes loaded by `load`): mtn_lane
-// lane for lane, with FMA instructions where it calls fmaf. The three divisions wait for a lane to pass,
-// so a ray that hits nothing in the block divides nothing; t is checked again once divided.
+// lane for lane, with FMA instructions where it calls fmaf. The division waits for a lane to pass, so a
+// ray that hits nothing in the block divides nothing; t is checked again once divided.
 template <class V, class Ops, class Load>
 SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const WideRay& r, float tmin, float tmax,
                                                     float* t_out, float* u_out, float* v_out) {
@@ -493,7 +496,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const Wi
                          Ops::xor_(sign, sign_bit));
   const V sv = Ops::xor_(Ops::fmadd(load(1, 0), rx, Ops::fmadd(load(1, 1), ry, Ops::mul(load(1, 2), rz))), sign);
   const V zero = Ops::set1(0.0f);
-  V hit = Ops::and_(valid, Ops::and_(Ops::gt(abs_det, zero), Ops::and_(Ops::ge(su, zero), Ops::ge(sv, zero))));
+  V hit = Ops::and_(valid, Ops::and_(Ops::ge(abs_det, Ops::set1(__FLT_MIN__)),
+                                     Ops::and_(Ops::ge(su, zero), Ops::ge(sv, zero))));
   hit = Ops::and_(hit, Ops::le(Ops::add(su, sv), abs_det));
   const V st = Ops::xor_(Ops::fmadd(cx, nx, Ops::fmadd(cy, ny, Ops::mul(cz, nz))), sign);
   hit = Ops::and_(hit, Ops::and_(Ops::ge(st, Ops::mul(abs_det, Ops::set1(tmin))),
@@ -518,7 +522,6 @@ struct Ops128 {
   SAHBENCH_KERNEL_INLINE static __m128 fmsub(__m128 a, __m128 b, __m128 c) { return _mm_fmsub_ps(a, b, c); }
   SAHBENCH_KERNEL_INLINE static __m128 and_(__m128 a, __m128 b) { return _mm_and_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m128 xor_(__m128 a, __m128 b) { return _mm_xor_ps(a, b); }
-  SAHBENCH_KERNEL_INLINE static __m128 gt(__m128 a, __m128 b) { return _mm_cmp_ps(a, b, _CMP_GT_OQ); }
   SAHBENCH_KERNEL_INLINE static __m128 ge(__m128 a, __m128 b) { return _mm_cmp_ps(a, b, _CMP_GE_OQ); }
   SAHBENCH_KERNEL_INLINE static __m128 le(__m128 a, __m128 b) { return _mm_cmp_ps(a, b, _CMP_LE_OQ); }
   SAHBENCH_KERNEL_INLINE static int movemask(__m128 a) { return _mm_movemask_ps(a); }
@@ -535,7 +538,6 @@ struct Ops256 {
   SAHBENCH_KERNEL_INLINE static __m256 fmsub(__m256 a, __m256 b, __m256 c) { return _mm256_fmsub_ps(a, b, c); }
   SAHBENCH_KERNEL_INLINE static __m256 and_(__m256 a, __m256 b) { return _mm256_and_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m256 xor_(__m256 a, __m256 b) { return _mm256_xor_ps(a, b); }
-  SAHBENCH_KERNEL_INLINE static __m256 gt(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
   SAHBENCH_KERNEL_INLINE static __m256 ge(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
   SAHBENCH_KERNEL_INLINE static __m256 le(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_LE_OQ); }
   SAHBENCH_KERNEL_INLINE static int movemask(__m256 a) { return _mm256_movemask_ps(a); }

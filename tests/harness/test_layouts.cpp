@@ -42,7 +42,8 @@ std::vector<std::string> specs_for(const LayoutInfo& layout) {
   std::vector<std::string> out;
   auto add_variants = [&](const std::string& isa) {
     for (const char* tri : {"watertight", "mt", "mt0", "mtn"})
-      for (const char* box : {"robust", "fast", "fma"}) out.push_back(layout.name + ":tri=" + tri + ",box=" + box + isa);
+      for (const char* box : {"robust", "fast", "fma"})
+        out.push_back(layout.name + ":tri=" + tri + ",box=" + box + isa);
   };
   if (!layout.has_isa) {
     add_variants("");
@@ -239,6 +240,60 @@ TEST(Layouts, RefitLayoutsMatchBruteForceOnDeformedGeometry) {
   }
 }
 
+// tri=mtn's SIMD kernels (FMA instructions, the comparisons scaled by |det|, the division only for hits)
+// against its scalar test, bit for bit, on every instruction set here, for bvh4 and bvh8: closest hits
+// (primitive, t, u, v) equal the brute force of MollerTrumboreNormalTest, and so do any hits. The scene
+// mixes random triangles with specks of edge 2^-66 (subnormal det: 1 / |det| once made hits at t = inf),
+// triangles of edge 1e15, lines (zero normal) and triangles seen edge-on; rays aim at specks and have
+// +0 and -0 components.
+TEST(Layouts, StoredNormalKernelsComputeTheScalarTestsHits) {
+  auto tris = test::random_triangles(1500, 31);
+  std::vector<Ray> rays = test::random_rays(tris, 1500, 9);
+  const float tiny = 0x1p-66f;
+  for (int i = 0; i < 40; ++i) {
+    const Vec3 at = tris[static_cast<std::size_t>(i) * 37].v0;
+    const Vec3 speck{static_cast<float>(i) * 0x1p-60f, 0.0f,
+                     static_cast<float>(i) * 0.25f};  // near the z axis
+    tris.push_back({speck, speck + Vec3{tiny, 0.0f, 0.0f}, speck + Vec3{0.0f, tiny, 0.0f}});
+    rays.push_back(Ray{speck + Vec3{tiny / 4, tiny / 4, -0.125f}, 0.0f, {0.0f, -0.0f, 1.0f}});
+    tris.push_back({at, at + Vec3{1.0f, 1.0f, 1.0f}, at + Vec3{2.0f, 2.0f, 2.0f}});  // a line
+    tris.push_back(
+        {at, at + Vec3{1e15f, 0.0f, 0.0f}, at + Vec3{0.0f, 0.0f, 1e15f}});  // huge, in the plane y = at.y
+    rays.push_back(Ray{at + Vec3{-1.0f, 0.0f, 0.5f}, 0.0f, {1.0f, 0.0f, 0.0f}});  // edge-on to it
+  }
+  for (std::size_t i = 0; i < rays.size(); i += 5) rays[i].dir[i % 3] = i % 2 ? 0.0f : -0.0f;
+  std::size_t found = 0;
+  for (uint32_t arity : {4u, 8u}) {
+    const BuilderInfo& info = find_builder("wide_binned_sah");
+    const Bvh bvh = info.build(BuildInput::from_triangles(tris),
+                               resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
+    for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
+      if (!kernel_isa_available(isa)) continue;
+      const std::string spec =
+          "bvh" + std::to_string(arity) + ":tri=mtn,box=fast,isa=" + std::string(to_string(isa));
+      SCOPED_TRACE(spec);
+      const auto layout = compile_layout(spec, bvh, tris);
+      std::vector<Hit> hits(rays.size());
+      std::vector<uint8_t> occluded(rays.size());
+      layout->trace_closest(rays, hits);
+      layout->trace_any(rays, occluded);
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        const Hit ref = brute_force_closest<MollerTrumboreNormalTest>(tris, rays[i]);
+        found += ref.found();
+        ASSERT_EQ(hits[i].prim, ref.prim) << "ray " << i;
+        if (ref.found()) {
+          ASSERT_EQ(std::bit_cast<uint32_t>(hits[i].t), std::bit_cast<uint32_t>(ref.t)) << "ray " << i;
+          ASSERT_EQ(std::bit_cast<uint32_t>(hits[i].u), std::bit_cast<uint32_t>(ref.u)) << "ray " << i;
+          ASSERT_EQ(std::bit_cast<uint32_t>(hits[i].v), std::bit_cast<uint32_t>(ref.v)) << "ray " << i;
+          ASSERT_TRUE(std::isfinite(hits[i].t)) << "ray " << i;
+        }
+        ASSERT_EQ(occluded[i] != 0, brute_force_any<MollerTrumboreNormalTest>(tris, rays[i])) << "ray " << i;
+      }
+    }
+  }
+  EXPECT_GT(found, rays.size());  // over all the layouts: most rays hit
+}
+
 // A layout refitted in place is the layout compiled afresh from the refitted tree: layouts depend only on
 // the tree's topology and the triangles, and both refits recompute every box from the triangles (min and
 // max are exact, so the order of the unions does not matter). So the hits must be bit-identical and the
@@ -371,7 +426,8 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
   };
   EXPECT_NE(error_of("bvh9").find("unknown layout 'bvh9'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:anyhit=first").find("anyhit = 'first' is not one of auto, nearest, stored, nearest_stored"), std::string::npos);
-  EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0, mtn"), std::string::npos);
+  EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0, mtn"),
+            std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:box").find("'box' is not of the form key=value"), std::string::npos);
@@ -399,7 +455,8 @@ TEST(Layouts, WideKernelsVisitTheBinaryKernelsNodesOnABinaryTree) {
   const Bvh binary = info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
   auto rays = test::random_rays(tris, 2000, 5);
   for (std::size_t i = 0; i < rays.size(); i += 7) rays[i].dir[i % 3] = -0.0f;  // ties between boxes
-  for (const char* variant : {"tri=watertight,box=robust", "tri=mt0,box=fma", "tri=mt,box=fast", "tri=mtn,box=fma"}) {
+  for (const char* variant :
+       {"tri=watertight,box=robust", "tri=mt0,box=fma", "tri=mt,box=fast", "tri=mtn,box=fma"}) {
     SCOPED_TRACE(variant);
     const auto reference = compile_layout(std::string("bvh2:") + variant, binary, tris);
     const TraceCounts closest = reference->count_closest(rays), any = reference->count_any(rays);

@@ -203,7 +203,8 @@ Bvh collapse_sah(const Bvh& bvh, uint32_t arity, const SahCost& cost, uint32_t m
   auto solve = [&](auto&& self, uint32_t n, uint32_t depth) -> void {
     const Node& node = bvh.nodes[n];
     if (depth >= spawn_depth || node.is_leaf()) return solve_serial(n);
-    tbb::parallel_invoke([&] { self(self, node.first, depth + 1); }, [&] { self(self, node.first + 1, depth + 1); });
+    tbb::parallel_invoke([&] { self(self, node.first, depth + 1); },
+                         [&] { self(self, node.first + 1, depth + 1); });
     solve_node(n);
   };
   solve(solve, 0, 0);

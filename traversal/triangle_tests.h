@@ -231,15 +231,11 @@ class MollerTrumboreNormalTest {
   explicit MollerTrumboreNormalTest(const Ray& ray) : org_(ray.org), dir_(ray.dir) {}
 
   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
+    // v0, the edges and the normal: what the wide layouts store.
     const Vec3 edge1 = tri.v1 - tri.v0;
     const Vec3 edge2 = tri.v2 - tri.v0;
-    return intersect(tri.v0, edge1, edge2, stored_normal(edge1, edge2), tmin, tmax, t, u, v);
-  }
-
-  /// The test from what the wide layouts store: v0, the edges and the normal.
-  bool intersect(Vec3 v0, Vec3 edge1, Vec3 edge2, Vec3 normal, float tmin, float tmax, float& t, float& u,
-                 float& v) const {
-    const Vec3 c = v0 - org_;
+    const Vec3 normal = stored_normal(edge1, edge2);
+    const Vec3 c = tri.v0 - org_;
     const Vec3 d = dir_;
     const Vec3 r{std::fma(d.y, c.z, -(d.z * c.y)), std::fma(d.z, c.x, -(d.x * c.z)),
                  std::fma(d.x, c.y, -(d.y * c.x))};

@@ -190,7 +190,6 @@ SAHBENCH_KERNEL_INLINE float flip_sign(float x, uint32_t sign) {
 
 // One lane of MollerTrumboreNormalTest: the scalar kernels' test, and the SSE kernels' (SSE has no fused
 // multiply-add; fmaf is exact there, and slow). The same operations as triangle_tests.h, in the same order.
-
 SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const WideRay& r, float tmin, float tmax,
                                      float& t_out, float& u_out, float& v_out) {
   const TriangleBlock& e = b.tri;  // edge form
@@ -428,13 +427,18 @@ SAHBENCH_KERNEL_INLINE __m256 load_pair(const float* lo, const float* hi) {
   return _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_load_ps(lo)), _mm_load_ps(hi), 1);
 }
 
+// All ones in the lanes of two blocks that hold a triangle (lanes_valid for 8 lanes).
+SAHBENCH_KERNEL_INLINE __m256 pair_lanes_valid(const TriangleBlock& lo, const TriangleBlock& hi) {
+  const __m256i prim =
+      _mm256_insertf128_si256(_mm256_castsi128_si256(_mm_load_si128(reinterpret_cast<const __m128i*>(lo.prim))),
+                              _mm_load_si128(reinterpret_cast<const __m128i*>(hi.prim)), 1);
+  const __m256i all = _mm256_set1_epi32(-1);
+  return _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(prim, all), all));
+}
+
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, const WideRay& r, float tmin, float tmax,
                                                         float epsilon, float* t_out, float* u_out, float* v_out) {
-  const __m256i prim = _mm256_insertf128_si256(
-      _mm256_castsi128_si256(_mm_load_si128(reinterpret_cast<const __m128i*>(b[0].prim))),
-      _mm_load_si128(reinterpret_cast<const __m128i*>(b[1].prim)), 1);
-  const __m256 valid = _mm256_castsi256_ps(
-      _mm256_xor_si256(_mm256_cmpeq_epi32(prim, _mm256_set1_epi32(-1)), _mm256_set1_epi32(-1)));
+  const __m256 valid = pair_lanes_valid(b[0], b[1]);
   const __m256 v0x = load_pair(b[0].v0[0], b[1].v0[0]), v0y = load_pair(b[0].v0[1], b[1].v0[1]),
                v0z = load_pair(b[0].v0[2], b[1].v0[2]);
   const __m256 e1x = load_pair(b[0].v1[0], b[1].v1[0]), e1y = load_pair(b[0].v1[1], b[1].v1[1]),
@@ -551,20 +555,20 @@ SAHBENCH_KERNEL_INLINE const float (*mtn_part(const NormalBlock& b, int part))[k
 
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const WideRay& r, float tmin, float tmax,
                                                     float* t_out, float* u_out, float* v_out) {
-  auto load = [&](int part, int axis) __attribute__((always_inline)) { return _mm_load_ps(mtn_part(b, part)[axis]); };
+  auto load = [&](int part, int axis) __attribute__((always_inline)) {
+    return _mm_load_ps(mtn_part(b, part)[axis]);
+  };
   return intersect_mtn_lanes<__m128, Ops128>(lanes_valid(b.tri), load, r, tmin, tmax, t_out, u_out, v_out);
 }
 
 // Two consecutive blocks, 8 lanes: bits 0-3 are the first block's lanes, 4-7 the second's.
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, const WideRay& r, float tmin, float tmax,
                                                          float* t_out, float* u_out, float* v_out) {
-  const __m256i prim = _mm256_insertf128_si256(
-      _mm256_castsi128_si256(_mm_load_si128(reinterpret_cast<const __m128i*>(b[0].tri.prim))),
-      _mm_load_si128(reinterpret_cast<const __m128i*>(b[1].tri.prim)), 1);
-  const __m256 valid = _mm256_castsi256_ps(
-      _mm256_xor_si256(_mm256_cmpeq_epi32(prim, _mm256_set1_epi32(-1)), _mm256_set1_epi32(-1)));
-  auto load = [&](int part, int axis) __attribute__((always_inline)) { return load_pair(mtn_part(b[0], part)[axis], mtn_part(b[1], part)[axis]); };
-  return intersect_mtn_lanes<__m256, Ops256>(valid, load, r, tmin, tmax, t_out, u_out, v_out);
+  auto load = [&](int part, int axis) __attribute__((always_inline)) {
+    return load_pair(mtn_part(b[0], part)[axis], mtn_part(b[1], part)[axis]);
+  };
+  return intersect_mtn_lanes<__m256, Ops256>(pair_lanes_valid(b[0].tri, b[1].tri), load, r, tmin, tmax, t_out,
+                                             u_out, v_out);
 }
 #endif
 

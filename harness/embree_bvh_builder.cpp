@@ -23,23 +23,24 @@ namespace sahbench {
 namespace {
 
 constexpr const char* kBuilderName = "embree_bvh";
-// Embree's binary trees: every inner node gets maxBranchingFactor = 2 children.
-constexpr unsigned kArity = 2;
 // Below this many primitives the RTCBuildPrimitive array is filled on the calling thread.
 constexpr std::size_t kParallelFill = 1 << 14;
 
 // A node of the temporary tree Embree builds through the callbacks. Inner nodes hold their children
-// and the children's boxes (Embree gives a node's boxes to the node, not to the children); a leaf holds
-// its primitive ids in the same allocation, right after the node.
+// and the children's boxes (Embree gives a node's boxes to the node, not to the children), in arrays
+// of the child count Embree asked for, allocated with the node; a leaf holds its primitive ids in the
+// same allocation, right after the node.
 struct TempNode {
   uint32_t child_count = 0;  // 0 for a leaf
   uint32_t prim_count = 0;
-  TempNode* children[kArity] = {nullptr, nullptr};
-  Aabb child_bounds[kArity];
-  uint32_t* prims = nullptr;  // leaf: prim_count ids
+  TempNode** children = nullptr;  // inner: child_count children
+  Aabb* child_bounds = nullptr;   // inner: their boxes
+  uint32_t* prims = nullptr;      // leaf: prim_count ids
 };
-// Alignment requested from rtcThreadLocalAlloc: TempNode's own (the ids after it need less).
+// Alignment requested from rtcThreadLocalAlloc: TempNode's own (the arrays after it need less).
 constexpr std::size_t kTempNodeAlign = alignof(TempNode);
+static_assert(sizeof(TempNode) % alignof(Aabb) == 0 && sizeof(Aabb) % alignof(TempNode*) == 0,
+              "the child arrays follow the node, boxes first, each aligned");
 
 // What the callbacks need: the triangles, for clipping in split_primitive.
 struct BuildContext {
@@ -51,23 +52,27 @@ Aabb to_aabb(const RTCBounds& b) { return {{b.lower_x, b.lower_y, b.lower_z}, {b
 // RTCCreateNodeFunction: an empty inner node in Embree's thread-local allocator. Embree releases that
 // memory with the RTCBVH, after we have flattened the tree.
 void* create_node(RTCThreadLocalAllocator alloc, unsigned child_count, void* /*user*/) {
-  void* memory = rtcThreadLocalAlloc(alloc, sizeof(TempNode), kTempNodeAlign);
+  const std::size_t bytes = sizeof(TempNode) + child_count * (sizeof(Aabb) + sizeof(TempNode*));
+  auto* memory = static_cast<std::byte*>(rtcThreadLocalAlloc(alloc, bytes, kTempNodeAlign));
   auto* node = new (memory) TempNode;
   node->child_count = child_count;
+  node->child_bounds = new (memory + sizeof(TempNode)) Aabb[child_count];
+  node->children = new (memory + sizeof(TempNode) + child_count * sizeof(Aabb)) TempNode*[child_count]();
   return node;
 }
 
-// RTCSetNodeChildrenFunction.
+// RTCSetNodeChildrenFunction. Embree passes the count it created the node with.
 void set_node_children(void* node_ptr, void** children, unsigned count, void* /*user*/) {
   auto* node = static_cast<TempNode*>(node_ptr);
-  node->child_count = std::min(count, kArity);
+  node->child_count = std::min(count, node->child_count);
   for (unsigned c = 0; c < node->child_count; ++c) node->children[c] = static_cast<TempNode*>(children[c]);
 }
 
 // RTCSetNodeBoundsFunction.
 void set_node_bounds(void* node_ptr, const RTCBounds** bounds, unsigned count, void* /*user*/) {
   auto* node = static_cast<TempNode*>(node_ptr);
-  for (unsigned c = 0; c < std::min(count, kArity); ++c) node->child_bounds[c] = to_aabb(*bounds[c]);
+  for (unsigned c = 0; c < std::min(count, node->child_count); ++c)
+    node->child_bounds[c] = to_aabb(*bounds[c]);
 }
 
 // RTCCreateLeafFunction: the node and its primitive ids in one allocation.
@@ -175,6 +180,8 @@ void check_param_values(const EmbreeBvhParams& p) {
          std::to_string(p.min_leaf) + ", max_leaf=" + std::to_string(p.max_leaf) + ")");
   if (p.min_leaf > p.max_leaf)
     fail("min_leaf=" + std::to_string(p.min_leaf) + " is larger than max_leaf=" + std::to_string(p.max_leaf));
+  if (p.arity != 2 && p.arity != 4 && p.arity != 8)
+    fail("arity=" + std::to_string(p.arity) + " is not 2, 4 or 8");
   if (p.max_depth < 1 || p.max_depth > kMaxDepth)
     fail("max_depth=" + std::to_string(p.max_depth) + " is outside 1.." + std::to_string(kMaxDepth));
   if (!std::has_single_bit(p.sah_block)) fail("sah_block=" + std::to_string(p.sah_block) + " is not a power of two");
@@ -192,12 +199,12 @@ void check_params(const BuildInput& input, const EmbreeBvhParams& p) {
     fail(std::to_string(input.size()) + " primitives are too many for 32-bit references");
 }
 
-// Flattens the temporary tree depth first: children of a node stored contiguously, the left subtree
-// right after the pair, leaf references in visiting order. A one-child node (which maxBranchingFactor
-// 2 should never produce) is replaced by its child.
-Bvh flatten(const TempNode* root, const Aabb& root_bounds, std::size_t reference_hint) {
+// Flattens the temporary tree depth first: children of a node stored contiguously, the first child's
+// subtree right after them, leaf references in visiting order. A one-child node (which Embree should
+// never produce) is replaced by its child.
+Bvh flatten(const TempNode* root, const Aabb& root_bounds, std::size_t reference_hint, uint32_t arity) {
   Bvh bvh;
-  bvh.arity = kArity;
+  bvh.arity = arity;
   bvh.prim_refs.reserve(reference_hint);
   bvh.nodes.reserve(2 * reference_hint);
   struct Item {
@@ -217,6 +224,9 @@ Bvh flatten(const TempNode* root, const Aabb& root_bounds, std::size_t reference
     if (item.depth > kMaxDepth)
       throw Error(std::string("builder '") + kBuilderName + "': Embree's tree is deeper than " + std::to_string(kMaxDepth));
     const TempNode& t = *item.node;
+    if (t.child_count > arity)
+      throw Error(std::string("builder '") + kBuilderName + "': Embree made a node of " +
+                  std::to_string(t.child_count) + " children for arity " + std::to_string(arity));
     if (t.child_count == 0) {
       if (t.prim_count == 0 || t.prim_count > kMaxLeafPrims)
         throw Error(std::string("builder '") + kBuilderName + "': Embree made a leaf of " + std::to_string(t.prim_count) +
@@ -231,7 +241,7 @@ Bvh flatten(const TempNode* root, const Aabb& root_bounds, std::size_t reference
     bvh.nodes[item.index].first = first;
     bvh.nodes[item.index].child_count = static_cast<uint16_t>(t.child_count);
     for (uint32_t c = 0; c < t.child_count; ++c) bvh.nodes.push_back({t.child_bounds[c], 0, 0, 0});
-    // Right child pushed first so the left subtree is laid out right after the pair.
+    // Last child pushed first so the first child's subtree is laid out right after the children.
     for (uint32_t c = t.child_count; c-- > 0;) stack.push_back({skip_single(t.children[c]), first + c, item.depth + 1});
   }
   return bvh;
@@ -279,7 +289,7 @@ Bvh build_embree_bvh(const BuildInput& input, const EmbreeBvhParams& params) {
   RTCBuildArguments args = rtcDefaultBuildArguments();
   args.buildQuality = to_rtc(params.quality);
   args.buildFlags = RTC_BUILD_FLAG_NONE;
-  args.maxBranchingFactor = kArity;
+  args.maxBranchingFactor = params.arity;
   args.maxDepth = params.max_depth;
   args.sahBlockSize = params.sah_block;
   args.minLeafSize = params.min_leaf;
@@ -301,7 +311,7 @@ Bvh build_embree_bvh(const BuildInput& input, const EmbreeBvhParams& params) {
   const void* root = rtcBuildBVH(&args);
   device.check("rtcBuildBVH");
   if (!root) throw Error(std::string("builder '") + kBuilderName + "': rtcBuildBVH returned no tree");
-  return flatten(static_cast<const TempNode*>(root), root_bounds, capacity);
+  return flatten(static_cast<const TempNode*>(root), root_bounds, capacity, params.arity);
 }
 
 static_assert(static_cast<int>(EmbreeQuality::kLow) == 0 && static_cast<int>(EmbreeQuality::kMedium) == 1 &&
@@ -316,11 +326,15 @@ void register_embree_builders() {
       // Named as for the `embree` builder (rtcCommitScene), so one config can ask both for "high".
       choice_param("quality", {"low", "medium", "high"}, static_cast<uint32_t>(defaults.quality),
                    "low (Morton codes), medium (binned SAH), high (binned SAH with spatial splits)"),
+      {"arity", ParamType::kInt, double(defaults.arity), 2, kMaxArity,
+       "maxBranchingFactor: children per inner node, 2, 4 or 8 (wide nodes filled by splitting the child of "
+       "largest area, as Embree's BVH4/BVH8 builders do)"},
       {"min_leaf", ParamType::kInt, double(defaults.min_leaf), 1, kEmbreeMaxLeafPrims,
        "minLeafSize: nodes with this many primitives or fewer become leaves"},
       {"max_leaf", ParamType::kInt, double(defaults.max_leaf), 1, kEmbreeMaxLeafPrims,
        "maxLeafSize: nodes with more primitives are always split"},
-      {"c_trav", ParamType::kFloat, defaults.cost.c_trav, 0, 1e6, "traversalCost: SAH cost of visiting an inner node"},
+      {"c_trav", ParamType::kFloat, defaults.cost.c_trav, 0, 1e6,
+       "traversalCost: SAH cost of visiting an inner node"},
       {"c_isect", ParamType::kFloat, defaults.cost.c_isect, 1e-6, 1e6,
        "intersectionCost: SAH cost of one ray/triangle test"},
       {"max_depth", ParamType::kInt, double(defaults.max_depth), 1, kMaxDepth,
@@ -333,6 +347,7 @@ void register_embree_builders() {
   auto from = [](const ParamSet& p) {
     EmbreeBvhParams e;
     e.quality = static_cast<EmbreeQuality>(p.get_uint("quality"));
+    e.arity = p.get_uint("arity");
     e.min_leaf = p.get_uint("min_leaf");
     e.max_leaf = p.get_uint("max_leaf");
     e.cost = sah_cost_of(p);
@@ -341,10 +356,13 @@ void register_embree_builders() {
     e.split_factor = p.get_float("split_factor");
     return e;
   };
-  register_builder({kBuilderName, "Embree 3 rtcBuildBVH, binary (Morton / binned SAH / spatial splits by quality)",
-                    std::move(params),
-                    [from](const BuildInput& input, const ParamSet& p) { return build_embree_bvh(input, from(p)); },
-                    [from](const ParamSet& p) { check_param_values(from(p)); }});
+  register_builder(
+      {kBuilderName,
+       "Embree 3 rtcBuildBVH, 2-, 4- or 8-wide (Morton / binned SAH / spatial splits by quality)",
+       std::move(params),
+       [from](const BuildInput& input, const ParamSet& p) { return build_embree_bvh(input, from(p)); },
+       [from](const ParamSet& p) { check_param_values(from(p)); },
+       [](const ParamSet& p) { return p.get_uint("arity"); }});
 }
 
 }  // namespace sahbench

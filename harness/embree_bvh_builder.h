@@ -3,7 +3,7 @@
 // so that trees built by Embree's builders are traced by our kernels and costed by our SAH, next to
 // ours. Embree builds into a temporary tree of our own nodes allocated in its thread-local allocator
 // (rtcThreadLocalAlloc) through its create-node, set-children, set-bounds and create-leaf callbacks;
-// that tree is then flattened into a Bvh of arity 2.
+// that tree is then flattened into a Bvh of arity 2, 4 or 8 (maxBranchingFactor).
 
 #include <cstdint>
 
@@ -22,6 +22,10 @@ struct EmbreeBvhParams {
   /// (BVHBuilderBinnedSAH); kHigh: binned SAH with spatial splits (BVHBuilderBinnedFastSpatialSAH),
   /// which clips triangles and so needs BuildInput::triangles.
   EmbreeQuality quality = EmbreeQuality::kMedium;
+  /// maxBranchingFactor: 2, 4 or 8. Embree's generic builder fills a wide node by splitting the child
+  /// of largest area until it has `arity` children or the SAH makes the rest leaves, as its BVH4 and
+  /// BVH8 scene builders do; with sah_block = 4 and min_leaf = 4 it is their tree for Triangle4 leaves.
+  uint32_t arity = 2;
   uint32_t min_leaf = 1;  ///< minLeafSize: nodes with this many primitives or fewer become leaves
   uint32_t max_leaf = 8;  ///< maxLeafSize: nodes with more are always split (Embree caps it at 32)
   SahCost cost;           ///< traversalCost, intersectionCost
@@ -56,7 +60,7 @@ inline constexpr float kEmbreeMaxSplitFactor = 4.0f;
 /// Invalid parameters and Embree errors throw sahbench::Error.
 Bvh build_embree_bvh(const BuildInput& input, const EmbreeBvhParams& params);
 
-/// Registers "embree_bvh" with builders/registry.h (parameters quality, min_leaf, max_leaf, c_trav,
+/// Registers "embree_bvh" with builders/registry.h (parameters quality, arity, min_leaf, max_leaf, c_trav,
 /// c_isect, max_depth, sah_block, split_factor). Calling it again does nothing. Not thread-safe: call
 /// at startup, like register_builder.
 void register_embree_builders();

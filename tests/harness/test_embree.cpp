@@ -327,30 +327,40 @@ class HarnessEmbreeBvh : public ::testing::TestWithParam<int> {
 
 TEST_P(HarnessEmbreeBvh, ValidTreesAndSameHitsAsBruteForce) {
   const BuilderInfo& info = find_builder("embree_bvh");
-  const ParamSet p = params();
-  for (const auto& scene : test::scene_cases()) {
-    SCOPED_TRACE(scene.name);
-    const BuildInput input = BuildInput::from_triangles(scene.triangles);
-    const Bvh bvh = info.build(input, p);
-    const ValidationReport report = validate(bvh, input.bounds);
-    ASSERT_TRUE(report.ok()) << report.summary();
-    ASSERT_EQ(bvh.arity, 2u);
-    const BvhStats stats = compute_stats(bvh, scene.triangles.size(), sah_cost_of(p));
-    EXPECT_LE(stats.max_leaf_size, p.get_uint("max_leaf"));
-    EXPECT_LE(stats.max_depth, kMaxDepth);
-    if (GetParam() != 2) {
-      EXPECT_EQ(bvh.prim_refs.size(), scene.triangles.size());
-    }
+  for (const char* arity : {"2", "4", "8"})
+    for (const auto& scene : test::scene_cases()) {
+      SCOPED_TRACE(std::string(scene.name) + ", arity " + arity);
+      const ParamSet p = params({{"arity", arity}});
+      const BuildInput input = BuildInput::from_triangles(scene.triangles);
+      const Bvh bvh = info.build(input, p);
+      const ValidationReport report = validate(bvh, input.bounds);
+      ASSERT_TRUE(report.ok()) << report.summary();
+      ASSERT_EQ(bvh.arity, p.get_uint("arity"));
+      ASSERT_EQ(info.arity(p), bvh.arity);
+      if (bvh.arity > 2 && scene.triangles.size() > 1000) {
+        // Embree fills wide nodes: most inner nodes have more than two children.
+        std::size_t inner = 0, wide = 0;
+        for (const Node& node : bvh.nodes) inner += !node.is_leaf(), wide += node.child_count > 2;
+        EXPECT_GT(wide, inner / 2) << wide << " of " << inner << " inner nodes";
+      }
+      const BvhStats stats = compute_stats(bvh, scene.triangles.size(), sah_cost_of(p));
+      EXPECT_LE(stats.max_leaf_size, p.get_uint("max_leaf"));
+      EXPECT_LE(stats.max_depth, kMaxDepth);
+      if (GetParam() != 2) {
+        EXPECT_EQ(bvh.prim_refs.size(), scene.triangles.size());
+      }
 
-    const std::size_t ray_count = std::clamp<std::size_t>(2'000'000 / scene.triangles.size(), 200, 2000);
-    const auto rays = test::random_rays(scene.triangles, ray_count, 21);
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      const Hit ref = brute_force_closest(scene.triangles, rays[i]);
-      ASSERT_TRUE(test::same_closest_hit(closest_hit(bvh, scene.triangles, rays[i]), ref, scene.triangles, rays[i]))
-          << "ray " << i;
-      ASSERT_EQ(any_hit(bvh, scene.triangles, rays[i]), brute_force_any(scene.triangles, rays[i])) << "ray " << i;
+      const std::size_t ray_count = std::clamp<std::size_t>(2'000'000 / scene.triangles.size(), 200, 2000);
+      const auto rays = test::random_rays(scene.triangles, ray_count, 21);
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        const Hit ref = brute_force_closest(scene.triangles, rays[i]);
+        ASSERT_TRUE(
+            test::same_closest_hit(closest_hit(bvh, scene.triangles, rays[i]), ref, scene.triangles, rays[i]))
+            << "ray " << i;
+        ASSERT_EQ(any_hit(bvh, scene.triangles, rays[i]), brute_force_any(scene.triangles, rays[i]))
+            << "ray " << i;
+      }
     }
-  }
 }
 
 TEST_P(HarnessEmbreeBvh, ZeroAndOnePrimitive) {
@@ -438,6 +448,7 @@ TEST(HarnessEmbreeBvhParams, RegistryDeclaresParametersAndRejectsBadOnes) {
   EXPECT_EQ(resolve_params(info.name, info.params, {{"quality", "high"}}).get_choice("quality"), "high");
   EXPECT_NE(resolve_params(info.name, info.params, {}).to_string().find("quality=medium"), std::string::npos);
   EXPECT_THROW(resolve_params(info.name, info.params, {{"max_leaf", "33"}}), Error);
+  EXPECT_THROW(resolve_params(info.name, info.params, {{"arity", "16"}}), Error);
 
   const auto tris = test::random_triangles(100, 9);
   const BuildInput input = BuildInput::from_triangles(tris);
@@ -445,6 +456,8 @@ TEST(HarnessEmbreeBvhParams, RegistryDeclaresParametersAndRejectsBadOnes) {
   EXPECT_THROW(build({{"min_leaf", "9"}, {"max_leaf", "8"}}), Error);
   EXPECT_THROW(build({{"sah_block", "3"}}), Error);
   EXPECT_NO_THROW(build({{"sah_block", "4"}}));
+  EXPECT_THROW(build({{"arity", "3"}}), Error);
+  EXPECT_THROW(info.check(resolve_params(info.name, info.params, {{"arity", "5"}})), Error);
 
   BuildInput bounds_only = BuildInput::from_triangles(tris);
   bounds_only.triangles = {};

@@ -89,7 +89,7 @@ TEST(Collapse, AFinerSourceGivesSmallerLeavesAtALowerSah) {
   // the SAH collapse merges its finer leaves back only where its own constants say so. The collapse
   // searches a superset of trees (every leaf of the coarse source is a subtree of the fine one, or
   // nearly), so its SAH, by the collapse's constants, should come out lower on these scenes, and its
-  // leaves smaller (on the shared scenes, at scale 0.25: 5-6% lower SAH, 30-43% more leaves).
+  // leaves smaller (on the shared scenes, at scale 0.25: 5-7% lower SAH, 30-43% more leaves).
   SahCost cost;
   cost.block = 4;  // wide_collapse's sah_block
   for (const auto& scene : test::scene_cases()) {

@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 
 namespace sahbench {
 
@@ -78,9 +77,15 @@ class KeyPass {
   // Largest key first; stable, so equal keys keep the builder's order.
   void sort_children(const Node& parent) {
     const uint32_t count = parent.child_count;
+    // Insertion sort: stable, and for at most kMaxArity children it needs no buffer, where
+    // std::stable_sort allocates one per call (a tenth of this pass on the 1M-triangle terrain).
     uint32_t order[kMaxArity];
-    std::iota(order, order + count, parent.first);
-    std::stable_sort(order, order + count, [&](uint32_t a, uint32_t b) { return keys_[a] > keys_[b]; });
+    for (uint32_t c = 0; c < count; ++c) {
+      const uint32_t child = parent.first + c;
+      uint32_t at = c;
+      for (; at > 0 && keys_[order[at - 1]] < keys_[child]; --at) order[at] = order[at - 1];
+      order[at] = child;
+    }
     Node nodes[kMaxArity];
     double keys[kMaxArity];
     for (uint32_t c = 0; c < count; ++c) {

@@ -12,6 +12,7 @@
 
 #include "builders/top_down.h"
 #include "core/error.h"
+#include "core/huge_pages.h"
 
 namespace sahbench {
 namespace {
@@ -73,23 +74,149 @@ class WideWriter {
   }
 
  private:
-  // Every reference under input node n, leaves in depth-first order.
+  // Every reference under input node n, leaves in depth-first order. The depth is at most kMaxDepth,
+  // which every builder guarantees.
   void append_refs(uint32_t n) {
-    std::vector<uint32_t> stack{n};
-    while (!stack.empty()) {
-      const Node& node = in_.nodes[stack.back()];
-      stack.pop_back();
-      if (node.is_leaf()) {
-        out_.prim_refs.insert(out_.prim_refs.end(), in_.prim_refs.begin() + node.first,
-                              in_.prim_refs.begin() + node.first + node.prim_count);
-        continue;
-      }
-      for (uint32_t c = node.child_count; c-- > 0;) stack.push_back(node.first + c);
+    const Node& node = in_.nodes[n];
+    if (node.is_leaf()) {
+      out_.prim_refs.insert(out_.prim_refs.end(), in_.prim_refs.begin() + node.first,
+                            in_.prim_refs.begin() + node.first + node.prim_count);
+      return;
     }
+    for (uint32_t c = 0; c < node.child_count; ++c) append_refs(node.first + c);
   }
 
   const Bvh& in_;
   Bvh out_;
+};
+
+// The SAH-optimal collapse for a fixed arity (a template parameter, so that the loops over subtree
+// counts unroll). C(n, i), the least cost of binary subtree n as at most i subtrees (Ylitie et al.), is
+// computed bottom-up in area-weighted units (divided by the root's area only in the statistics), in
+// double, since a million-node sum in float would round differently along different paths.
+//
+// Each node's costs are returned to its parent rather than stored: a node's C(., i) is read only by its
+// parent, and the recursion holds at most two per level. Only the choices that reach them are kept,
+// one byte per node and subtree count, for the reconstruction. (A table of every node's costs had been
+// 25-33 MB on the 1M-triangle terrain, written once and read once, and its first touch alone cost
+// more than the arithmetic.)
+template <uint32_t kArity>
+class SahCollapse {
+ public:
+  SahCollapse(const Bvh& bvh, const SahCost& cost, uint32_t max_leaf)
+      : bvh_(bvh), cost_(cost), max_leaf_(max_leaf), choice_(bvh.nodes.size() * kArity) {
+    // The top levels in parallel, each node's two subtrees as two tasks, down to the depth where a
+    // balanced tree has kTasksPerThread subtrees per thread (as refit() spawns); none with one thread.
+    // Every node's values depend on its subtree alone, so the result is the serial one. Serial, this
+    // pass held wide_collapse's 1M-terrain build at 2 threads at 1.08-1.27x Embree medium's time (1.05x
+    // in parallel).
+    const int threads = tbb::this_task_arena::max_concurrency();
+    spawn_depth_ =
+        threads > 1 ? static_cast<uint32_t>(std::ceil(std::log2(double(threads) * kTasksPerThread))) : 0;
+  }
+
+  Bvh run() {
+    solve(0, 0);
+    auto slots_of = [&](uint32_t n, std::vector<uint32_t>& slots) {
+      // As an inner node, n's children are split into kArity slots at the k recorded for it.
+      const uint32_t k = choice(n, 1);
+      const Node& node = bvh_.nodes[n];
+      take(node.first, k, slots);
+      take(node.first + 1, kArity - k, slots);
+    };
+    auto is_leaf = [&](uint32_t n) { return bvh_.nodes[n].is_leaf() || choice(n, 1) == kAsLeaf; };
+    return WideWriter(bvh_, kArity).write(slots_of, is_leaf);
+  }
+
+ private:
+  // choice(n, 1): kAsLeaf, or the k of the best split of n's children into kArity subtrees as an inner
+  // node (k subtrees from the left child, kArity - k from the right). choice(n, i) for i >= 2: kFewer
+  // when i - 1 subtrees are as cheap, else the k of the best split into i. An input leaf has kAsLeaf
+  // (= kFewer) everywhere.
+  static constexpr uint8_t kAsLeaf = 0, kFewer = 0;
+  static constexpr double kInf = std::numeric_limits<double>::infinity();
+
+  struct Subtree {
+    std::array<double, kArity> cost;  // cost[i - 1] = C(n, i)
+    uint32_t refs;                    // references under n
+  };
+
+  uint8_t& choice(uint32_t n, uint32_t i) { return choice_[std::size_t{n} * kArity + i - 1]; }
+
+  // Post-order: the depth is at most kMaxDepth, which every builder guarantees.
+  Subtree solve(uint32_t n, uint32_t depth) {
+    const Node node = bvh_.nodes[n];
+    if (node.is_leaf()) {
+      // An input leaf stays one leaf, whatever its size.
+      std::fill_n(&choice(n, 1), kArity, kAsLeaf);
+      Subtree s;
+      s.cost.fill(cost_.leaf_cost(node.prim_count) * double(node.bounds.half_area()));
+      s.refs = node.prim_count;
+      return s;
+    }
+    Subtree l, r;
+    if (depth < spawn_depth_) {
+      tbb::parallel_invoke([&] { l = solve(node.first, depth + 1); },
+                           [&] { r = solve(node.first + 1, depth + 1); });
+    } else {
+      l = solve(node.first, depth + 1);
+      r = solve(node.first + 1, depth + 1);
+    }
+    return combine(n, node, l, r);
+  }
+
+  Subtree combine(uint32_t n, const Node& node, const Subtree& l, const Subtree& r) {
+    // distribute[j]: the least cost of the two children as at most j subtrees together, at the first
+    // least k. Selects, not branches: which k wins is unpredictable.
+    std::array<double, kArity + 1> distribute;
+    std::array<uint8_t, kArity + 1> split_at;
+    for (uint32_t j = 2; j <= kArity; ++j) {
+      double least = kInf;
+      uint8_t at = 0;
+      for (uint32_t k = 1; k < j; ++k) {
+        const double v = l.cost[k - 1] + r.cost[j - k - 1];
+        const bool lower = v < least;
+        least = lower ? v : least;
+        at = lower ? static_cast<uint8_t>(k) : at;
+      }
+      distribute[j] = least;
+      split_at[j] = at;
+    }
+    const double area = node.bounds.half_area();
+    Subtree s;
+    s.refs = l.refs + r.refs;
+    const double as_leaf = s.refs <= max_leaf_ ? cost_.leaf_cost(s.refs) * area : kInf;
+    const double as_node = cost_.c_trav * area + distribute[kArity];
+    s.cost[0] = as_leaf <= as_node ? as_leaf : as_node;
+    choice(n, 1) = as_leaf <= as_node ? kAsLeaf : split_at[kArity];
+    for (uint32_t i = 2; i <= kArity; ++i) {
+      // Ties prefer fewer subtrees: fewer, larger nodes cost the same and keep the tree shallow.
+      const bool fewer = s.cost[i - 2] <= distribute[i];
+      s.cost[i - 1] = fewer ? s.cost[i - 2] : distribute[i];
+      choice(n, i) = fewer ? kFewer : split_at[i];
+    }
+    return s;
+  }
+
+  // Reconstruction: appends the slots of subtree n represented as at most i subtrees.
+  void take(uint32_t n, uint32_t i, std::vector<uint32_t>& slots) {
+    const Node& node = bvh_.nodes[n];
+    while (i > 1 && !node.is_leaf() && choice(n, i) == kFewer) --i;
+    if (i == 1 || node.is_leaf()) {
+      slots.push_back(n);
+      return;
+    }
+    const uint32_t k = choice(n, i);
+    take(node.first, k, slots);
+    take(node.first + 1, i - k, slots);
+  }
+
+  const Bvh& bvh_;
+  const SahCost& cost_;
+  uint32_t max_leaf_;
+  uint32_t spawn_depth_;
+  // Every entry is written by the bottom-up pass before it is read, so it starts uninitialised.
+  HugePageArray<uint8_t> choice_;
 };
 
 }  // namespace
@@ -124,118 +251,15 @@ Bvh collapse_greedy(const Bvh& bvh, uint32_t arity) {
 Bvh collapse_sah(const Bvh& bvh, uint32_t arity, const SahCost& cost, uint32_t max_leaf) {
   check_arity(bvh, arity, "collapse_sah");
   if (bvh.arity != 2) throw Error("collapse_sah: needs a binary tree, got arity " + std::to_string(bvh.arity));
-  const std::size_t n_nodes = bvh.nodes.size();
-  if (n_nodes == 0) return Bvh{{}, {}, arity};
-
-  // cost_[n * arity + i - 1]: the least cost of subtree n as at most i subtrees ("C(n, i)" in Ylitie et
-  // al.), in area-weighted units (divided by the root's area only in the statistics). Double, since a
-  // million-node sum in float would round differently along different paths.
-  std::vector<double> best(n_nodes * arity);
-  // choice_[n * arity + i - 1]: for i = 1, kAsLeaf or kAsNode; for i >= 2, 0 when i - 1 subtrees are
-  // as cheap (kFewer), else the k of the best split (k subtrees from the left child, i - k from the right).
-  constexpr uint8_t kAsLeaf = 0, kAsNode = 1, kFewer = 0;
-  std::vector<uint8_t> choice(n_nodes * arity);
-  std::vector<uint32_t> refs(n_nodes);
-
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  // C(n, i) and the choices for node n, from its children's.
-  auto solve_node = [&](uint32_t n) {
-    const Node& node = bvh.nodes[n];
-    const double area = node.bounds.half_area();
-    double* c = &best[std::size_t{n} * arity];
-    uint8_t* ch = &choice[std::size_t{n} * arity];
-    if (node.is_leaf()) {
-      // An input leaf stays one leaf, whatever its size.
-      refs[n] = node.prim_count;
-      std::fill(c, c + arity, cost.leaf_cost(node.prim_count) * area);
-      std::fill(ch, ch + arity, kAsLeaf);
-      return;
-    }
-    const uint32_t l = node.first, r = node.first + 1;
-    refs[n] = refs[l] + refs[r];
-    const double* cl = &best[std::size_t{l} * arity];
-    const double* cr = &best[std::size_t{r} * arity];
-    // distribute[j]: the least cost of the two children as at most j subtrees together.
-    std::array<double, 9> distribute;
-    std::array<uint8_t, 9> split_at{};
-    for (uint32_t j = 2; j <= arity; ++j) {
-      distribute[j] = kInf;
-      for (uint32_t k = 1; k < j; ++k) {
-        const double v = cl[k - 1] + cr[j - k - 1];
-        if (v < distribute[j]) distribute[j] = v, split_at[j] = static_cast<uint8_t>(k);
-      }
-    }
-    const double as_leaf = refs[n] <= max_leaf ? cost.leaf_cost(refs[n]) * area : kInf;
-    const double as_node = cost.c_trav * area + distribute[arity];
-    c[0] = as_leaf <= as_node ? as_leaf : as_node;
-    ch[0] = as_leaf <= as_node ? kAsLeaf : kAsNode;
-    for (uint32_t i = 2; i <= arity; ++i) {
-      // Ties prefer fewer subtrees: fewer, larger nodes cost the same and keep the tree shallow.
-      if (c[i - 2] <= distribute[i]) {
-        c[i - 1] = c[i - 2];
-        ch[i - 1] = kFewer;
-      } else {
-        c[i - 1] = distribute[i];
-        ch[i - 1] = split_at[i];
-      }
-    }
-  };
-  // Subtree `root` children first, on this thread: its nodes in depth-first preorder, walked backwards.
-  auto solve_serial = [&](uint32_t root) {
-    std::vector<uint32_t> order;
-    for (std::vector<uint32_t> stack{root}; !stack.empty();) {
-      const uint32_t n = stack.back();
-      stack.pop_back();
-      order.push_back(n);
-      const Node& node = bvh.nodes[n];
-      for (uint32_t c = 0; c < node.child_count; ++c) stack.push_back(node.first + c);
-    }
-    for (auto it = order.rbegin(); it != order.rend(); ++it) solve_node(*it);
-  };
-  // The top levels in parallel, each node's two subtrees as two tasks, down to the depth where a
-  // balanced tree has kTasksPerThread subtrees per thread (as refit() spawns); none with one thread. Every
-  // node's values depend on its subtree alone, so the result is the serial one. Serial, this pass held
-  // wide_collapse's 1M-terrain build at 2 threads at 1.08-1.27x Embree medium's time (1.05x in parallel).
-  const int threads = tbb::this_task_arena::max_concurrency();
-  const uint32_t spawn_depth =
-      threads > 1 ? static_cast<uint32_t>(std::ceil(std::log2(double(threads) * kTasksPerThread))) : 0;
-  auto solve = [&](auto&& self, uint32_t n, uint32_t depth) -> void {
-    const Node& node = bvh.nodes[n];
-    if (depth >= spawn_depth || node.is_leaf()) return solve_serial(n);
-    tbb::parallel_invoke([&] { self(self, node.first, depth + 1); },
-                         [&] { self(self, node.first + 1, depth + 1); });
-    solve_node(n);
-  };
-  solve(solve, 0, 0);
-
-  // Reconstruction: the slots of an inner node n are its two children's best split into `arity`.
-  auto take = [&](auto&& self, uint32_t n, uint32_t i, std::vector<uint32_t>& slots) -> void {
-    const Node& node = bvh.nodes[n];
-    while (i > 1 && !node.is_leaf() && choice[std::size_t{n} * arity + i - 1] == kFewer) --i;
-    if (i == 1 || node.is_leaf()) {
-      slots.push_back(n);
-      return;
-    }
-    const uint32_t k = choice[std::size_t{n} * arity + i - 1];
-    self(self, node.first, k, slots);
-    self(self, node.first + 1, i - k, slots);
-  };
-  auto slots_of = [&](uint32_t n, std::vector<uint32_t>& slots) {
-    const Node& node = bvh.nodes[n];
-    // As an inner node, n's children are split into `arity` slots by the best k recorded for it.
-    double best_v = kInf;
-    uint32_t best_k = 1;
-    const double* cl = &best[std::size_t{node.first} * arity];
-    const double* cr = &best[std::size_t{node.first + 1} * arity];
-    for (uint32_t k = 1; k < arity; ++k) {
-      const double v = cl[k - 1] + cr[arity - k - 1];
-      if (v < best_v) best_v = v, best_k = k;
-    }
-    take(take, node.first, best_k, slots);
-    take(take, node.first + 1, arity - best_k, slots);
-  };
-  auto is_leaf = [&](uint32_t n) { return bvh.nodes[n].is_leaf() || choice[std::size_t{n} * arity] == kAsLeaf; };
-  return WideWriter(bvh, arity).write(slots_of, is_leaf);
+  if (bvh.nodes.empty()) return Bvh{{}, {}, arity};
+  switch (arity) {
+    case 2:
+      return SahCollapse<2>(bvh, cost, max_leaf).run();
+    case 4:
+      return SahCollapse<4>(bvh, cost, max_leaf).run();
+    default:
+      return SahCollapse<8>(bvh, cost, max_leaf).run();
+  }
 }
 
 }  // namespace sahbench

@@ -46,7 +46,8 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back({"wide_collapse", {{"arity", "4"}, {"source", "sweep_sah"}}});
   out.push_back({"wide_collapse", {{"method", "greedy"}, {"arity", "4"}, {"max_leaf", "1"}}});
   out.push_back({"wide_collapse", {{"source", "sbvh"}}});
-  out.push_back({"wide_collapse", {{"c_trav", "2"}, {"source_c_trav_scale", "0.25"}}});
+  // configs/wide.toml's finer row.
+  out.push_back({"wide_collapse", {{"c_trav", "2"}, {"source_c_trav_scale", "0.25"}, {"min_leaf", "4"}}});
   out.push_back({"wide_collapse", {{"source_c_trav_scale", "0"}, {"source", "sbvh"}}});
   // Spatial splits tried at every node: without unsplitting, with the fewest slabs everywhere; and with
   // the most slabs, a large budget and single-reference leaves.

@@ -122,6 +122,8 @@ CsvRow common_row(const std::string& run_id, const Environment& env, const Exper
   row["git_commit"] = env.git_commit;
   row["cpu"] = env.cpu;
   row["compiler"] = env.compiler;
+  // What the code was compiled for; `isa` is each row's kernel (report captions name both).
+  row["build_isa"] = env.isa;
   row["threads"] = std::to_string(threads);
   row["scene"] = scene.name;
   row["scene_triangles"] = std::to_string(scene.triangles.size());

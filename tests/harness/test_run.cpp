@@ -9,9 +9,10 @@
 #include <map>
 #include <sstream>
 
-#include "core/error.h"
 #include "builders/registry.h"
+#include "core/error.h"
 #include "harness/csv.h"
+#include "harness/environment.h"
 #include "harness/report.h"
 #include "harness/runner.h"
 #include "harness/trace_command.h"
@@ -57,6 +58,9 @@ TEST(HarnessRun, EveryCellWritesARowWithNoMismatchesAndResumeSkipsThem) {
     EXPECT_GT(std::stod(row.at("nodes_per_ray")), 0.0);
     EXPECT_FALSE(row.at("git_commit").empty());
     EXPECT_FALSE(row.at("isa").empty());
+    // The compile target, which report captions give as "built for" (it had been left empty, and the
+    // captions named the first row's kernel ISA instead).
+    EXPECT_EQ(row.at("build_isa"), current_environment().isa);
     EXPECT_EQ(row.at("sah_c_trav"), "1");
   }
   EXPECT_NE(log.str().find("[32/32]"), std::string::npos) << log.str();

@@ -143,6 +143,43 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     table.caption += ".";
   }
 
+  // SAH costs are comparable only under one cost model: the table's usual constants are those of most of
+  // its rows with a cost, and a cost under others carries them as a note (and is not marked best). A
+  // collapse with c_trav = 2 reports a larger SAH for a tree that traces faster than c_trav = 1's.
+  const std::vector<std::pair<std::string, std::string>> model_fields = {
+      {"sah_c_trav", "c_trav"}, {"sah_c_isect", "c_isect"}, {"sah_block", "block"}};
+  auto model_of = [&](const CsvRow& r) {
+    std::vector<std::string> values;
+    for (const auto& [column, name] : model_fields) values.push_back(field(r, column));
+    return values;
+  };
+  std::map<std::vector<std::string>, int> model_rows;
+  for (const CsvRow* r : group)
+    if (csv_number(*r, "sah_cost")) ++model_rows[model_of(*r)];
+  std::vector<std::string> usual_model;
+  int usual_rows = 0;
+  for (const auto& [model, rows] : model_rows)
+    if (rows > usual_rows) usual_model = model, usual_rows = rows;
+  auto model_note = [&](const CsvRow& r) {
+    std::string note;
+    const auto model = model_of(r);
+    for (std::size_t i = 0; i < model.size(); ++i)
+      if (model[i] != usual_model[i])
+        note +=
+            (note.empty() ? "" : ", ") + model_fields[i].second + "=" + (model[i].empty() ? "?" : model[i]);
+    return note;
+  };
+  if (model_rows.size() > 1) {
+    std::string usual;
+    for (std::size_t i = 0; i < usual_model.size(); ++i)
+      usual +=
+          (i ? ", " : "") + model_fields[i].second + "=" + (usual_model[i].empty() ? "?" : usual_model[i]);
+    table.caption +=
+        " SAH costs are in each builder's own constants; those in brackets differ from the table's "
+        "usual " +
+        usual + ", and are not compared.";
+  }
+
   // One table row per (builder, params, layout), with one trace column per ray set.
   std::vector<std::pair<std::string, std::string>> keys;
   for (const CsvRow* r : group) {
@@ -168,6 +205,7 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     row.cells.push_back(cell(csv_number(any, "build_ms_median"), anchor_number(any_anchor, "build_ms_median")));
     row.cells.push_back(cell(mib(csv_number(any, "mem_bytes")), mib(anchor_number(any_anchor, "mem_bytes"))));
     row.cells.push_back(cell(csv_number(any, "sah_cost"), anchor_number(any_anchor, "sah_cost")));
+    if (row.cells.back().value) row.cells.back().note = model_note(any);
     for (const auto& rs : ray_sets) {
       const auto it = by_set.find(rs);
       const auto a = anchor.find(rs);

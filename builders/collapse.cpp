@@ -188,7 +188,9 @@ class SahCollapse {
     const double as_leaf = s.refs <= max_leaf_ ? cost_.leaf_cost(s.refs) * area : kInf;
     const double as_node = cost_.c_trav * area + distribute[kArity];
     s.cost[0] = as_leaf <= as_node ? as_leaf : as_node;
-    choice(n, 1) = as_leaf <= as_node ? kAsLeaf : split_at[kArity];
+    // A split k of 0 means no candidate was finite (costs that overflowed to inf or NaN); k = 1 then, as
+    // the reconstruction took before, so that the node stays an inner node and never reads as kAsLeaf.
+    choice(n, 1) = as_leaf <= as_node ? kAsLeaf : std::max<uint8_t>(split_at[kArity], 1);
     for (uint32_t i = 2; i <= kArity; ++i) {
       // Ties prefer fewer subtrees: fewer, larger nodes cost the same and keep the tree shallow.
       const bool fewer = s.cost[i - 2] <= distribute[i];

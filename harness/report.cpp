@@ -153,9 +153,18 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     for (const auto& [column, name] : model_fields) values.push_back(field(r, column));
     return values;
   };
-  std::map<std::vector<std::string>, int> model_rows;
-  for (const CsvRow* r : group)
-    if (csv_number(*r, "sah_cost")) ++model_rows[model_of(*r)];
+  // Models in order of first appearance, so that a tie goes to the one of the earlier rows.
+  std::vector<std::pair<std::vector<std::string>, int>> model_rows;
+  for (const CsvRow* r : group) {
+    if (!csv_number(*r, "sah_cost")) continue;
+    const auto model = model_of(*r);
+    auto it =
+        std::find_if(model_rows.begin(), model_rows.end(), [&](const auto& m) { return m.first == model; });
+    if (it == model_rows.end())
+      model_rows.push_back({model, 1});
+    else
+      ++it->second;
+  }
   std::vector<std::string> usual_model;
   int usual_rows = 0;
   for (const auto& [model, rows] : model_rows)

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <iostream>
+#include <limits>
 
 #include "builders/binned_sah.h"
 #include "builders/collapse.h"
@@ -105,6 +106,32 @@ TEST(Collapse, AFinerSourceGivesSmallerLeavesAtALowerSah) {
     EXPECT_GT(f.leaves, c.leaves);
     std::cout << "[ collapse ] " << scene.name << ": source c_trav x0.25: SAH " << f.sah_cost << " against "
               << c.sah_cost << ", leaves " << f.leaves << " against " << c.leaves << "\n";
+  }
+}
+
+TEST(Collapse, OverflowingCostsKeepInnerNodesWhereLeavesWouldBeTooLarge) {
+  // Boxes of half-area beyond float's range cost inf, and with c_trav = 0 an inner node's cost is
+  // 0 * inf = NaN, so no split candidate is finite and neither side of leaf-or-node compares true. The
+  // collapse must still make inner nodes here rather than leaves over max_leaf (it did before costs were
+  // returned up the recursion; the first version of that read the missing split as "leaf").
+  const Aabb huge{{-1e30f, -1e30f, -1e30f}, {1e30f, 1e30f, 1e30f}};
+  ASSERT_EQ(huge.half_area(), std::numeric_limits<float>::infinity());
+  Bvh binary;
+  // Root 0 -> inner 1, 2; each of them -> two single-reference leaves.
+  binary.nodes = {{huge, 1, 2, 0}, {huge, 3, 2, 0}, {huge, 5, 2, 0}, {huge, 0, 0, 1},
+                  {huge, 1, 0, 1}, {huge, 2, 0, 1}, {huge, 3, 0, 1}};
+  binary.prim_refs = {0, 1, 2, 3};
+  SahCost cost;
+  cost.c_trav = 0.0f;
+  for (uint32_t arity : {2u, 4u, 8u}) {
+    const Bvh wide = collapse_sah(binary, arity, cost, 1);
+    uint32_t references = 0;
+    for (const Node& node : wide.nodes) {
+      if (!node.is_leaf()) continue;
+      EXPECT_LE(node.prim_count, 1u) << "arity " << arity;
+      references += node.prim_count;
+    }
+    EXPECT_EQ(references, 4u) << "arity " << arity;
   }
 }
 

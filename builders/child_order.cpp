@@ -89,7 +89,7 @@ class KeyPass {
   void sort_children(const Node& parent) {
     const uint32_t count = parent.child_count;
     // Insertion sort: stable, and for at most kMaxArity children it needs no buffer, where
-    // std::stable_sort allocates one per call (a tenth of this pass on the 1M-triangle terrain).
+    // std::stable_sort allocates one per call (13-17% of this pass on Sponza and the 1M terrain).
     uint32_t order[kMaxArity];
     for (uint32_t c = 0; c < count; ++c) {
       const uint32_t child = parent.first + c;

@@ -169,20 +169,18 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   int usual_rows = 0;
   for (const auto& [model, rows] : model_rows)
     if (rows > usual_rows) usual_model = model, usual_rows = rows;
-  auto model_note = [&](const CsvRow& r) {
-    std::string note;
-    const auto model = model_of(r);
+  // "c_trav=2, block=4": the constants of `model` that differ from `other` (all of them without one).
+  auto describe = [&](const std::vector<std::string>& model, const std::vector<std::string>* other) {
+    std::string text;
     for (std::size_t i = 0; i < model.size(); ++i)
-      if (model[i] != usual_model[i])
-        note +=
-            (note.empty() ? "" : ", ") + model_fields[i].second + "=" + (model[i].empty() ? "?" : model[i]);
-    return note;
+      if (!other || model[i] != (*other)[i])
+        text +=
+            (text.empty() ? "" : ", ") + model_fields[i].second + "=" + (model[i].empty() ? "?" : model[i]);
+    return text;
   };
+  auto model_note = [&](const CsvRow& r) { return describe(model_of(r), &usual_model); };
   if (model_rows.size() > 1) {
-    std::string usual;
-    for (std::size_t i = 0; i < usual_model.size(); ++i)
-      usual +=
-          (i ? ", " : "") + model_fields[i].second + "=" + (usual_model[i].empty() ? "?" : usual_model[i]);
+    const std::string usual = describe(usual_model, nullptr);
     table.caption +=
         " SAH costs are in each builder's own constants; those in brackets differ from the table's "
         "usual " +

@@ -177,9 +177,11 @@ class AnimationRunner {
     planned_ += total;
     if (total == 0) return;
 
-    // One camera for every frame: the file's, else the automatic framing of all frames together.
+    // One camera for every frame: the config's [[camera]], else the file's, else the automatic framing of
+    // all frames together.
     std::vector<Triangle> triangles;
     std::optional<Camera> camera = animated.scene.camera;
+    if (const CameraConfig* view = cfg_.camera_for(name)) camera = to_camera(*view);
     if (!camera) {
       Aabb all;
       for (double t : times) {

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "harness/embree_scene.h"
 #include "harness/layout.h"
+#include "harness/ray_sets.h"
 #include "harness/toml_file.h"
 
 namespace sahbench {
@@ -499,7 +500,70 @@ void read_ray_sets(const Source& src, const toml::table& root, ExperimentConfig&
   }
 }
 
+// A list of three numbers, each finite as a float.
+std::array<float, 3> read_vec3(const Source& src, const toml::node& node, const std::string& key) {
+  const std::string must = key + " must be a list of three numbers, e.g. [0.0, 1.5, -2.0]";
+  const auto* list = node.as_array();
+  if (!list) src.fail(node, must + ", not " + type_name(node));
+  if (list->size() != 3) src.fail(node, must + ", not " + std::to_string(list->size()));
+  std::array<float, 3> out{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const toml::node& item = *list->get(i);
+    if (!item.is_number()) src.fail(item, must + ", not contain " + type_name(item));
+    const double v = item.is_integer() ? double(item.as_integer()->get()) : item.as_floating_point()->get();
+    if (!std::isfinite(static_cast<float>(v)))
+      src.fail(item, key + ": " + param_text(src, item, key) + " is not finite");
+    out[i] = static_cast<float>(v);
+  }
+  return out;
+}
+
+// [[camera]]: each names a scene of the experiment (checked after [experiment] is read), once.
+void read_cameras(const Source& src, const toml::table& root, ExperimentConfig& config) {
+  const auto* node = root.get("camera");
+  if (!node) return;
+  for (const toml::table* table : read_table_array(src, *node, "camera")) {
+    check_keys(src, *table, "[[camera]]", {"scene", "eye", "target", "up", "fov"});
+    CameraConfig camera;
+    const auto* scene = table->get("scene");
+    if (!scene) src.fail(*table, "[[camera]] has no scene (scene = \"...\", as in experiment.scenes)");
+    camera.scene = read_string(src, *scene, "camera.scene");
+    const auto& required = config.scenes;
+    const auto& optional = config.optional_scenes;
+    if (std::find(required.begin(), required.end(), camera.scene) == required.end() &&
+        std::find(optional.begin(), optional.end(), camera.scene) == optional.end())
+      src.fail(*scene, "camera.scene = \"" + camera.scene +
+                           "\" is not a scene of this experiment (experiment.scenes or optional_scenes)");
+    if (config.camera_for(camera.scene))
+      src.fail(*scene, "scene \"" + camera.scene + "\" has two [[camera]] tables; give one view per scene");
+    for (const char* key : {"eye", "target"})
+      if (!table->get(key))
+        src.fail(*table, std::string("[[camera]] has no ") + key + " (" + key + " = [x, y, z])");
+    camera.eye = read_vec3(src, *table->get("eye"), "camera.eye");
+    camera.target = read_vec3(src, *table->get("target"), "camera.target");
+    if (const auto* n = table->get("up")) camera.up = read_vec3(src, *n, "camera.up");
+    if (const auto* n = table->get("fov")) {
+      if (!n->is_number()) src.fail(*n, "camera.fov must be a number (degrees), not " + type_name(*n));
+      camera.fov = static_cast<float>(n->is_integer() ? double(n->as_integer()->get())
+                                                      : n->as_floating_point()->get());
+    }
+    // The view itself (target at the eye, up along the view, fov out of range): the line of the table.
+    try {
+      to_camera(camera);
+    } catch (const Error& e) {
+      src.fail(*table, std::string("[[camera]] for \"") + camera.scene + "\": " + e.what());
+    }
+    config.cameras.push_back(std::move(camera));
+  }
+}
+
 }  // namespace
+
+const CameraConfig* ExperimentConfig::camera_for(std::string_view scene) const {
+  for (const auto& camera : cameras)
+    if (camera.scene == scene) return &camera;
+  return nullptr;
+}
 
 std::string BuilderRun::label() const {
   if (params.empty()) return name;
@@ -519,7 +583,8 @@ ExperimentConfig load_experiment_config(const std::filesystem::path& path) {
 ExperimentConfig parse_experiment_config(std::string_view toml_text, const std::string& source_name) {
   const Source src{source_name};
   const toml::table root = parse_toml(toml_text, source_name);
-  check_keys(src, root, "the top level", {"experiment", "repetitions", "builder", "ray_set", "animation"});
+  check_keys(src, root, "the top level",
+             {"experiment", "repetitions", "builder", "ray_set", "camera", "animation"});
 
   ExperimentConfig config;
   config.path = source_name;
@@ -529,6 +594,7 @@ ExperimentConfig parse_experiment_config(std::string_view toml_text, const std::
   if (const auto* node = root.get("animation")) read_animation(src, *node, config);
   read_builders(src, root, config);
   read_ray_sets(src, root, config);
+  read_cameras(src, root, config);
   return config;
 }
 

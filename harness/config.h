@@ -57,6 +57,13 @@
 //   kind = "random"
 //   count = 262144                    # random rays to generate
 //
+//   [[camera]]                        # optional, at most one per scene: the view of its primary rays, and
+//   scene = "crytek_sponza"           # so of its secondary sets; replaces the file's camera and the
+//   eye = [-115.0, 18.0, -4.0]        # automatic framing. scene: as spelled in scenes or optional_scenes;
+//   target = [100.0, 40.0, 4.0]       # eye and target in the scene's units, target at the image centre
+//   up = [0, 1, 0]                    # default; not parallel to target - eye
+//   fov = 45                          # vertical field of view in degrees, in (0, 180); default 45
+//
 // Keys by ray-set kind (any other key is an error, so that no setting is silently ignored):
 //   all: name, kind;  primary, shadow, diffuse, ao: width, height;  shadow, diffuse, ao, random: count;
 //   shadow: light_source, and lights when light_source = "auto";  ao: ao_radius.
@@ -75,6 +82,7 @@
 // Every error is a sahbench::Error whose message starts with "<file>:<line>:" (for a key, the line of
 // its value; for a missing key, the line of its table; for a missing table, line 1).
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -130,6 +138,18 @@ struct RaySetConfig {
   bool operator==(const RaySetConfig&) const = default;
 };
 
+/// A view for one scene's primary rays ([[camera]] above), and so for every secondary set, which start at
+/// the primary hits: it replaces the file's camera and the automatic framing (harness/ray_sets.h:
+/// look_at_camera).
+struct CameraConfig {
+  std::string scene;  ///< as spelled in experiment.scenes or experiment.optional_scenes
+  std::array<float, 3> eye{}, target{};
+  std::array<float, 3> up{0.0f, 1.0f, 0.0f};
+  float fov = 45.0f;  ///< vertical field of view in degrees
+
+  bool operator==(const CameraConfig&) const = default;
+};
+
 /// Most frames an animation experiment may sample: a guard against a typo, as every frame is a full set
 /// of builds and traces per builder (10,000 frames are close to three minutes of animation at 60 Hz).
 inline constexpr uint32_t kMaxFrames = 10000;
@@ -173,11 +193,16 @@ struct ExperimentConfig {
   std::vector<BuilderRun> builders;
   std::vector<std::string> layouts{"bvh2"};
   std::vector<RaySetConfig> ray_sets;
+  /// At most one per scene, each naming a scene of this experiment.
+  std::vector<CameraConfig> cameras;
   Repetitions reps;
   ReferencePolicy reference = ReferencePolicy::kAuto;
   uint64_t brute_force_max_triangles = 20000;
   /// Present for an animation experiment ([animation] table).
   std::optional<AnimationConfig> animation;
+
+  /// The [[camera]] for `scene` (as spelled in scenes or optional_scenes), or null.
+  const CameraConfig* camera_for(std::string_view scene) const;
 
   bool operator==(const ExperimentConfig&) const = default;
 };

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <optional>
 #include <ostream>
 
 #include "builders/registry.h"
@@ -72,6 +74,24 @@ RgbImage false_colour(const FloatImage& counts, const Range& range) {
   return png;
 }
 
+// "x,y,z" as a point or direction for option `option`.
+Vec3 parse_vec3(const std::string& text, const char* option) {
+  Vec3 out;
+  std::size_t at = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t end = i < 2 ? text.find(',', at) : text.size();
+    const std::string part = end == std::string::npos ? std::string() : text.substr(at, end - at);
+    char* stop = nullptr;
+    const float v = part.empty() ? 0.0f : std::strtof(part.c_str(), &stop);
+    if (part.empty() || stop != part.c_str() + part.size() ||
+        (i == 2 && text.find(',', at) != std::string::npos))
+      throw Error(std::string(option) + " '" + text + "': expected three numbers, x,y,z");
+    out[i] = v;
+    at = end + 1;
+  }
+  return out;
+}
+
 uint8_t to_byte(float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); }
 
 }  // namespace
@@ -98,7 +118,15 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   const ParamSet params = resolve_params(info.name, info.params, spec.params);
   const LayoutSpec layout_spec = parse_layout_spec(options.layout);
 
-  const Scene scene = load_scene(options.scene);
+  if (options.eye.empty() != options.target.empty())
+    throw Error("--eye and --target go together: give both, or neither for the scene's own view");
+  std::optional<Camera> view;
+  if (!options.eye.empty())
+    view = look_at_camera(parse_vec3(options.eye, "--eye"), parse_vec3(options.target, "--target"),
+                          parse_vec3(options.up, "--up"), options.fov);
+
+  Scene scene = load_scene(options.scene);
+  if (view) scene.camera = view;
   if (scene.triangles.empty()) throw Error("scene '" + options.scene + "' has no triangles");
   const Bvh bvh = info.build(BuildInput::from_triangles(scene.triangles), params);
   const ValidationReport valid = validate(bvh, std::span<const Triangle>(scene.triangles));

@@ -30,6 +30,10 @@ struct ImageCommandOptions {
   std::string layout = "bvh2";         ///< a layout spec, NAME[:key=value,...]
   uint32_t width = 512, height = 512;
   std::string ray_set = "primary";     ///< only primary rays map one to one onto pixels
+  /// A view in place of the scene's camera (harness/ray_sets.h: look_at_camera), as "x,y,z" texts; eye and
+  /// target go together, up and fov need them. Empty: the scene's camera or the automatic framing.
+  std::string eye, target, up = "0,1,0";
+  float fov = 45.0f;                   ///< vertical, degrees
   std::filesystem::path out;           ///< prefix: PREFIX_nodes.png, ...
 };
 

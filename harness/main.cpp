@@ -89,6 +89,16 @@ int main(int argc, char** argv) {
   image_cmd->add_option("--height", image.height, "pixels")->capture_default_str();
   image_cmd->add_option("--ray-set", image.ray_set, "ray set (primary)")->capture_default_str();
   image_cmd->add_option("--out", image.out, "prefix: PREFIX_nodes.png, PREFIX_nodes.exr, ...")->required();
+  auto* eye_opt = image_cmd->add_option(
+      "--eye", image.eye,
+      "camera position x,y,z, with --target (default: the scene's camera, else automatic)");
+  image_cmd->add_option("--target", image.target, "point x,y,z at the image centre, with --eye");
+  image_cmd->add_option("--up", image.up, "image up direction x,y,z, with --eye")
+      ->capture_default_str()
+      ->needs(eye_opt);
+  image_cmd->add_option("--fov", image.fov, "vertical field of view in degrees, with --eye")
+      ->capture_default_str()
+      ->needs(eye_opt);
 
   ImageDiffOptions image_diff;
   auto* image_diff_cmd = app.add_subcommand("image-diff", "B - A of two images (EXR signed, PNG diverging), max and mean |B - A|");

@@ -2,6 +2,7 @@
 
 #include <fmt/chrono.h>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <tbb/global_control.h>
 
 #include <chrono>
@@ -145,6 +146,11 @@ class ExperimentRunner {
     log_ << fmt::format("scene {}: {} triangles ({} removed), {}, from {} in {:.0f} ms\n", scene_name,
                         scene.triangles.size(), scene.removed.total(), scene.animated ? "animated" : "static",
                         scene.source, load_ms);
+    if (const CameraConfig* view = cfg_.camera_for(scene_name)) {
+      scene.camera = to_camera(*view);
+      log_ << fmt::format("scene {}: camera from the config: eye ({}), target ({}), fov {} degrees\n",
+                          scene_name, fmt::join(view->eye, ", "), fmt::join(view->target, ", "), view->fov);
+    }
     GeneratedRaySets generated;
     rays_ms_ += time_ms([&] { generated = generate_ray_sets(scene, cfg_.ray_sets, cfg_.seed); });
     for (const auto& [set, reason] : generated.skipped) {

@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
@@ -12,6 +13,7 @@
 #include "builders/registry.h"
 #include "core/error.h"
 #include "harness/config.h"
+#include "harness/embree_bvh_builder.h"
 #include "tests/support/config_error.h"
 
 namespace sahbench {
@@ -162,6 +164,8 @@ TEST(HarnessConfigParse, HeaderExampleIsValid) {
                                       "embree[quality=high]"}));
   EXPECT_EQ(config.ray_sets.size(), 4u);
   EXPECT_EQ(config.threads, (std::vector<int>{1, 2}));
+  ASSERT_EQ(config.cameras.size(), 1u);
+  EXPECT_EQ(config.cameras[0].scene, "crytek_sponza");
 }
 
 TEST(HarnessConfigDefaults, OptionalKeysMissing) {
@@ -503,6 +507,106 @@ layouts = ["bvh2",
            "bvh9"]
 )",
                5, {"experiment.layouts", "unknown layout 'bvh9'", "bvh2"});
+}
+
+TEST(HarnessConfigCamera, OneViewPerSceneWithDefaults) {
+  const auto config = parse_experiment_config(R"([experiment]
+name = "c"
+scenes = ["proc:soup:tris=1k"]
+optional_scenes = ["crytek_sponza", "stanford_bunny"]
+
+[[builder]]
+name = "binned_sah"
+
+[[ray_set]]
+kind = "primary"
+
+[[camera]]
+scene = "crytek_sponza"
+eye = [-100, 20.5, -4]
+target = [100.0, 45.0, -4.0]
+up = [0, 0, 1]
+fov = 65.5
+
+[[camera]]
+scene = "proc:soup:tris=1k"
+eye = [0, 0, 5]
+target = [0, 0, 0]
+)",
+                                              "c.toml");
+  ASSERT_EQ(config.cameras.size(), 2u);
+  const CameraConfig* sponza = config.camera_for("crytek_sponza");
+  ASSERT_NE(sponza, nullptr);
+  EXPECT_EQ(sponza->eye, (std::array<float, 3>{-100.0f, 20.5f, -4.0f}));
+  EXPECT_EQ(sponza->target, (std::array<float, 3>{100.0f, 45.0f, -4.0f}));
+  EXPECT_EQ(sponza->up, (std::array<float, 3>{0.0f, 0.0f, 1.0f}));
+  EXPECT_EQ(sponza->fov, 65.5f);
+  const CameraConfig* soup = config.camera_for("proc:soup:tris=1k");
+  ASSERT_NE(soup, nullptr);
+  EXPECT_EQ(soup->up, (std::array<float, 3>{0.0f, 1.0f, 0.0f}));  // defaults
+  EXPECT_EQ(soup->fov, 45.0f);
+  EXPECT_EQ(config.camera_for("stanford_bunny"), nullptr);
+  EXPECT_TRUE(parse_with("").cameras.empty());
+}
+
+TEST(HarnessConfigCamera, BadViewsNameKeyValueAndLine) {
+  // kBase is lines 1-9 with the scene "proc:soup:tris=1k"; [[camera]] starts on line 10.
+  const std::string scene = "[[camera]]\nscene = \"proc:soup:tris=1k\"\n";
+  expect_error(kBase + "[[camera]]\nscene = \"crytek_sponza\"\neye = [0, 0, 1]\ntarget = [0, 0, 0]\n", 11,
+               {"camera.scene = \"crytek_sponza\" is not a scene of this experiment"});
+  expect_error(kBase + "[[camera]]\neye = [0, 0, 1]\ntarget = [0, 0, 0]\n", 10, {"[[camera]] has no scene"});
+  expect_error(kBase + scene + "target = [0, 0, 0]\n", 10, {"[[camera]] has no eye"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\n", 10, {"[[camera]] has no target"});
+  expect_error(kBase + scene + "eye = [0, 1]\ntarget = [0, 0, 0]\n", 12,
+               {"camera.eye must be a list of three numbers", "not 2"});
+  expect_error(kBase + scene + "eye = \"0,0,1\"\ntarget = [0, 0, 0]\n", 12,
+               {"camera.eye must be a list of three numbers", "not a string"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, \"x\", 0]\n", 13,
+               {"camera.target must be a list of three numbers", "not contain a string"});
+  expect_error(kBase + scene + "eye = [0, 0, 1e39]\ntarget = [0, 0, 0]\n", 12,
+               {"camera.eye", "1e+39", "not finite"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nfov = \"wide\"\n", 14,
+               {"camera.fov must be a number"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nzoom = 2\n", 14,
+               {"unknown key 'zoom' in [[camera]]", "scene, eye, target, up, fov"});
+  // The view itself: the message names the scene and the value, at the table's line.
+  expect_error(kBase + scene + "eye = [1, 2, 3]\ntarget = [1, 2, 3]\n", 10,
+               {"[[camera]] for \"proc:soup:tris=1k\"", "target (1, 2, 3) must differ from the eye"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nup = [0, 0, 2]\n", 10,
+               {"up (0, 0, 2)", "not parallel to the view direction"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nup = [0, 0, 0]\n", 10, {"up (0, 0, 0)"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nfov = 180\n", 10,
+               {"fov = 180 degrees must be in (0, 180)"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nfov = 0\n", 10, {"fov = 0 degrees"});
+  // One view per scene.
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\n" + scene +
+                   "eye = [0, 0, 2]\ntarget = [0, 0, 0]\n",
+               15, {"scene \"proc:soup:tris=1k\" has two [[camera]] tables"});
+  expect_error("camera = 3\n" + kBase, 1, {"camera must be written as [[camera]] tables"});
+}
+
+// Every experiment config shipped in configs/ loads, and every one that measures Sponza looks at it from
+// inside (the automatic framing would see only the outside of the building).
+TEST(HarnessConfigLoad, ShippedConfigsLoadAndViewSponzaFromInside) {
+  register_embree_builders();  // as sahbench does at startup (a repeated call is a no-op)
+  std::size_t experiments = 0;
+  for (const auto& entry :
+       std::filesystem::directory_iterator(std::filesystem::path(SAHBENCH_SOURCE_DIR) / "configs")) {
+    if (entry.path().extension() != ".toml") continue;
+    std::ifstream in(entry.path());
+    std::stringstream text;
+    text << in.rdbuf();
+    if (text.str().find("\n[stress]") != std::string::npos) continue;  // sahbench stress's own schema
+    SCOPED_TRACE(entry.path().string());
+    ExperimentConfig config;
+    ASSERT_NO_THROW(config = load_experiment_config(entry.path()));
+    ++experiments;
+    const auto& optional = config.optional_scenes;
+    if (std::find(optional.begin(), optional.end(), "crytek_sponza") != optional.end()) {
+      EXPECT_NE(config.camera_for("crytek_sponza"), nullptr);
+    }
+  }
+  EXPECT_GE(experiments, 6u);
 }
 
 TEST(HarnessConfigLoad, ReadsFileAndNamesItInErrors) {

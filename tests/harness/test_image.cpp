@@ -170,6 +170,56 @@ TEST(HarnessImage, DiffIsBMinusAAndZeroAgainstItself) {
             3u * kWidth * kHeight);
 }
 
+TEST(HarnessImage, EyeAndTargetGiveTheView) {
+  TempDir dir;
+  // Facing the sphere from close by it fills the picture; facing away, every pixel misses.
+  auto facing = options(dir.path() / "facing");
+  facing.eye = "0,0,3";
+  facing.target = "0,0,0";
+  facing.fov = 30.0f;
+  std::ostringstream facing_log;
+  run_image_command(facing, facing_log);
+  auto hits = [](const std::string& log) {
+    const std::size_t end = log.find(" hits\n"), start = log.rfind(' ', end - 1);
+    return end == std::string::npos ? -1 : std::stoi(log.substr(start + 1, end - start - 1));
+  };
+  // The automatic framing leaves a margin round the sphere; this view does not.
+  std::ostringstream automatic_log;
+  run_image_command(options(dir.path() / "automatic"), automatic_log);
+  EXPECT_GT(hits(facing_log.str()), hits(automatic_log.str()) * 3 / 2)
+      << facing_log.str() << automatic_log.str();
+  auto away = facing;
+  away.out = dir.path() / "away";
+  away.target = "0,0,6";
+  std::ostringstream away_log;
+  run_image_command(away, away_log);
+  EXPECT_EQ(hits(away_log.str()), 0) << away_log.str();
+  EXPECT_NE(away_log.str().find("depth: no hits"), std::string::npos) << away_log.str();
+
+  std::ostringstream log;
+  auto lone_eye = options(dir.path() / "x");
+  lone_eye.eye = "0,0,3";
+  EXPECT_NE(error_message([&] { run_image_command(lone_eye, log); }).find("--eye and --target go together"),
+            std::string::npos);
+  auto short_target = facing;
+  short_target.target = "0,0";
+  EXPECT_NE(error_message([&] {
+              run_image_command(short_target, log);
+            }).find("--target '0,0': expected three numbers"),
+            std::string::npos);
+  auto junk = facing;
+  junk.up = "0,1,x";
+  EXPECT_NE(error_message([&] { run_image_command(junk, log); }).find("--up '0,1,x'"), std::string::npos);
+  auto four = facing;
+  four.eye = "0,0,3,4";
+  EXPECT_NE(error_message([&] { run_image_command(four, log); }).find("--eye '0,0,3,4'"), std::string::npos);
+  auto same = facing;
+  same.target = "0,0,3";
+  EXPECT_NE(error_message([&] { run_image_command(same, log); }).find("must differ from the eye"),
+            std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "x_nodes.png"));
+}
+
 TEST(HarnessImage, BadInputIsAnErrorNamingIt) {
   TempDir dir;
   std::ostringstream log;

@@ -1,9 +1,10 @@
 #include <gtest/gtest.h>
-
 #include <tbb/task_arena.h>
 
 #include <cmath>
+#include <limits>
 
+#include "core/error.h"
 #include "harness/ray_sets.h"
 #include "scenes/load.h"
 #include "traversal/brute_force.h"
@@ -92,6 +93,50 @@ TEST(HarnessRaySets, SceneLightsMissingSkipsTheSetWithAReason) {
   ASSERT_EQ(out.skipped.size(), 1u);
   EXPECT_EQ(out.skipped[0].first, "shadow_scene");
   EXPECT_NE(out.skipped[0].second.find("no lights"), std::string::npos);
+}
+
+TEST(HarnessRaySets, LookAtCameraAimsThePrimaryRaysAndRejectsBadViews) {
+  Scene scene = load_scene("proc:sphere:tris=2000");
+  const Vec3 eye{3.0f, 1.0f, -2.0f}, target{0.0f, 0.0f, 0.0f};
+  scene.camera = look_at_camera(eye, target, Vec3{0.0f, 2.0f, 0.0f}, 30.0f);
+  EXPECT_EQ(scene.camera->up, (Vec3{0.0f, 1.0f, 0.0f}));
+  EXPECT_FLOAT_EQ(scene.camera->yfov, 30.0f * 3.14159265f / 180.0f);
+  RaySetConfig primary;
+  primary.width = primary.height = 33;  // odd: the centre pixel looks at the target
+  const auto out = generate_ray_sets(scene, std::vector<RaySetConfig>{primary}, 1);
+  ASSERT_EQ(out.sets.size(), 1u);
+  const auto& rays = out.sets[0].rays;
+  for (const Ray& r : rays) EXPECT_EQ(r.org, eye);
+  const Vec3 centre = rays[16 * 33 + 16].dir, toward = normalize(target - eye);
+  EXPECT_NEAR(dot(centre, toward), 1.0f, 1e-6f);
+  // Row 0 is the top of the image: its rays point further up than the bottom row's.
+  EXPECT_GT(rays[16].dir.y, rays[32 * 33 + 16].dir.y);
+  // The view spans the field of view: the top and bottom rows' rays are about 30 degrees apart.
+  const float spread = std::acos(dot(rays[16].dir, rays[32 * 33 + 16].dir)) * 180.0f / 3.14159265f;
+  EXPECT_NEAR(spread, 30.0f * 32.0f / 33.0f, 0.1f);
+
+  auto message = [](auto&& make) {
+    try {
+      make();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const Vec3 up{0.0f, 1.0f, 0.0f};
+  EXPECT_NE(message([&] { look_at_camera(eye, eye, up, 45.0f); }).find("must differ from the eye"),
+            std::string::npos);
+  EXPECT_NE(message([&] { look_at_camera(eye, target, eye, 45.0f); }).find("not parallel"),
+            std::string::npos);
+  EXPECT_NE(message([&] { look_at_camera(eye, target, up, 180.0f); }).find("(0, 180)"), std::string::npos);
+  EXPECT_NE(message([&] { look_at_camera(eye, target, up, -1.0f); }).find("fov = -1"), std::string::npos);
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_NE(message([&] {
+              look_at_camera(Vec3{inf, 0, 0}, target, up, 45.0f);
+            }).find("eye (inf, 0, 0) is not finite"),
+            std::string::npos);
+  EXPECT_NE(message([&] { look_at_camera(eye, target, up, std::nanf("")); }).find("fov = nan"),
+            std::string::npos);
 }
 
 }  // namespace

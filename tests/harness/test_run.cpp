@@ -183,6 +183,40 @@ TEST(HarnessRun, MissingRequiredSceneFailsBeforeAnyCell) {
   EXPECT_TRUE(read_csv(csv).empty()) << "no cell may run before the scenes are known to exist";
 }
 
+TEST(HarnessRun, ConfigCameraGivesThePrimaryViewAndSecondarySetsFollowIt) {
+  // The same scene seen from a [[camera]] that faces it, and from one that faces away: every primary ray
+  // then misses, and the shadow set, which starts at the primary hits, is skipped with the reason.
+  const auto dir = temp_dir();
+  auto run = [&](const std::string& name, const std::string& target) {
+    const auto path = dir / (name + ".toml"), csv = dir / (name + ".csv");
+    std::filesystem::remove(csv);
+    std::ofstream(path) << "[experiment]\nname = \"" << name << "\"\noutput = \"" << csv.string() << "\"\n"
+                        << "scenes = [\"proc:sphere:tris=3000\"]\nreference = \"brute_force\"\n"
+                        << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+                        << "[[builder]]\nname = \"binned_sah\"\n"
+                        << "[[camera]]\nscene = \"proc:sphere:tris=3000\"\neye = [0, 0, 10]\ntarget = "
+                        << target << "\nfov = 20\n"
+                        << "[[ray_set]]\nkind = \"primary\"\nwidth = 16\nheight = 16\n"
+                        << "[[ray_set]]\nkind = \"shadow\"\nwidth = 16\nheight = 16\n";
+    std::ostringstream log;
+    EXPECT_EQ(run_experiment({path, false, "", std::nullopt}, log), 0) << log.str();
+    EXPECT_NE(log.str().find("camera from the config: eye (0, 0, 10)"), std::string::npos) << log.str();
+    return std::make_pair(read_csv(csv), log.str());
+  };
+  const auto [facing, facing_log] = run("camera_facing", "[0, 0, 0]");
+  ASSERT_EQ(facing.size(), 2u) << facing_log;
+  // A 20-degree view of the sphere from 10 units: it fills much of the picture, and every ray starts at the
+  // eye.
+  EXPECT_GT(std::stod(facing[0].at("nodes_per_ray")), 1.0);
+  EXPECT_EQ(facing[1].at("ray_set"), "shadow");
+  EXPECT_GT(std::stoi(facing[1].at("ray_count")), 16 * 16 / 4);
+
+  const auto [away, away_log] = run("camera_away", "[0, 0, 20]");
+  ASSERT_EQ(away.size(), 1u) << away_log;
+  EXPECT_EQ(away[0].at("ray_set"), "primary");
+  EXPECT_NE(away_log.find("skipping ray set 'shadow'"), std::string::npos) << away_log;
+}
+
 TEST(HarnessRun, OnlyFiltersCells) {
   const auto config = write_config("run_only", "");
   std::ostringstream log;

@@ -343,9 +343,9 @@ class AnimationRunner {
         row["nodes"] = std::to_string(bvh.nodes.size());
         row["arity"] = std::to_string(bvh.arity);
         put_ray_set(row, rs);
-        if (refit_state) row["notes"] = "tree and layout of frame 0 refitted";
+        if (refit_state) add_note(row, "tree and layout of frame 0 refitted");
         if (!valid) {
-          row["notes"] = "invalid tree, not traced: " + report.errors.front();
+          add_note(row, "invalid tree, not traced: " + report.errors.front());
           append(csv, row,
                  fmt::format("{} f{} {} {} t={} {}: INVALID tree, not traced", scene.name, frame.index,
                              b.label, layout_name, threads, rs.name));
@@ -425,7 +425,7 @@ class AnimationRunner {
         put_timing(row, "trace_mrays", trace_t);
         put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
         if (b.variant == Variant::kEmbreeRefit)
-          row["notes"] = "Embree refit of frame 0's build (dynamic scene, geometry quality refit)";
+          add_note(row, "Embree refit of frame 0's build (dynamic scene, geometry quality refit)");
         append(csv, row,
                fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
                            frame.index, b.label, layout.name, threads, rs.name,

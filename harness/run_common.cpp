@@ -114,6 +114,16 @@ std::vector<std::string> layouts_for(const ResolvedRun& b, const std::vector<std
   return out;
 }
 
+void add_note(CsvRow& row, const std::string& note) {
+  std::string& notes = row["notes"];
+  notes += (notes.empty() ? "" : "; ") + note;
+}
+
+std::string camera_note(const CameraConfig& camera) {
+  return fmt::format("camera eye ({}) target ({}) up ({}) fov {}", fmt::join(camera.eye, ", "),
+                     fmt::join(camera.target, ", "), fmt::join(camera.up, ", "), camera.fov);
+}
+
 CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
                   const Scene& scene, uint32_t frame, const std::string& builder, const std::string& params_text,
                   int threads) {
@@ -137,6 +147,7 @@ CsvRow common_row(const std::string& run_id, const Environment& env, const Exper
   row["scene_source"] = scene.source;
   row["scene_removed"] = std::to_string(scene.removed.total());
   row["embree_version"] = env.embree;
+  if (const CameraConfig* camera = cfg.camera_for(scene.name)) add_note(row, camera_note(*camera));
   return row;
 }
 

@@ -77,7 +77,14 @@ std::vector<std::string> layouts_for(const ResolvedRun& b, const std::vector<std
 
 /// The columns every row of a cell starts with: the run (run_id, config, seed, build_reps, trace_reps),
 /// the machine (git_commit, cpu, compiler, embree_version), the scene and `frame`, the builder run
-/// (`builder`, its `params_text`) and the thread count.
+/// (`builder`, its `params_text`) and the thread count. A scene viewed through the config's [[camera]]
+/// gets it in `notes` (camera_note), so a row says which view its rays came from.
+/// Appends `note` to the row's `notes`, after "; " when it has some already.
+void add_note(CsvRow& row, const std::string& note);
+
+/// "camera eye (x, y, z) target (x, y, z) up (x, y, z) fov F": the view of a [[camera]], for `notes`.
+std::string camera_note(const CameraConfig& camera);
+
 CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
                   const Scene& scene, uint32_t frame, const std::string& builder, const std::string& params_text,
                   int threads);

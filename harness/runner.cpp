@@ -297,7 +297,7 @@ class ExperimentRunner {
           row["nodes"] = std::to_string(stats.nodes);
           row["arity"] = std::to_string(bvh.arity);
           put_ray_set(row, rs);
-          row["notes"] = "invalid tree, not traced: " + report.errors.front();
+          add_note(row, "invalid tree, not traced: " + report.errors.front());
           csv_ms_ += time_ms([&] { csv.append(row); });
           progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name, b.run.label(),
                                          layout_name, threads, rs.name));

@@ -105,6 +105,11 @@ KernelIsa best_kernel_isa(KernelIsa widest) {
   return KernelIsa::kScalar;
 }
 
-KernelIsa preferred_kernel_isa() { return best_kernel_isa(KernelIsa::kAvx2); }
+KernelIsa preferred_kernel_isa() {
+#if defined(__x86_64__) || defined(__i386__)
+  if (__builtin_cpu_is("intel")) return best_kernel_isa(KernelIsa::kAvx512);
+#endif
+  return best_kernel_isa(KernelIsa::kAvx2);
+}
 
 }  // namespace sahbench

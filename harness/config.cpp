@@ -511,8 +511,8 @@ std::array<float, 3> read_vec3(const Source& src, const toml::node& node, const 
     const toml::node& item = *list->get(i);
     if (!item.is_number()) src.fail(item, must + ", not contain " + type_name(item));
     const double v = item.is_integer() ? double(item.as_integer()->get()) : item.as_floating_point()->get();
-    if (!std::isfinite(static_cast<float>(v)))
-      src.fail(item, key + ": " + param_text(src, item, key) + " is not finite");
+    if (!(std::fabs(v) <= std::numeric_limits<float>::max()))
+      src.fail(item, key + ": " + param_text(src, item, key) + " is not finite as a float");
     out[i] = static_cast<float>(v);
   }
   return out;
@@ -544,10 +544,12 @@ void read_cameras(const Source& src, const toml::table& root, ExperimentConfig& 
     if (const auto* n = table->get("up")) camera.up = read_vec3(src, *n, "camera.up");
     if (const auto* n = table->get("fov")) {
       if (!n->is_number()) src.fail(*n, "camera.fov must be a number (degrees), not " + type_name(*n));
-      camera.fov = static_cast<float>(n->is_integer() ? double(n->as_integer()->get())
-                                                      : n->as_floating_point()->get());
+      const double fov = n->is_integer() ? double(n->as_integer()->get()) : n->as_floating_point()->get();
+      if (!(fov > 0.0 && fov < 180.0))
+        src.fail(*n, "camera.fov = " + param_text(src, *n, "fov") + " degrees must be in (0, 180)");
+      camera.fov = static_cast<float>(fov);
     }
-    // The view itself (target at the eye, up along the view, fov out of range): the line of the table.
+    // The view as a whole (target at the eye, up zero or along the view): the line of the table.
     try {
       to_camera(camera);
     } catch (const Error& e) {

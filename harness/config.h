@@ -61,7 +61,8 @@
 //   scene = "crytek_sponza"           # so of its secondary sets; replaces the file's camera and the
 //   eye = [-115.0, 18.0, -4.0]        # automatic framing. scene: as spelled in scenes or optional_scenes;
 //   target = [100.0, 40.0, 4.0]       # eye and target in the scene's units, target at the image centre
-//   up = [0, 1, 0]                    # default; not parallel to target - eye
+//   up = [0, 1, 0]                    # default; not parallel to target - eye (a view that cannot be
+//                                     # made, e.g. target = eye, is an error at the [[camera]] line)
 //   fov = 45                          # vertical field of view in degrees, in (0, 180); default 45
 //
 // Keys by ray-set kind (any other key is an error, so that no setting is silently ignored):

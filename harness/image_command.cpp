@@ -74,18 +74,24 @@ RgbImage false_colour(const FloatImage& counts, const Range& range) {
   return png;
 }
 
-// "x,y,z" as a point or direction for option `option`.
+// "x,y,z" as a finite point or direction for option `option` (blanks around the numbers allowed).
 Vec3 parse_vec3(const std::string& text, const char* option) {
+  auto fail = [&](const std::string& why) -> Error {
+    return Error(std::string(option) + " '" + text + "': " + why);
+  };
   Vec3 out;
   std::size_t at = 0;
   for (int i = 0; i < 3; ++i) {
-    const std::size_t end = i < 2 ? text.find(',', at) : text.size();
-    const std::string part = end == std::string::npos ? std::string() : text.substr(at, end - at);
+    const std::size_t comma = text.find(',', at);
+    if ((i < 2) != (comma != std::string::npos)) throw fail("expected three numbers, x,y,z");
+    const std::size_t end = i < 2 ? comma : text.size();
+    std::string part = text.substr(at, end - at);
+    part.erase(0, part.find_first_not_of(" \t"));
+    part.erase(part.find_last_not_of(" \t") + 1);
     char* stop = nullptr;
     const float v = part.empty() ? 0.0f : std::strtof(part.c_str(), &stop);
-    if (part.empty() || stop != part.c_str() + part.size() ||
-        (i == 2 && text.find(',', at) != std::string::npos))
-      throw Error(std::string(option) + " '" + text + "': expected three numbers, x,y,z");
+    if (part.empty() || stop != part.c_str() + part.size()) throw fail("expected three numbers, x,y,z");
+    if (!std::isfinite(v)) throw fail("'" + part + "' is not a finite number");
     out[i] = v;
     at = end + 1;
   }
@@ -121,9 +127,16 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   if (options.eye.empty() != options.target.empty())
     throw Error("--eye and --target go together: give both, or neither for the scene's own view");
   std::optional<Camera> view;
-  if (!options.eye.empty())
-    view = look_at_camera(parse_vec3(options.eye, "--eye"), parse_vec3(options.target, "--target"),
-                          parse_vec3(options.up, "--up"), options.fov);
+  if (!options.eye.empty()) {
+    const Vec3 eye = parse_vec3(options.eye, "--eye"), target = parse_vec3(options.target, "--target"),
+               up = parse_vec3(options.up, "--up");
+    try {
+      view = look_at_camera(eye, target, up, options.fov);
+    } catch (const Error& e) {
+      throw Error(fmt::format("--eye {} --target {} --up {} --fov {}: {}", options.eye, options.target,
+                              options.up, options.fov, e.what()));
+    }
+  }
 
   Scene scene = load_scene(options.scene);
   if (view) scene.camera = view;

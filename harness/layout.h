@@ -51,7 +51,8 @@ class CompiledLayout {
 ///   tri = watertight | mt | mt0 | mtn   (triangle test; mt0 is Möller–Trumbore with epsilon 0, mtn
 ///                                        Möller–Trumbore with a stored normal, as Embree's Triangle4)
 ///   box = robust | fast | fma           (ray/box test)
-///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto = the widest the CPU runs)
+///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto: kernel_variant.h's
+///                                                preferred_kernel_isa, AVX-512 on Intel, else up to AVX2)
 /// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2".
 struct LayoutSpec {
   std::string name;

@@ -43,7 +43,9 @@ void print_catalogue(std::ostream& out) {
   fmt::print(out, "  {:<14} {}\n", "embree_1/8/16", "Embree's own BVH, rtcIntersect1/Occluded1 and 8/16-wide packets (builder embree)");
 
   fmt::print(out, "\nray sets (config: [[ray_set]] kind = ...):\n");
-  fmt::print(out, "  {:<14} {}\n", "primary", "pinhole camera: the file's camera, else automatic framing; width x height rays");
+  fmt::print(out, "  {:<14} {}\n", "primary",
+             "pinhole camera: the config's [[camera]], else the file's, else automatic framing; width x "
+             "height rays");
   fmt::print(out, "  {:<14} {}\n", "shadow", "any-hit, from primary hits to point lights (light_source auto|scene, lights)");
   fmt::print(out, "  {:<14} {}\n", "diffuse", "closest-hit, cosine-weighted bounces from primary hits");
   fmt::print(out, "  {:<14} {}\n", "ao", "any-hit, cosine-weighted, length ao_radius x scene diagonal");

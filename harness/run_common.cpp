@@ -1,6 +1,7 @@
 #include "harness/run_common.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -70,12 +71,24 @@ std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream
 std::set<std::string> finished_cells(const std::filesystem::path& output, const ExperimentConfig& cfg,
                                      std::string& run_id, std::ostream& log) {
   std::set<std::string> finished;
+  std::size_t other_view = 0;
   for (const auto& row : read_csv(output)) {
+    // A row measured through another view of its scene (another [[camera]], or none) is not this cell.
+    const CameraConfig* camera = cfg.camera_for(row.at("scene"));
+    const auto notes = row.find("notes");
+    const std::string note = notes == row.end() ? "" : notes->second;
+    const std::string view = note.starts_with("camera ") ? note.substr(0, note.find(';')) : "";
+    if (view != (camera ? camera_note(*camera) : "")) {
+      ++other_view;
+      continue;
+    }
     finished.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"), row.at("layout"),
                              std::stoi(row.at("threads")), row.at("ray_set"), std::stoi(row.at("frame"))));
     if (row.at("config") == cfg.path.string()) run_id = row.at("run_id");
   }
-  log << fmt::format("resume: {} finished cells in {}\n", finished.size(), output.string());
+  log << fmt::format("resume: {} finished cells in {}", finished.size(), output.string());
+  if (other_view) log << fmt::format(" ({} rows from another view of their scene not counted)", other_view);
+  log << "\n";
   return finished;
 }
 

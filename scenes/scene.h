@@ -24,7 +24,7 @@ struct RemovedTriangles {
 struct Camera {
   Vec3 position;
   Vec3 forward{0, 0, -1};  ///< unit view direction
-  Vec3 up{0, 1, 0};        ///< unit, orthogonal to forward
+  Vec3 up{0, 1, 0};        ///< unit; primary rays orthogonalise it against forward
   float yfov = 0.785398f;  ///< vertical field of view in radians
 };
 

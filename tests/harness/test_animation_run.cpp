@@ -184,6 +184,33 @@ TEST(HarnessAnimationRun, RowsPerFrameForRefitAndRebuildWithoutMismatches) {
   EXPECT_EQ(read_csv(csv).size(), rows.size());
 }
 
+// A [[camera]] gives every frame its view: the rows name it, before the refit note of the refit rows.
+TEST(HarnessAnimationRun, ConfigCameraViewsEveryFrame) {
+  const auto dir = temp_dir();
+  const auto config = dir / "animation_camera.toml", csv = dir / "animation_camera.csv";
+  std::filesystem::remove(csv);
+  std::ofstream(config)
+      << "[experiment]\nname = \"animation_camera\"\noutput = \"" << csv.string() << "\"\n"
+      << "scenes = [\"proc:wave:tris=1500\"]\nreference = \"brute_force\"\n"
+      << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+      << "[animation]\nframes = 2\n[[builder]]\nname = \"binned_sah\"\n"
+      << "[[camera]]\nscene = \"proc:wave:tris=1500\"\neye = [0, 5, 0]\ntarget = [0, 10, 0]\n"
+      << "up = [0, 0, 1]\n[[ray_set]]\nkind = \"primary\"\nwidth = 8\nheight = 8\n";
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 4u) << log.str();  // 2 frames x (rebuild, refit)
+  const std::string view = "camera eye (0, 5, 0) target (0, 10, 0) up (0, 0, 1) fov 45";
+  for (const auto& row : rows) {
+    // Looking up, away from the wave: every primary ray misses, on every frame.
+    EXPECT_EQ(std::stod(row.at("nodes_per_ray")), 0.0) << row.at("builder") << " frame " << row.at("frame");
+    if (row.at("builder") == "refit(binned_sah)")
+      EXPECT_EQ(row.at("notes"), view + "; tree and layout of frame 0 refitted");
+    else
+      EXPECT_EQ(row.at("notes"), view);
+  }
+}
+
 // The refit cells trace their layouts refitted in place (bvh2: the common format's copy; bvh8: wide
 // nodes and triangle blocks), timed into layout_refit_ms; the rebuild cells compile theirs (layout_ms).
 TEST(HarnessAnimationRun, RefitCellsRefitTheirLayoutsInPlace) {

@@ -14,6 +14,7 @@
 #include "core/error.h"
 #include "harness/config.h"
 #include "harness/embree_bvh_builder.h"
+#include "scenes/load.h"
 #include "tests/support/config_error.h"
 
 namespace sahbench {
@@ -564,7 +565,8 @@ TEST(HarnessConfigCamera, BadViewsNameKeyValueAndLine) {
   expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, \"x\", 0]\n", 13,
                {"camera.target must be a list of three numbers", "not contain a string"});
   expect_error(kBase + scene + "eye = [0, 0, 1e39]\ntarget = [0, 0, 0]\n", 12,
-               {"camera.eye", "1e+39", "not finite"});
+               {"camera.eye", "1e+39", "not finite as a float"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, nan, 0]\n", 13, {"camera.target", "nan"});
   expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nfov = \"wide\"\n", 14,
                {"camera.fov must be a number"});
   expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nzoom = 2\n", 14,
@@ -575,9 +577,10 @@ TEST(HarnessConfigCamera, BadViewsNameKeyValueAndLine) {
   expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nup = [0, 0, 2]\n", 10,
                {"up (0, 0, 2)", "not parallel to the view direction"});
   expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nup = [0, 0, 0]\n", 10, {"up (0, 0, 0)"});
-  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nfov = 180\n", 10,
-               {"fov = 180 degrees must be in (0, 180)"});
-  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nfov = 0\n", 10, {"fov = 0 degrees"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nfov = 180\n", 14,
+               {"camera.fov = 180 degrees must be in (0, 180)"});
+  expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\nfov = 0.0\n", 14,
+               {"camera.fov = 0 degrees"});
   // One view per scene.
   expect_error(kBase + scene + "eye = [0, 0, 1]\ntarget = [0, 0, 0]\n" + scene +
                    "eye = [0, 0, 2]\ntarget = [0, 0, 0]\n",
@@ -590,6 +593,7 @@ TEST(HarnessConfigCamera, BadViewsNameKeyValueAndLine) {
 TEST(HarnessConfigLoad, ShippedConfigsLoadAndViewSponzaFromInside) {
   register_embree_builders();  // as sahbench does at startup (a repeated call is a no-op)
   std::size_t experiments = 0;
+  std::vector<std::array<float, 3>> eyes;
   for (const auto& entry :
        std::filesystem::directory_iterator(std::filesystem::path(SAHBENCH_SOURCE_DIR) / "configs")) {
     if (entry.path().extension() != ".toml") continue;
@@ -603,10 +607,22 @@ TEST(HarnessConfigLoad, ShippedConfigsLoadAndViewSponzaFromInside) {
     ++experiments;
     const auto& optional = config.optional_scenes;
     if (std::find(optional.begin(), optional.end(), "crytek_sponza") != optional.end()) {
-      EXPECT_NE(config.camera_for("crytek_sponza"), nullptr);
+      const CameraConfig* camera = config.camera_for("crytek_sponza");
+      ASSERT_NE(camera, nullptr);
+      eyes.push_back(camera->eye);
     }
   }
   EXPECT_GE(experiments, 6u);
+  // Inside the building, where the scene is present: within its box, under the roof.
+  if (eyes.empty() || !find_scene_file("crytek_sponza")) return;
+  const Scene sponza = load_scene("crytek_sponza");
+  Aabb box;
+  for (const Triangle& t : sponza.triangles) box.extend(t.bounds());
+  for (const auto& eye : eyes)
+    for (int axis = 0; axis < 3; ++axis) {
+      EXPECT_GT(eye[axis], box.min[axis] + 0.05f * box.extent()[axis]) << axis;
+      EXPECT_LT(eye[axis], box.max[axis] - 0.05f * box.extent()[axis]) << axis;
+    }
 }
 
 TEST(HarnessConfigLoad, ReadsFileAndNamesItInErrors) {

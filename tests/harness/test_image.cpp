@@ -210,6 +210,20 @@ TEST(HarnessImage, EyeAndTargetGiveTheView) {
   auto junk = facing;
   junk.up = "0,1,x";
   EXPECT_NE(error_message([&] { run_image_command(junk, log); }).find("--up '0,1,x'"), std::string::npos);
+  auto spaced = facing;
+  spaced.out = dir.path() / "spaced";
+  spaced.eye = " 0 , 0,3 ";
+  run_image_command(spaced, log);
+  auto infinite = facing;
+  infinite.eye = "1e999,0,3";
+  EXPECT_NE(error_message([&] {
+              run_image_command(infinite, log);
+            }).find("--eye '1e999,0,3': '1e999' is not a finite"),
+            std::string::npos);
+  auto wide = facing;
+  wide.fov = 200.0f;
+  EXPECT_NE(error_message([&] { run_image_command(wide, log); }).find("--fov 200: camera fov = 200 degrees"),
+            std::string::npos);
   auto four = facing;
   four.eye = "0,0,3,4";
   EXPECT_NE(error_message([&] { run_image_command(four, log); }).find("--eye '0,0,3,4'"), std::string::npos);

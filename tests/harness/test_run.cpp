@@ -187,9 +187,9 @@ TEST(HarnessRun, ConfigCameraGivesThePrimaryViewAndSecondarySetsFollowIt) {
   // The same scene seen from a [[camera]] that faces it, and from one that faces away: every primary ray
   // then misses, and the shadow set, which starts at the primary hits, is skipped with the reason.
   const auto dir = temp_dir();
-  auto run = [&](const std::string& name, const std::string& target) {
+  auto run = [&](const std::string& name, const std::string& target, bool resume = false) {
     const auto path = dir / (name + ".toml"), csv = dir / (name + ".csv");
-    std::filesystem::remove(csv);
+    if (!resume) std::filesystem::remove(csv);
     std::ofstream(path) << "[experiment]\nname = \"" << name << "\"\noutput = \"" << csv.string() << "\"\n"
                         << "scenes = [\"proc:sphere:tris=3000\"]\nreference = \"brute_force\"\n"
                         << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
@@ -199,8 +199,10 @@ TEST(HarnessRun, ConfigCameraGivesThePrimaryViewAndSecondarySetsFollowIt) {
                         << "[[ray_set]]\nkind = \"primary\"\nwidth = 16\nheight = 16\n"
                         << "[[ray_set]]\nkind = \"shadow\"\nwidth = 16\nheight = 16\n";
     std::ostringstream log;
-    EXPECT_EQ(run_experiment({path, false, "", std::nullopt}, log), 0) << log.str();
-    EXPECT_NE(log.str().find("camera from the config: eye (0, 0, 10)"), std::string::npos) << log.str();
+    EXPECT_EQ(run_experiment({path, resume, "", std::nullopt}, log), 0) << log.str();
+    if (!resume) {
+      EXPECT_NE(log.str().find("camera from the config: eye (0, 0, 10)"), std::string::npos) << log.str();
+    }
     return std::make_pair(read_csv(csv), log.str());
   };
   const auto [facing, facing_log] = run("camera_facing", "[0, 0, 0]");
@@ -219,6 +221,16 @@ TEST(HarnessRun, ConfigCameraGivesThePrimaryViewAndSecondarySetsFollowIt) {
   ASSERT_EQ(away.size(), 1u) << away_log;
   EXPECT_EQ(away[0].at("ray_set"), "primary");
   EXPECT_NE(away_log.find("skipping ray set 'shadow'"), std::string::npos) << away_log;
+
+  // Resume counts a row as done only if it was measured through the view the config has now.
+  const auto [same, same_log] = run("camera_facing", "[0, 0, 0]", true);
+  EXPECT_EQ(same.size(), 2u) << same_log;
+  EXPECT_NE(same_log.find("0 cells to run"), std::string::npos) << same_log;
+  const auto [moved, moved_log] = run("camera_facing", "[0, 1, 0]", true);
+  ASSERT_EQ(moved.size(), 4u) << moved_log;
+  EXPECT_NE(moved_log.find("2 rows from another view of their scene not counted"), std::string::npos)
+      << moved_log;
+  EXPECT_EQ(moved[3].at("notes"), "camera eye (0, 0, 10) target (0, 1, 0) up (0, 1, 0) fov 20");
 }
 
 TEST(HarnessRun, OnlyFiltersCells) {

@@ -35,11 +35,20 @@ WideNode<N> empty_node() {
   return node;
 }
 
+// A NaN plane is stored as -inf (a minimum) or +inf (a maximum). Every box test takes the distance to
+// either as no bound at all (ray_box.h: a NaN distance leaves the interval as it is, and so does an
+// infinite one on its own side), so no test answers differently; but the SIMD kernels' integer min and
+// max (wide_kernels.inl) order NaN above every distance, and infinities as the float compares do.
+// The builders never make NaN boxes from the scenes' finite triangles: this is for trees made by hand.
+inline float finite_or(float plane, float unbounded) {
+  return plane == plane ? plane : unbounded;
+}
+
 template <uint32_t N>
 void set_box(WideNode<N>& node, uint32_t slot, const Aabb& box) {
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    node.planes[2 * axis][slot] = box.min[axis];
-    node.planes[2 * axis + 1][slot] = box.max[axis];
+    node.planes[2 * axis][slot] = finite_or(box.min[axis], -kInf);
+    node.planes[2 * axis + 1][slot] = finite_or(box.max[axis], kInf);
   }
 }
 
@@ -85,7 +94,7 @@ namespace {
 // per ray: set-up is a tenth of a closest-hit ray's time at 10 Mrays/s, and a run-time choice of the
 // reciprocal per axis (box=fma's or IEEE's) cost the closest-hit rays 1-7%.
 template <bool kShear, bool kFma>
-inline void set_up(const Ray& ray, WideRay& r) {
+inline bool set_up(const Ray& ray, WideRay& r) {
   for (uint32_t axis = 0; axis < 3; ++axis) {
     r.org[axis] = ray.org[axis];
     r.dir[axis] = ray.dir[axis];
@@ -100,6 +109,11 @@ inline void set_up(const Ray& ray, WideRay& r) {
   r.tmax = ray.tmax;
   // An untraceable ray (core/ray.h) gets an empty interval, which no box test can widen, NaN or not.
   if (!traceable(ray)) r.tmin = 1.0f, r.tmax = 0.0f;
+  // box=fma's inv_dir is finite and non-zero (FmaRayBox::safe_direction); org_inv overflows only for
+  // origins beyond 1e20 or so.
+  const bool int_order = kFma && !std::signbit(r.tmin) && !(r.tmax < 0.0f) && std::abs(r.org_inv[0]) < kInf &&
+                         std::abs(r.org_inv[1]) < kInf && std::abs(r.org_inv[2]) < kInf;
+  r.int_order = int_order;
   if constexpr (!kShear) {
     r.kx = 0, r.ky = 1, r.kz = 2;
     r.sx = r.sy = r.sz = 0.0f;
@@ -118,16 +132,19 @@ inline void set_up(const Ray& ray, WideRay& r) {
     r.sy = ray.dir[r.ky] / ray.dir[kz];
     r.sz = 1.0f / ray.dir[kz];
   }
+  return int_order;
 }
 
 template <bool kShear, bool kFma>
-void set_up_all(std::span<const Ray> rays, WideRay* out) {
-  for (std::size_t i = 0; i < rays.size(); ++i) set_up<kShear, kFma>(rays[i], out[i]);
+bool set_up_all(std::span<const Ray> rays, WideRay* out) {
+  bool int_order = true;
+  for (std::size_t i = 0; i < rays.size(); ++i) int_order &= set_up<kShear, kFma>(rays[i], out[i]);
+  return int_order;
 }
 
 }  // namespace
 
-void make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box) {
+bool make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box) {
   const bool fma = box == BoxTestKind::kFma;
   if (shear) return fma ? set_up_all<true, true>(rays, out) : set_up_all<true, false>(rays, out);
   return fma ? set_up_all<false, true>(rays, out) : set_up_all<false, false>(rays, out);
@@ -165,8 +182,8 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
       throw Error("layout bvh" + std::to_string(N) + ": reference " + std::to_string(ref) + " is beyond the " +
                   std::to_string(triangles.size()) + " triangles");
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    out.root_planes[2 * axis] = bvh.root().bounds.min[axis];
-    out.root_planes[2 * axis + 1] = bvh.root().bounds.max[axis];
+    out.root_planes[2 * axis] = finite_or(bvh.root().bounds.min[axis], -kInf);
+    out.root_planes[2 * axis + 1] = finite_or(bvh.root().bounds.max[axis], kInf);
   }
 
   // First the arena's order (wide_bvh.h), sequentially: where each wide node and each leaf's blocks go.
@@ -307,8 +324,8 @@ void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles) {
     spawn_depth = static_cast<uint32_t>(std::ceil(std::log(double(threads) * kRefitTasksPerThread) / std::log(double(N))));
   const Aabb root = WideRefitter<N>(wide, triangles, spawn_depth).refit(0, 0);
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    wide.root_planes[2 * axis] = root.min[axis];
-    wide.root_planes[2 * axis + 1] = root.max[axis];
+    wide.root_planes[2 * axis] = finite_or(root.min[axis], -kInf);
+    wide.root_planes[2 * axis + 1] = finite_or(root.max[axis], kInf);
   }
 }
 

@@ -103,6 +103,10 @@ struct WideRay {
   uint32_t far_plane[3];
   uint32_t kx, ky, kz;
   float sx, sy, sz;
+  /// box=fma only: the AVX2 and AVX-512 kernels' integer min and max order this ray's slab distances as
+  /// the float compares do (wide_kernels.inl: kIntOrder): tmin is +0 or positive, tmax is not negative
+  /// and org_inv is finite (inv_dir is, and non-zero, by FmaRayBox::safe_direction).
+  bool int_order;
 };
 
 /// `shear`: also the watertight test's shear; the Möller–Trumbore kernels do not read it, and leaving it
@@ -110,7 +114,8 @@ struct WideRay {
 WideRay make_wide_ray(const Ray& ray, bool shear = true, BoxTestKind box = BoxTestKind::kRobust);
 /// make_wide_ray for each of `rays`, into out[0, rays.size()): what the layouts call, with the choices
 /// made once per batch rather than once per ray.
-void make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box);
+/// Returns whether every ray has WideRay::int_order, as WideBatch::int_order wants it.
+bool make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box);
 
 /// The arena's unit (wide_bvh.h): references to nodes and blocks count these from the arena's start.
 inline constexpr std::size_t kWideUnit = 32;
@@ -198,6 +203,9 @@ struct WideBatch {
   /// The order in which any hit visits children: kNearest, kStored or kNearestStored, resolved by the
   /// layout from its anyhit option and the tree (bvh2_traversal.h: resolve_any_hit_order).
   AnyHitOrder any_hit_order;
+  /// Every ray has WideRay::int_order (make_wide_rays' answer): the box=fma kernels may then take the
+  /// integer path for the batch.
+  bool int_order = false;
 };
 
 using WideKernel = void (*)(const WideBatch&);

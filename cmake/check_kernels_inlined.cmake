@@ -8,8 +8,9 @@ if(NOT status EQUAL 0)
   message(FATAL_ERROR "${NM} -C ${LIBRARY} failed (${status})")
 endif()
 # Functions of the SIMD kernels' namespaces that are meant to be called: the entry points, the
-# per-ray loop body, the benchmark loops and the watertight block test (kept as a call on purpose).
-set(allowed "trace_batch|trace_ray|node_test_loop|block_test_loop|intersect_block_watertight")
+# per-ray loop body, the benchmark loops, the tests' one-node test and the watertight block test (kept
+# as a call on purpose).
+set(allowed "trace_batch|trace_ray|node_test_loop|node_test_one|block_test_loop|intersect_block_watertight")
 string(REPLACE "\n" ";" lines "${symbols}")
 set(found 0)
 set(offending "")

@@ -73,7 +73,7 @@ class WideLayout final : public CompiledLayout {
       WideRay setup[kWideChunk];
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
-        const bool int_order = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
+        const IntOrder int_order = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, nullptr, nullptr, nullptr,
                          any_hit_order_, int_order},
                i);
@@ -90,7 +90,7 @@ class WideLayout final : public CompiledLayout {
       TraceCounts sum;
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
-        const bool int_order = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
+        const IntOrder int_order = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
         WideCounts c;
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, hits.data(), occluded.data(), &c,
                          any_hit_order_, int_order});

@@ -93,6 +93,19 @@ static_assert(sizeof(NormalBlock) == 224, "block format as documented");
 /// direction, reciprocal direction (the box test's: FmaRayBox keeps it finite) and origin times it, the
 /// near and far plane index per axis (chosen by the sign bit, so -0 counts as negative, as in
 /// ray_box.h), and the watertight test's shear (triangle_tests.h).
+///
+/// IntOrder: whether the box=fma kernels for AVX2 and AVX-512 may take the maximum and minimum of a
+/// ray's slab distances, and compare them, on the floats' bits as integers (wide_kernels.inl: kInt),
+/// which order as the floats do when no distance is negative zero and the interval starts at +0 or later.
+/// - kFree: tmin is +0 or positive, tmax is not negative, and |org_inv| is in [2^-100, inf) on each axis
+///   (inv_dir is finite and non-zero by FmaRayBox::safe_direction): no slab distance is -0 or NaN.
+/// - kGuarded: the same but for some |org_inv| below 2^-100 (an origin on or near a coordinate plane):
+///   a distance below 2^-150 in magnitude may round to -0, and the kernels test the nodes where it does
+///   again on the float path.
+/// - kNone: the float path (tmin negative or -0, tmax negative, an origin so far out that org * inv
+///   overflows).
+enum class IntOrder : uint8_t { kNone, kGuarded, kFree };
+
 struct WideRay {
   float org[3];
   float dir[3];
@@ -103,10 +116,9 @@ struct WideRay {
   uint32_t far_plane[3];
   uint32_t kx, ky, kz;
   float sx, sy, sz;
-  /// box=fma only: the AVX2 and AVX-512 kernels' integer min and max order this ray's slab distances as
-  /// the float compares do (wide_kernels.inl: kIntOrder): tmin is +0 or positive, tmax is not negative
-  /// and org_inv is finite (inv_dir is, and non-zero, by FmaRayBox::safe_direction).
-  bool int_order;
+  /// box=fma only: whether the AVX2 and AVX-512 kernels may order this ray's slab distances by their
+  /// bits as integers (IntOrder).
+  IntOrder int_order;
 };
 
 /// `shear`: also the watertight test's shear; the Möller–Trumbore kernels do not read it, and leaving it
@@ -114,8 +126,8 @@ struct WideRay {
 WideRay make_wide_ray(const Ray& ray, bool shear = true, BoxTestKind box = BoxTestKind::kRobust);
 /// make_wide_ray for each of `rays`, into out[0, rays.size()): what the layouts call, with the choices
 /// made once per batch rather than once per ray.
-/// Returns whether every ray has WideRay::int_order, as WideBatch::int_order wants it.
-bool make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box);
+/// Returns the lowest of the rays' WideRay::int_order, as WideBatch::int_order wants it.
+IntOrder make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box);
 
 /// The arena's unit (wide_bvh.h): references to nodes and blocks count these from the arena's start.
 inline constexpr std::size_t kWideUnit = 32;
@@ -203,9 +215,9 @@ struct WideBatch {
   /// The order in which any hit visits children: kNearest, kStored or kNearestStored, resolved by the
   /// layout from its anyhit option and the tree (bvh2_traversal.h: resolve_any_hit_order).
   AnyHitOrder any_hit_order;
-  /// Every ray has WideRay::int_order (make_wide_rays' answer): the box=fma kernels may then take the
-  /// integer path for the batch.
-  bool int_order = false;
+  /// The lowest of the rays' WideRay::int_order (make_wide_rays' answer): the path the box=fma kernels
+  /// take for the batch.
+  IntOrder int_order = IntOrder::kNone;
 };
 
 using WideKernel = void (*)(const WideBatch&);
@@ -221,9 +233,12 @@ struct WideBenchLoops {
   double (*nodes)(const void* nodes, std::size_t count, const WideRay* rays, std::size_t ray_count);
   /// `blocks`: `count` consecutive blocks of the form block_form_for(the variant's triangle test).
   double (*blocks)(const void* blocks, std::size_t count, const WideRay* rays, std::size_t ray_count);
+  /// For the tests: one node of the width asked against one ray, on the path the kernels take for it.
+  /// Returns the hit mask and writes each slot's entry distance to t_entry[0, width).
+  uint32_t (*node)(const void* node, const WideRay& ray, float* t_entry);
 };
 
-/// The loops compiled for `isa` (not kAuto); both null when that set is not compiled in.
+/// The loops compiled for `isa` (not kAuto); all null when that set is not compiled in.
 WideBenchLoops find_wide_bench_loops(KernelIsa isa, uint32_t width, const KernelVariant& variant);
 
 }  // namespace sahbench

@@ -3,8 +3,7 @@
 // SAHBENCH_WIDE_SCALAR, _SSE, _AVX2 or _AVX512, then include this file inside a namespace of their own,
 // so the functions below never meet their twin from another instruction set at link time.
 //
-// Every lane computes exactly what the scalar kernels of ray_box.h and triangle_tests.h compute (the
-// box=fma integer path below has one known exception, at denormal scale: see kIntOrder), in the
+// Every lane computes exactly what the scalar kernels of ray_box.h and triangle_tests.h compute, in the
 // same order and with the same IEEE operations (min/max with the same NaN rule, no reciprocal
 // approximations, and fused multiply-adds only where the scalar test calls fmaf: the project builds with
 // -ffp-contract=off), so every instruction set returns the same hits, and visits the same nodes in the
@@ -42,11 +41,11 @@ SAHBENCH_KERNEL_INLINE float plane_distance(float plane, const WideRay& r, uint3
   else return (plane - r.org[axis]) * r.inv_dir[axis];
 }
 
-// box=fma with integer min and max (kIntOrder below): the maximum and minimum of the slab distances, and
-// the final compare, done on the floats' bits as signed integers, as Embree's node test does on AVX-512
+// box=fma with integer min and max (kInt below): the maximum and minimum of the slab distances, and the
+// final compare, done on the floats' bits as signed integers, as Embree's node test does on AVX-512
 // (maxi, mini and an integer compare in its BVHNNodeIntersector1). An integer max or min takes one cycle
 // where a float one takes four, and the slab test is on the path from one node's address to the next:
-// 1-10% more rays/second in every cell of configs/wide.toml's scenes and ray sets, shadow rays 5-10%
+// 1-10% more rays/second in every cell of configs/wide.toml's scenes and ray sets, shadow rays 4-10%
 // (A/B against the float path, 4 interleaved rounds; issue 4's note, stop 19).
 // The bits order as the floats do among non-negative floats (+0 and +inf included), and every negative
 // float orders below all of them. So the integer and float answers are the same, bit for bit, when
@@ -58,15 +57,17 @@ SAHBENCH_KERNEL_INLINE float plane_distance(float plane, const WideRay& r, uint3
 //   NaN when inv is finite and non-zero (FmaRayBox::safe_direction makes it so, the CPU not flushing
 //   denormals to zero), org_inv is finite and no plane is NaN (wide_bvh.cpp stores NaN planes as
 //   infinities). tmax, the closest hit so far, may be -0: its sign bit is cleared.
-//   KNOWN EXCEPTION: a negative distance smaller than 2^-150 in magnitude, which takes planes, origins
-//   or reciprocals near the bottom of the denormals, rounds to -0 all the same. A far distance of -0
-//   with an entry distance of +0 (tmin +0, the ray starting on the box's far face) is a zero-length
-//   entry that the float compare takes and the integer compare misses. A helper's review found it
-//   (issue 4's note, stop 18); the fix, an add of +0 to each far distance, is not measured yet.
 // Then a minimum with a negative distance in it is negative under both orders, and the compare fails
-// under both. The ray set-up checks the conditions on each ray (WideRay::int_order, wide_bvh.cpp), and
-// a batch takes the integer path only when every ray in it meets them (trace_batch): the others (a
-// negative tmin, an origin so far out that org * inv overflows) take the float path.
+// under both. One case is left: a negative distance below 2^-150 in magnitude rounds to -0 all the
+// same, and a far distance of -0 with an entry of +0 (the ray starting on the box's far face) is a
+// zero-length entry that the float compare takes and the integer one misses (a helper's review found
+// it). That takes |org_inv| below 2^-100 on the distance's axis (wide_bvh.cpp proves the bound), so the
+// ray set-up sorts the rays (WideRay::int_order): kFree rays cannot meet it; for kGuarded rays, whose
+// origin is on or near a coordinate plane, the kernel looks for a far minimum of -0 (INT_MIN, below
+// every other value) at each node and tests that node again on the float path. The check cost shadow
+// rays 0.5-3% where every ray took it (Sponza's most), hence the two kinds. A batch takes the lowest
+// kind of its rays (trace_batch): a negative tmin, or an origin so far out that org * inv overflows,
+// sends it to the float path.
 
 // Whether this instruction set has the integer path: the FMA sets (SSE has no fused multiply-add, and
 // the scalar kernels are the reference).
@@ -78,7 +79,7 @@ inline constexpr bool kHasIntOrder = false;
 
 #if defined(SAHBENCH_WIDE_SCALAR)
 
-template <uint32_t N, BoxTestKind kBox, bool kIntOrder = false>
+template <uint32_t N, BoxTestKind kBox, IntOrder kInt = IntOrder::kNone>
 SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
                                    float* t_entry) {
   uint32_t mask = 0;
@@ -120,11 +121,11 @@ SAHBENCH_KERNEL_INLINE __m128 plane_distances4(__m128 planes, const WideRay& r, 
   }
 }
 
-template <BoxTestKind kBox, bool kIntOrder = false>
+template <BoxTestKind kBox, IntOrder kInt = IntOrder::kNone>
 SAHBENCH_KERNEL_INLINE uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, float tmin, float tmax,
                                     float* t_entry, uint32_t stride) {
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
-  if constexpr (kIntOrder) {
+  if constexpr (kInt != IntOrder::kNone) {
     static_assert(kBox == BoxTestKind::kFma, "the integer order is box=fma's");
     auto distances = [&](uint32_t plane, uint32_t axis) __attribute__((always_inline)) {
       return _mm_castps_si128(_mm_fmadd_ps(_mm_load_ps(planes[plane * stride]), _mm_set1_ps(r.inv_dir[axis]),
@@ -136,6 +137,12 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children4(const float (*planes)[4], co
     const __m128i t_far =
         _mm_min_epi32(_mm_min_epi32(distances(r.far_plane[0], 0), distances(r.far_plane[1], 1)),
                       _mm_min_epi32(distances(r.far_plane[2], 2), _mm_set1_epi32(__builtin_bit_cast(int, tmax) & 0x7fffffff)));
+    // A far distance of -0 (see the exception above) makes its lane's minimum INT_MIN: that node is
+    // tested again on the float path. Off the path to the mask, and a branch that is never taken.
+    if constexpr (kInt == IntOrder::kGuarded) {
+      if (__builtin_expect(!_mm_testz_si128(_mm_cmpeq_epi32(t_far, _mm_set1_epi32(INT32_MIN)), _mm_set1_epi32(-1)), 0))
+        return intersect_children4<kBox>(planes, r, tmin, tmax, t_entry, stride);
+    }
     _mm_storeu_si128(reinterpret_cast<__m128i*>(t_entry), t_near);
 #if defined(SAHBENCH_WIDE_AVX512)
     return static_cast<uint32_t>(_mm_cmple_epi32_mask(t_near, t_far));
@@ -157,15 +164,15 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children4(const float (*planes)[4], co
   return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmple_ps(t_near, t_far)));
 }
 
-template <uint32_t N, BoxTestKind kBox, bool kIntOrder = false>
+template <uint32_t N, BoxTestKind kBox, IntOrder kInt = IntOrder::kNone>
 SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, float tmin, float tmax,
                                    float* t_entry) {
   if constexpr (N == 4) {
-    return intersect_children4<kBox, kIntOrder>(reinterpret_cast<const float (*)[4]>(node.planes), r, tmin, tmax,
+    return intersect_children4<kBox, kInt>(reinterpret_cast<const float (*)[4]>(node.planes), r, tmin, tmax,
                                                 t_entry, 1);
   } else {
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
-    if constexpr (kIntOrder) {
+    if constexpr (kInt != IntOrder::kNone) {
       static_assert(kBox == BoxTestKind::kFma, "the integer order is box=fma's");
       // Both extremes as trees of two levels: each distance is one fused multiply-subtract from the load.
       auto distances = [&](uint32_t plane, uint32_t axis) __attribute__((always_inline)) {
@@ -178,6 +185,15 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, cons
       const __m256i t_far = _mm256_min_epi32(
           _mm256_min_epi32(distances(r.far_plane[0], 0), distances(r.far_plane[1], 1)),
           _mm256_min_epi32(distances(r.far_plane[2], 2), _mm256_set1_epi32(__builtin_bit_cast(int, tmax) & 0x7fffffff)));
+      if constexpr (kInt == IntOrder::kGuarded) {
+#if defined(SAHBENCH_WIDE_AVX512)
+        const bool negative_zero = _mm256_cmpeq_epi32_mask(t_far, _mm256_set1_epi32(INT32_MIN)) != 0;
+#else
+        const bool negative_zero = !_mm256_testz_si256(_mm256_cmpeq_epi32(t_far, _mm256_set1_epi32(INT32_MIN)),
+                                                       _mm256_set1_epi32(-1));
+#endif
+        if (__builtin_expect(negative_zero, 0)) return intersect_children<N, kBox>(node, r, tmin, tmax, t_entry);
+      }
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(t_entry), t_near);
 #if defined(SAHBENCH_WIDE_AVX512)
       return static_cast<uint32_t>(_mm256_cmple_epi32_mask(t_near, t_far));
@@ -215,7 +231,7 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, cons
     // SSE: the two halves of the eight children. planes[p] is 8 floats; as [4]-rows, plane p's first
     // half is row 2p and its second half row 2p + 1.
     const auto* rows = reinterpret_cast<const float (*)[4]>(node.planes);
-    static_assert(!kIntOrder, "no integer order without fused multiply-adds");
+    static_assert(kInt == IntOrder::kNone, "no integer order without fused multiply-adds");
     const uint32_t lo = intersect_children4<kBox>(rows, r, tmin, tmax, t_entry, 2);
     const uint32_t hi = intersect_children4<kBox>(rows + 1, r, tmin, tmax, t_entry + 4, 2);
     return lo | (hi << 4);
@@ -829,7 +845,7 @@ SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t 
 }
 
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
-          bool kIntOrder>
+          IntOrder kInt>
 inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const WideRay& r, WideCounts* counts) {
   Hit best;
   float t_root;
@@ -896,7 +912,7 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
       __builtin_prefetch(node.child);
       if constexpr (kCount) ++counts->inner_visits;
       alignas(32) float t_entry[N];
-      uint32_t mask = intersect_children<N, kBox, kIntOrder>(node, r, r.tmin, best_t, t_entry);
+      uint32_t mask = intersect_children<N, kBox, kInt>(node, r, r.tmin, best_t, t_entry);
       if (mask != 0) {
         // Continue with the nearest child entered; the others go on the stack, farthest deepest.
         entry = descend<N, kOrder>(node, mask, t_entry, arena, stack, size);
@@ -912,33 +928,35 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
   }
 }
 
-// The integer order (kIntOrder) is chosen for a whole batch, when every ray in it meets its conditions
-// (WideBatch::int_order), and the float path otherwise. A choice per ray, between two calls in the loop,
-// traced the closest-hit rays up to 9% slower (the bunny's primary rays), and a check of every ray here
-// 3-5%, than no choice at all; the set-up has the ray's values in registers.
+// The integer order (kInt) is chosen for a whole batch, the lowest of its rays' (WideBatch::int_order):
+// guarded if any ray needs the check for -0, the float path if any ray cannot take the integer path. A
+// choice per ray, between two calls in the loop, traced the closest-hit rays up to 9% slower (the
+// bunny's primary rays), and a check of every ray here 3-5%, than no choice at all; the set-up has the
+// ray's values in registers.
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount>
 void trace_batch(const WideBatch& batch) {
-  auto run = [&]<AnyHitOrder kOrder, bool kIntOrder>() {
+  auto run = [&]<AnyHitOrder kOrder, IntOrder kInt>() {
     for (std::size_t i = 0; i < batch.count; ++i) {
       if constexpr (kCount) ++batch.counts->rays;
-      const Hit hit = trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kIntOrder>(batch.root_planes, batch.arena,
-                                                                                  batch.rays[i], batch.counts);
+      const Hit hit = trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(batch.root_planes, batch.arena,
+                                                                             batch.rays[i], batch.counts);
       if constexpr (kAnyHit) batch.occluded[i] = hit.prim != kInvalidPrim;
       else batch.hits[i] = hit;
     }
   };
-  auto with_order = [&]<bool kIntOrder>() {
+  auto with_order = [&]<IntOrder kInt>() {
     if constexpr (kAnyHit) {
-      if (batch.any_hit_order == AnyHitOrder::kStored) return run.template operator()<AnyHitOrder::kStored, kIntOrder>();
+      if (batch.any_hit_order == AnyHitOrder::kStored) return run.template operator()<AnyHitOrder::kStored, kInt>();
       if (batch.any_hit_order == AnyHitOrder::kNearestStored)
-        return run.template operator()<AnyHitOrder::kNearestStored, kIntOrder>();
+        return run.template operator()<AnyHitOrder::kNearestStored, kInt>();
     }
-    run.template operator()<AnyHitOrder::kNearest, kIntOrder>();
+    run.template operator()<AnyHitOrder::kNearest, kInt>();
   };
   if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
-    if (batch.int_order) return with_order.template operator()<true>();
+    if (batch.int_order == IntOrder::kFree) return with_order.template operator()<IntOrder::kFree>();
+    if (batch.int_order == IntOrder::kGuarded) return with_order.template operator()<IntOrder::kGuarded>();
   }
-  with_order.template operator()<false>();
+  with_order.template operator()<IntOrder::kNone>();
 }
 
 // The table of this instruction set's kernels: [width 4, 8][triangle test][box test][closest, any].
@@ -980,20 +998,39 @@ double node_test_loop(const void* nodes, std::size_t node_count, const WideRay* 
   const auto* typed = static_cast<const WideNode<N>*>(nodes);
   double sum = 0.0;
   alignas(32) float t_entry[N];
+  auto loop = [&]<IntOrder kInt>(const WideRay& ray) {
+    for (std::size_t n = 0; n < node_count; ++n)
+      sum += intersect_children<N, kBox, kInt>(typed[n], ray, ray.tmin, ray.tmax, t_entry) + t_entry[0];
+  };
   for (std::size_t r = 0; r < ray_count; ++r) {
     // The kernels' choice of path (trace_batch), so that the tests compare the integer path as well.
-    const bool int_order = kHasIntOrder && kBox == BoxTestKind::kFma && rays[r].int_order;
-    for (std::size_t n = 0; n < node_count; ++n) {
-      if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
-        if (int_order) {
-          sum += intersect_children<N, kBox, true>(typed[n], rays[r], rays[r].tmin, rays[r].tmax, t_entry) + t_entry[0];
-          continue;
-        }
+    if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
+      if (rays[r].int_order == IntOrder::kFree) {
+        loop.template operator()<IntOrder::kFree>(rays[r]);
+        continue;
       }
-      sum += intersect_children<N, kBox>(typed[n], rays[r], rays[r].tmin, rays[r].tmax, t_entry) + t_entry[0];
+      if (rays[r].int_order == IntOrder::kGuarded) {
+        loop.template operator()<IntOrder::kGuarded>(rays[r]);
+        continue;
+      }
     }
+    loop.template operator()<IntOrder::kNone>(rays[r]);
   }
   return sum;
+}
+
+// One node against one ray, for the tests: the hit mask, with every slot's entry distance in t_entry,
+// on the path (integer or float) that trace_batch takes for a batch of that ray alone.
+template <uint32_t N, BoxTestKind kBox>
+uint32_t node_test_one(const void* node, const WideRay& ray, float* t_entry) {
+  const auto& typed = *static_cast<const WideNode<N>*>(node);
+  if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
+    if (ray.int_order == IntOrder::kFree)
+      return intersect_children<N, kBox, IntOrder::kFree>(typed, ray, ray.tmin, ray.tmax, t_entry);
+    if (ray.int_order == IntOrder::kGuarded)
+      return intersect_children<N, kBox, IntOrder::kGuarded>(typed, ray, ray.tmin, ray.tmax, t_entry);
+  }
+  return intersect_children<N, kBox>(typed, ray, ray.tmin, ray.tmax, t_entry);
 }
 
 template <TriangleTestKind kTri>
@@ -1009,16 +1046,24 @@ double block_test_loop(const void* data, std::size_t block_count, const WideRay*
 
 inline WideBenchLoops select_bench_loops(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
   WideBenchLoops loops{};
-  auto nodes = [&]<uint32_t N>() -> double (*)(const void*, std::size_t, const WideRay*, std::size_t) {
+  auto nodes = [&]<uint32_t N>() {
     switch (box) {
-      case BoxTestKind::kRobust: return &node_test_loop<N, BoxTestKind::kRobust>;
-      case BoxTestKind::kFast: return &node_test_loop<N, BoxTestKind::kFast>;
-      case BoxTestKind::kFma: return &node_test_loop<N, BoxTestKind::kFma>;
+      case BoxTestKind::kRobust:
+        loops.nodes = &node_test_loop<N, BoxTestKind::kRobust>;
+        loops.node = &node_test_one<N, BoxTestKind::kRobust>;
+        break;
+      case BoxTestKind::kFast:
+        loops.nodes = &node_test_loop<N, BoxTestKind::kFast>;
+        loops.node = &node_test_one<N, BoxTestKind::kFast>;
+        break;
+      case BoxTestKind::kFma:
+        loops.nodes = &node_test_loop<N, BoxTestKind::kFma>;
+        loops.node = &node_test_one<N, BoxTestKind::kFma>;
+        break;
     }
-    return nullptr;
   };
-  if (width == 4) loops.nodes = nodes.template operator()<4>();
-  if (width == 8) loops.nodes = nodes.template operator()<8>();
+  if (width == 4) nodes.template operator()<4>();
+  if (width == 8) nodes.template operator()<8>();
   switch (tri) {
     case TriangleTestKind::kWatertight: loops.blocks = &block_test_loop<TriangleTestKind::kWatertight>; break;
     case TriangleTestKind::kMollerTrumbore: loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumbore>; break;

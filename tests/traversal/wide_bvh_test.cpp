@@ -7,10 +7,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <limits>
 #include <random>
+#include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/huge_pages.h"
@@ -230,15 +234,17 @@ TEST(WideBvh, NodeTestsOfEveryIsaComputeTheScalarBoxTestsDistances) {
 // Nodes and rays where the AVX2 and AVX-512 kernels' integer min and max for box=fma (wide_kernels.inl:
 // kIntOrder) would part from the float compares if one of its conditions were missed: planes at +0 and
 // -0, rays from +-0 with zero and tiny direction components, tmin of +0, -0 and below zero, tmax of -0,
-// and origins so far out that org * inv overflows. Each node against each ray alone, with each slot in
-// lane 0 in turn (the loop returns the mask and lane 0's entry distance).
+// origins so far out that org * inv overflows, and slab distances that round to -0 from below (planes
+// and reciprocals at the bottom of the denormals, with a ray that starts on the box's far face). Each
+// node against each ray alone: the hit mask and every slot's entry distance, against ray_box.h's.
 template <uint32_t N>
 void check_node_tests_on_signed_zeros() {
   constexpr float kInf = std::numeric_limits<float>::infinity();
+  constexpr float kDenormMin = std::numeric_limits<float>::denorm_min();
   std::mt19937 rng(5);
   auto pick = [&](const auto& values) { return values[rng() % std::size(values)]; };
-  const float planes[] = {-2.0f, -1.0f, -0.0f, 0.0f, 1.0f, 2.0f};
-  std::vector<Aabb> boxes(24);
+  const float planes[] = {-2.0f, -1.0f, -0.5f, -kDenormMin, -0.0f, 0.0f, kDenormMin, 0.5f, 1.0f, 2.0f};
+  std::vector<Aabb> boxes(40);
   for (Aabb& box : boxes)
     for (int axis = 0; axis < 3; ++axis) {
       float lo = pick(planes), hi = pick(planes);
@@ -246,11 +252,21 @@ void check_node_tests_on_signed_zeros() {
       box.min[axis] = lo;
       box.max[axis] = hi;
     }
+  // Boxes with a face at +-denorm_min or 0.5 on x, for rays from 0 and 0.5 along x (below): a far
+  // distance of denorm_min * inv with |inv| < 1 is below 2^-150, or 0.5 * inv - round(0.5 * inv) with a
+  // denormal inv.
+  for (const auto& [lo, hi] : {std::pair{-1.0f, -kDenormMin},
+                               {kDenormMin, 1.0f},
+                               {0.0f, 0.5f},
+                               {-0.5f, 0.0f},
+                               {-1.0f, 0.5f},
+                               {-0.5f, 1.0f}})
+    boxes.push_back(Aabb{{lo, -1.0f, -1.0f}, {hi, 1.0f, 1.0f}});
   std::vector<WideNode<N>> nodes;
-  for (std::size_t k = 0; k < 3 * boxes.size(); ++k) {
+  for (std::size_t k = 0; k < 2 * boxes.size(); ++k) {
     WideNode<N> node{};
     for (uint32_t i = 0; i < N; ++i) {
-      const Aabb box = (k % 3 == 0 && i == N - 1) ? Aabb::empty() : boxes[(k + i) % boxes.size()];
+      const Aabb box = (k % 3 == 0 && i == N - 1) ? Aabb::empty() : boxes[(k * 5 + i) % boxes.size()];
       for (int axis = 0; axis < 3; ++axis) {
         node.planes[2 * axis][i] = box.min[axis];
         node.planes[2 * axis + 1][i] = box.max[axis];
@@ -258,9 +274,9 @@ void check_node_tests_on_signed_zeros() {
     }
     nodes.push_back(node);
   }
-  const float origins[] = {-0.0f, 0.0f, 1.0f, -1.0f, 0.5f, -1.5f};
-  const float directions[] = {1.0f, -1.0f, 0.5f, -0.0f, 0.0f, 1e-20f, -1e-20f};
-  const float tmins[] = {0.0f, -0.0f, -1.0f, 0.25f};
+  const float origins[] = {-0.0f, 0.0f, 1.0f, -1.0f, 0.5f, -0.5f, -1.5f};
+  const float directions[] = {1.0f, -1.0f, 0.5f, 2.0f, -2.0f, -0.0f, 0.0f, 1e-20f, -1e-20f, 2.7e38f, -3e38f};
+  const float tmins[] = {0.0f, 0.0f, -0.0f, -1.0f, 0.25f};
   const float tmaxs[] = {kInf, -0.0f, 0.0f, 1.5f};
   std::vector<Ray> rays;
   for (int i = 0; i < 400; ++i) {
@@ -274,30 +290,94 @@ void check_node_tests_on_signed_zeros() {
     rays.push_back(ray);
   }
   for (float far : {1e30f, -3e38f}) rays.push_back(Ray{{far, 0.5f, -0.0f}, 0.0f, {1e-20f, 1.0f, -0.0f}});
-  // A direction component so large that its reciprocal is a denormal.
+  // Along x from 0 and +-0.5, at +0, with direction components from 2 to near the top of the floats,
+  // whose reciprocals reach the denormals: the rays of the far-face cases above.
+  for (float x : {0.0f, 0.5f, -0.5f})
+    for (float d : {2.0f, 3.0f, 1.7e38f, 2.3e38f, 2.7e38f, 2.9e38f, 3.1e38f, 3.3e38f})
+      for (float sign : {1.0f, -1.0f}) rays.push_back(Ray{{x, 0.25f, -0.25f}, 0.0f, {sign * d, 0.0f, -0.0f}});
   rays.push_back(Ray{{0.5f, -0.0f, 1.0f}, 0.0f, {3e38f, -1.0f, 0.0f}});
+  auto same = [](float a, float b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+  int kinds[3] = {};
   for (BoxTestKind box : {BoxTestKind::kRobust, BoxTestKind::kFast, BoxTestKind::kFma}) {
     SCOPED_TRACE(std::string(to_string(box)));
     for (const Ray& ray : rays) {
       const WideRay wide_ray = make_wide_ray(ray, false, box);
+      if (box == BoxTestKind::kFma) ++kinds[static_cast<int>(wide_ray.int_order)];
       for (const WideNode<N>& node : nodes) {
-        const std::vector<WideNode<N>> one_node{node};
-        const std::vector<Ray> one_ray{ray};
-        double expected = 0.0;
-        if (box == BoxTestKind::kRobust) expected = reference_node_sum<RobustRayBox>(one_node, one_ray);
-        if (box == BoxTestKind::kFast) expected = reference_node_sum<FastRayBox>(one_node, one_ray);
-        if (box == BoxTestKind::kFma) expected = reference_node_sum<FmaRayBox>(one_node, one_ray);
+        uint32_t expected_mask = 0;
+        float expected_t[N];
+        for (uint32_t i = 0; i < N; ++i) {
+          const Aabb slot{{node.planes[0][i], node.planes[2][i], node.planes[4][i]},
+                          {node.planes[1][i], node.planes[3][i], node.planes[5][i]}};
+          bool hit = false;
+          if (box == BoxTestKind::kRobust)
+            hit = RobustRayBox(ray).intersect(slot, ray.tmin, ray.tmax, expected_t[i]);
+          if (box == BoxTestKind::kFast)
+            hit = FastRayBox(ray).intersect(slot, ray.tmin, ray.tmax, expected_t[i]);
+          if (box == BoxTestKind::kFma)
+            hit = FmaRayBox(ray).intersect(slot, ray.tmin, ray.tmax, expected_t[i]);
+          expected_mask |= static_cast<uint32_t>(hit) << i;
+        }
         for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
           if (!kernel_isa_available(isa)) continue;
-          const double sum = find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box})
-                                 .nodes(&node, 1, &wide_ray, 1);
-          ASSERT_EQ(sum, expected) << to_string(isa) << ": ray from (" << ray.org.x << ", " << ray.org.y
-                                   << ", " << ray.org.z << ") along (" << ray.dir.x << ", " << ray.dir.y
-                                   << ", " << ray.dir.z << ") in [" << ray.tmin << ", " << ray.tmax << "]";
+          alignas(32) float t[N];
+          const uint32_t mask =
+              find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box}).node(&node, wide_ray, t);
+          auto where = [&] {
+            std::ostringstream out;
+            out << std::setprecision(9) << to_string(isa)
+                << (wide_ray.int_order == IntOrder::kFree      ? " (integer order)"
+                    : wide_ray.int_order == IntOrder::kGuarded ? " (guarded integer order)"
+                                                               : "")
+                << ": ray from (" << ray.org.x << ", " << ray.org.y << ", " << ray.org.z << ") along ("
+                << ray.dir.x << ", " << ray.dir.y << ", " << ray.dir.z << ") in [" << ray.tmin << ", "
+                << ray.tmax << "]";
+            return out.str();
+          };
+          ASSERT_EQ(mask, expected_mask) << where();
+          for (uint32_t i = 0; i < N; ++i)
+            ASSERT_TRUE(same(t[i], expected_t[i]))
+                << where() << ", slot " << i << ": entry " << t[i] << ", expected " << expected_t[i];
         }
       }
     }
   }
+  // Every path of the kernels was taken.
+  EXPECT_GT(kinds[static_cast<int>(IntOrder::kNone)], 20);
+  EXPECT_GT(kinds[static_cast<int>(IntOrder::kGuarded)], 20);
+  EXPECT_GT(kinds[static_cast<int>(IntOrder::kFree)], 20);
+}
+
+// The ray set-up's sorting for the integer path (wide_bvh.h: IntOrder), at the edges of each condition,
+// and a batch's answer is the lowest of its rays'.
+TEST(WideBvh, RaySetUpSortsRaysForTheIntegerPathAtTheEdgesOfItsConditions) {
+  auto kind = [](Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = std::numeric_limits<float>::infinity()) {
+    return make_wide_ray(Ray{org, tmin, dir, tmax}, false, BoxTestKind::kFma).int_order;
+  };
+  const float low = 0x1p-100f, below = std::nextafter(low, 0.0f);
+  EXPECT_EQ(kind({1, 2, 3}, {1, -1, 0.5f}), IntOrder::kFree);
+  EXPECT_EQ(kind({low, -low, low}, {1, -1, 1}), IntOrder::kFree);
+  EXPECT_EQ(kind({1, below, 1}, {1, 1, 1}), IntOrder::kGuarded);
+  EXPECT_EQ(kind({1, 1, -0.0f}, {1, 1, 1}), IntOrder::kGuarded);
+  EXPECT_EQ(kind({0, 0, 0}, {1, 1, 1}), IntOrder::kGuarded);
+  // A zero direction component: its reciprocal is +-1e18, so org * inv is far from 2^-100.
+  EXPECT_EQ(kind({1, 1, 1}, {0, 1, 1}), IntOrder::kFree);
+  EXPECT_EQ(kind({1, 1, 1}, {1, 1, 1}, -0.0f), IntOrder::kNone);
+  EXPECT_EQ(kind({1, 1, 1}, {1, 1, 1}, -1.0f), IntOrder::kNone);
+  EXPECT_EQ(kind({1, 1, 1}, {1, 1, 1}, 0.0f, -1.0f), IntOrder::kNone);
+  EXPECT_EQ(kind({1, 1, 1}, {1, 1, 1}, 0.0f, -0.0f), IntOrder::kFree);
+  EXPECT_EQ(kind({1e30f, 1, 1}, {0, 1, 1}), IntOrder::kNone);  // org * 1e18 overflows
+  EXPECT_EQ(kind({0, 1, 1}, {1, 1, 1}, -1.0f), IntOrder::kNone);
+  // The other box tests never take the integer path.
+  EXPECT_EQ(make_wide_ray(Ray{{1, 2, 3}, 0.0f, {1, 1, 1}}, false, BoxTestKind::kFast).int_order,
+            IntOrder::kNone);
+  const std::vector<Ray> batch{Ray{{1, 2, 3}, 0.0f, {1, 1, 1}}, Ray{{0, 2, 3}, 0.0f, {1, 1, 1}},
+                               Ray{{1, 2, 3}, -1.0f, {1, 1, 1}}};
+  std::vector<WideRay> out(batch.size());
+  EXPECT_EQ(make_wide_rays(std::span(batch).first(1), out.data(), false, BoxTestKind::kFma), IntOrder::kFree);
+  EXPECT_EQ(make_wide_rays(std::span(batch).first(2), out.data(), false, BoxTestKind::kFma),
+            IntOrder::kGuarded);
+  EXPECT_EQ(make_wide_rays(batch, out.data(), false, BoxTestKind::kFma), IntOrder::kNone);
 }
 
 TEST(WideBvh, NodeTestsOfEveryIsaAgreeOnSignedZerosNegativeTminAndOverflowingOrigins) {

@@ -1,6 +1,6 @@
 #pragma once
 // Sibling order of the common format for occlusion rays. The any-hit kernels visit the children of a
-// wide tree's nodes nearest first and then in storage order (bvh2_traversal.h: resolve_any_hit_order),
+// wide tree's nodes in storage order by default (bvh2_traversal.h: resolve_any_hit_order),
 // so the wide builders store first the children most likely to end a shadow ray soon.
 
 #include <span>

@@ -40,19 +40,24 @@ struct TraversalCounters {
 };
 
 /// The order in which any hit visits a node's children on `bvh`: `order`, with kAuto resolved.
-/// - Wide trees (arity above 2): kNearestStored. Their builders store first the children likeliest to
-///   hold an occluder per unit of cost (builders/child_order.h); storage order beat nearest first on the
-///   8-wide kernels' shadow rays (no sort on the way to the next node), on Sponza most. Going first to
-///   the nearest child (ties to the earlier) and then in storage order visited fewer nodes than either
-///   and, against storage order, traced the 1M terrain's shadow rays 1-7% faster, the bunny's 1-6%
-///   faster, and the dragon's and Sponza's within 2% either way (medians of 4 runs, single runs -5% to
-///   +10%), for both wide builders (`bvh8:tri=mt0,box=fma`; notes of issue 4).
+/// - Wide trees (arity above 2): kStored. Their builders store first the children likeliest to hold an
+///   occluder per unit of cost (builders/child_order.h), and storage order costs no sort or search on
+///   the way to the next node. Going first to the nearest child (ties to the earlier) and then in
+///   storage order (kNearestStored, the default until stop 20) traced the shadow rays of the 1M terrain
+///   3% faster, the bunny's 5% faster and the dragon's the same, and Sponza's, seen from inside its
+///   atrium (configs/wide.toml's camera), 17% slower: 0.77 of Embree against 0.92, with as many nodes
+///   and triangles per ray (`bvh8:tri=mtn,box=fma`, wide_collapse, 3 interleaved rounds; notes of issue
+///   4, stop 20). The shadow rays of an interior start on a floor or wall whose box is the nearest, and
+///   their occluders are far. Storage order's worst case is the smaller, hence the default. (From
+///   outside Sponza, before the configs had a camera, the nearest first had looked no worse there.)
+///   Nearest first only where the ray starts in none of the children was worse than both on all but
+///   Sponza (0.82).
 /// - Binary trees: kNearest. Storage order cost their shadow rays 10 to 16% (measured against Embree in
 ///   one run; notes of issue 4).
 /// The layout option anyhit=nearest|stored|nearest_stored overrides it.
 inline AnyHitOrder resolve_any_hit_order(const Bvh& bvh, AnyHitOrder order = AnyHitOrder::kAuto) {
   if (order != AnyHitOrder::kAuto) return order;
-  return bvh.arity > 2 ? AnyHitOrder::kNearestStored : AnyHitOrder::kNearest;
+  return bvh.arity > 2 ? AnyHitOrder::kStored : AnyHitOrder::kNearest;
 }
 
 namespace detail {

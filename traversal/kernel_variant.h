@@ -27,7 +27,7 @@ enum class BoxTestKind : uint8_t {
 /// The order in which any hit (shadow rays) visits the children a ray enters; closest hit always visits
 /// them nearest first.
 enum class AnyHitOrder : uint8_t {
-  kAuto,     ///< kNearestStored on wide trees (arity above 2), kNearest on binary ones (bvh2_traversal.h)
+  kAuto,     ///< kStored on wide trees (arity above 2), kNearest on binary ones (bvh2_traversal.h)
   kNearest,  ///< nearest entry distance first, as closest hit
   kStored,   ///< the tree's child order (the wide builders store an occlusion order: builders/child_order.h)
   /// The nearest child entered first (ties to the earlier slot, the tree's choice), then the others in

@@ -91,7 +91,7 @@ TEST(ChildOrder, EveryWideBuilderWritesTheOcclusionOrder) {
     const ParamSet params = resolve_params(info.name, info.params, {});
     const Bvh bvh = info.build(BuildInput::from_triangles(tris), params);
     ASSERT_TRUE(validate(bvh, tris).ok()) << validate(bvh, tris).summary();
-    EXPECT_EQ(resolve_any_hit_order(bvh), bvh.arity > 2 ? AnyHitOrder::kNearestStored : AnyHitOrder::kNearest);
+    EXPECT_EQ(resolve_any_hit_order(bvh), bvh.arity > 2 ? AnyHitOrder::kStored : AnyHitOrder::kNearest);
     if (bvh.arity <= 2) continue;
     ++wide_builders;
     expect_ordered(bvh, tris, sah_cost_of(params));

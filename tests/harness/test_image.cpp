@@ -8,6 +8,8 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <string>
+#include <string_view>
 
 #include "builders/params.h"
 #include "builders/registry.h"
@@ -197,40 +199,36 @@ TEST(HarnessImage, EyeAndTargetGiveTheView) {
   EXPECT_NE(away_log.str().find("depth: no hits"), std::string::npos) << away_log.str();
 
   std::ostringstream log;
+  // Each bad view is an error that names the option and its value.
+  auto expect_error = [&](auto view, std::string_view text) {
+    const std::string message = error_message([&] { run_image_command(view, log); });
+    EXPECT_NE(message.find(text), std::string::npos) << "expected '" << text << "' in: " << message;
+  };
   auto lone_eye = options(dir.path() / "x");
   lone_eye.eye = "0,0,3";
-  EXPECT_NE(error_message([&] { run_image_command(lone_eye, log); }).find("--eye and --target go together"),
-            std::string::npos);
+  expect_error(lone_eye, "--eye and --target go together");
   auto short_target = facing;
   short_target.target = "0,0";
-  EXPECT_NE(error_message([&] {
-              run_image_command(short_target, log);
-            }).find("--target '0,0': expected three numbers"),
-            std::string::npos);
+  expect_error(short_target, "--target '0,0': expected three numbers");
   auto junk = facing;
   junk.up = "0,1,x";
-  EXPECT_NE(error_message([&] { run_image_command(junk, log); }).find("--up '0,1,x'"), std::string::npos);
+  expect_error(junk, "--up '0,1,x'");
   auto spaced = facing;
   spaced.out = dir.path() / "spaced";
   spaced.eye = " 0 , 0,3 ";
   run_image_command(spaced, log);
   auto infinite = facing;
   infinite.eye = "1e999,0,3";
-  EXPECT_NE(error_message([&] {
-              run_image_command(infinite, log);
-            }).find("--eye '1e999,0,3': '1e999' is not a finite"),
-            std::string::npos);
+  expect_error(infinite, "--eye '1e999,0,3': '1e999' is not a finite");
   auto wide = facing;
   wide.fov = 200.0f;
-  EXPECT_NE(error_message([&] { run_image_command(wide, log); }).find("--fov 200: camera fov = 200 degrees"),
-            std::string::npos);
+  expect_error(wide, "--fov 200: camera fov = 200 degrees");
   auto four = facing;
   four.eye = "0,0,3,4";
-  EXPECT_NE(error_message([&] { run_image_command(four, log); }).find("--eye '0,0,3,4'"), std::string::npos);
+  expect_error(four, "--eye '0,0,3,4'");
   auto same = facing;
   same.target = "0,0,3";
-  EXPECT_NE(error_message([&] { run_image_command(same, log); }).find("must differ from the eye"),
-            std::string::npos);
+  expect_error(same, "must differ from the eye");
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "x_nodes.png"));
 }
 

@@ -1,0 +1,138 @@
+#!/usr/bin/python3
+"""scripts/ab.py against fake sahbench builds that write known CSVs: the medians of ours over Embree
+medium per cell and build, the change against the first build, the interleaved order, and clear
+errors for a failing build, a missing column and bad arguments.
+
+    test_ab.py PATH/TO/ab.py
+
+Exits 77 (ctest's SKIP_RETURN_CODE) when pandas is not installed.
+"""
+
+import os
+import stat
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+SKIP = 77
+failures = []
+
+
+def check(condition, message):
+    if not condition:
+        failures.append(message)
+        print(f"FAIL: {message}", file=sys.stderr)
+
+
+# A fake build: `NAME run CONFIG --output PATH` appends NAME to the order log, then writes a CSV where
+# Embree's figures change from run to run (a noisy machine) and ours are `scale` times Embree's, so
+# that only the ratio is stable. Trace: ours = scale * Embree's rays/s; build: ours = Embree's ms / scale.
+FAKE = """#!{python}
+import sys, pathlib
+name, scale, mode = {name!r}, {scale!r}, {mode!r}
+args = sys.argv[1:]
+assert args[0] == "run", args
+out = pathlib.Path(args[args.index("--output") + 1])
+log = pathlib.Path({log!r})
+runs = log.read_text().count(name) if log.exists() else 0
+with log.open("a") as f:
+    f.write(name + "\\n")
+if mode == "fail":
+    print("error: something broke in the run", file=sys.stderr)
+    sys.exit(3)
+noise = 1.0 + 0.2 * (runs % 3)
+columns = ["scene", "builder", "builder_params", "layout", "threads", "ray_set", "trace_mrays_median",
+           "build_ms_median"]
+if mode == "nocolumn":
+    columns.remove("build_ms_median")
+rows = [
+    ["bunny", "embree", "quality=medium", "embree_1", 1, "shadow", 10.0 * noise, 100.0 * noise],
+    ["bunny", "embree", "quality=medium", "embree_8", 1, "shadow", 30.0 * noise, 100.0 * noise],
+    ["bunny", "embree", "quality=medium", "embree_1", 1, "", "", 100.0 * noise],
+    ["bunny", "wide_collapse", "arity=8", "bvh8", 1, "shadow", 10.0 * noise * scale, 80.0 * noise],
+    ["bunny", "wide_collapse", "arity=8", "", 1, "", "", 100.0 * noise / scale],
+]
+with out.open("w") as f:
+    f.write(",".join(columns) + "\\n")
+    for row in rows:
+        if mode == "nocolumn":
+            row = row[:-1]
+        f.write(",".join(str(x) for x in row) + "\\n")
+"""
+
+
+def make_build(folder, name, scale, log, mode="ok"):
+    path = Path(folder) / name
+    path.write_text(FAKE.format(python=sys.executable, name=name, scale=scale, mode=mode, log=str(log)))
+    path.chmod(path.stat().st_mode | stat.S_IXUSR)
+    return str(path)
+
+
+def run_ab(ab, *args):
+    return subprocess.run([sys.executable, ab, *args], capture_output=True, text=True)
+
+
+def main():
+    if len(sys.argv) != 2:
+        print(__doc__, file=sys.stderr)
+        return 2
+    try:
+        import pandas  # noqa: F401
+    except ImportError:
+        print("pandas not installed: skipped", file=sys.stderr)
+        return SKIP
+    ab = sys.argv[1]
+    with tempfile.TemporaryDirectory() as folder:
+        config = Path(folder) / "x.toml"
+        config.write_text("[experiment]\nname = 'x'\n")
+        log = Path(folder) / "order.log"
+        a = make_build(folder, "sahbench-a", 0.8, log)
+        b = make_build(folder, "sahbench-b", 0.9, log)
+
+        done = run_ab(ab, "--rounds", "3", str(config), a, b)
+        check(done.returncode == 0, f"a good A/B exits 0, got {done.returncode}: {done.stderr}")
+        out = done.stdout
+        trace = [line for line in out.splitlines() if "| bvh8 |" in line]
+        build = [line for line in out.splitlines() if "| build |" in line]
+        check(len(trace) == 1 and "| 0.800 | 0.900 | +12.5% |" in trace[0],
+              f"the shadow cell is 0.800 for A and 0.900 for B, +12.5%: {trace}")
+        check(len(build) == 1 and "| 0.800 | 0.900 | +12.5% |" in build[0],
+              f"the build cell is Embree's time over ours, 0.800 and 0.900: {build}")
+        check("embree" not in "".join(trace + build), "Embree's own rows are anchors, not cells")
+        check(f"# A: {a}" in out and f"# B: {b}" in out, "the legend names each build")
+        order = log.read_text().split()
+        check(order == ["sahbench-a", "sahbench-b", "sahbench-b", "sahbench-a", "sahbench-a", "sahbench-b"],
+              f"rounds alternate the order: {order}")
+        check("round 3:" in done.stderr, "progress on stderr names the round")
+
+        failing = make_build(folder, "sahbench-broken", 1.0, log, mode="fail")
+        done = run_ab(ab, "--rounds", "1", str(config), a, failing)
+        check(done.returncode == 1, f"a failing build exits 1, got {done.returncode}")
+        check("sahbench-broken run" in done.stderr and "exited 3" in done.stderr
+              and "something broke" in done.stderr, f"the error names the build and its message: {done.stderr}")
+
+        no_column = make_build(folder, "sahbench-old", 1.0, log, mode="nocolumn")
+        done = run_ab(ab, "--rounds", "1", str(config), a, no_column)
+        check(done.returncode == 1 and "no column build_ms_median" in done.stderr,
+              f"a CSV without a column is an error naming it: {done.returncode} {done.stderr}")
+
+        done = run_ab(ab, str(config), a)
+        check(done.returncode == 2 and "at least two builds" in done.stderr, f"one build: {done.stderr}")
+        done = run_ab(ab, str(config), a, str(Path(folder) / "missing"))
+        check(done.returncode == 2 and "is not an executable file" in done.stderr, f"missing build: {done.stderr}")
+        done = run_ab(ab, str(Path(folder) / "nope.toml"), a, b)
+        check(done.returncode == 2 and "nope.toml' does not exist" in done.stderr, f"missing config: {done.stderr}")
+        done = run_ab(ab, "--rounds", "0", str(config), a, b)
+        check(done.returncode == 2 and "--rounds 0" in done.stderr, f"zero rounds: {done.stderr}")
+
+    if failures:
+        print(f"ab.py: {len(failures)} checks failed", file=sys.stderr)
+        return 1
+    print("ab.py: all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -8,12 +8,10 @@ errors for a failing build, a missing column and bad arguments.
 Exits 77 (ctest's SKIP_RETURN_CODE) when pandas is not installed.
 """
 
-import os
 import stat
 import subprocess
 import sys
 import tempfile
-import textwrap
 from pathlib import Path
 
 SKIP = 77

@@ -79,9 +79,11 @@ inline constexpr bool kHasIntOrder = false;
 
 // A ray's constants for the 8-wide integer path (AVX2, AVX-512), broadcast once per ray by trace_ray:
 // inv_dir and -org_inv + 0 on each axis. Made in the node test, the three negations and six broadcasts
-// stayed in the node loop (GCC 12 did not hoist them), and tracing was 1-4% slower; loaded from the ray
+// stayed in the node loop (GCC 12 did not hoist them), and tracing was 0-2.5% slower; loaded from the ray
 // as broadcasts in the loop instead, shadow rays were up to 3% slower still (stop 21, issue 4's note).
-// Empty in the other builds, which take their constants from the ray.
+// The leaf test's direction and origin kept here as well traced shadow rays 2-3% slower on AVX-512 (diffuse
+// 0-2% faster), so the leaf tests broadcast theirs at each leaf. Empty in the other builds, which take
+// their constants from the ray.
 struct RaySlabs {
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
   __m256 inv[3];

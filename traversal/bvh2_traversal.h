@@ -47,9 +47,10 @@ struct TraversalCounters {
 ///   1-8% faster, the bunny's 4-5% faster and the dragon's within 2%, and Sponza's, seen from inside its
 ///   atrium (configs/wide.toml's camera), 17% slower: 0.77 of Embree against 0.92, with about as many
 ///   nodes and triangles per ray (`bvh8:tri=mtn,box=fma`, wide_collapse with min_leaf 4; two A/Bs of 3
-///   interleaved rounds and 3 runs of wide.toml; notes of issue 4, stop 20). The shadow rays of an interior start on a floor or wall whose box is the nearest, and
-///   their occluders are far. Storage order's worst case is the smaller, hence the default. (From
-///   outside Sponza, before the configs had a camera, the nearest first had looked no worse there.)
+///   interleaved rounds and 3 runs of wide.toml; notes of issue 4, stop 20). The shadow rays of an
+///   interior start on a floor or wall whose box is the nearest, and their occluders are far. Storage
+///   order's worst case is the smaller, hence the default. (From outside Sponza, before the configs had
+///   a camera, the nearest first had looked no worse there.)
 ///   Nearest first only where the ray starts in none of the children was worse than both on all but
 ///   Sponza (0.82).
 /// - Binary trees: kNearest. Storage order cost their shadow rays 10 to 16% (measured against Embree in

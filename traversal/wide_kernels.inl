@@ -79,11 +79,11 @@ inline constexpr bool kHasIntOrder = false;
 
 // A ray's constants for the 8-wide integer path (AVX2, AVX-512), broadcast once per ray by trace_ray:
 // inv_dir and -org_inv + 0 on each axis. Made in the node test, the three negations and six broadcasts
-// stayed in the node loop (GCC 12 did not hoist them), and tracing was 0-2.5% slower; loaded from the ray
-// as broadcasts in the loop instead, shadow rays were up to 3% slower still (stop 21, issue 4's note).
-// The leaf test's direction and origin kept here as well traced shadow rays 2-3% slower on AVX-512 (diffuse
-// 0-2% faster), so the leaf tests broadcast theirs at each leaf. Empty in the other builds, which take
-// their constants from the ray.
+// stayed in the node loop (GCC 12 did not hoist them), and tracing was 0-2.5% slower than with them here.
+// Stored in the ray and broadcast from it in the loop, shadow rays were 0.6-2.7% slower than with neither
+// (stop 21, issue 4's note). The leaf test's direction and origin kept here as well traced shadow rays
+// 2-3% slower on AVX-512 (diffuse 0-2% faster), so the leaf tests broadcast theirs at each leaf. Empty in
+// the other builds, which take their constants from the ray.
 struct RaySlabs {
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
   __m256 inv[3];
@@ -105,8 +105,8 @@ SAHBENCH_KERNEL_INLINE RaySlabs ray_slabs([[maybe_unused]] const WideRay& r) {
 #if defined(SAHBENCH_WIDE_SCALAR)
 
 template <uint32_t N, BoxTestKind kBox, IntOrder kInt = IntOrder::kNone>
-SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, const RaySlabs&, float tmin,
-                                                   float tmax, float* t_entry) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, const WideRay& r, const RaySlabs&,
+                                                   float tmin, float tmax, float* t_entry) {
   uint32_t mask = 0;
   for (uint32_t i = 0; i < N; ++i) {
     float t_near = tmin, t_far = tmax;
@@ -218,7 +218,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, cons
         const bool negative_zero = !_mm256_testz_si256(_mm256_cmpeq_epi32(t_far, _mm256_set1_epi32(INT32_MIN)),
                                                        _mm256_set1_epi32(-1));
 #endif
-        if (__builtin_expect(negative_zero, 0)) return intersect_children<N, kBox>(node, r, slabs, tmin, tmax, t_entry);
+        if (__builtin_expect(negative_zero, 0))
+          return intersect_children<N, kBox>(node, r, slabs, tmin, tmax, t_entry);
       }
       _mm256_storeu_si256(reinterpret_cast<__m256i*>(t_entry), t_near);
 #if defined(SAHBENCH_WIDE_AVX512)

@@ -16,7 +16,8 @@ const std::vector<Triangle>& soup(std::size_t count) {
     tris.reserve(count);
     for (std::size_t i = 0; i < count; ++i) {
       const Vec3 a{pos(rng), pos(rng), pos(rng)};
-      tris.push_back({a, a + Vec3{edge(rng), edge(rng), edge(rng)}, a + Vec3{edge(rng), edge(rng), edge(rng)}});
+      tris.push_back(
+          {a, a + Vec3{edge(rng), edge(rng), edge(rng)}, a + Vec3{edge(rng), edge(rng), edge(rng)}});
     }
   }
   return tris;
@@ -39,7 +40,8 @@ const std::vector<Ray>& rays(std::size_t count) {
 const Bvh& binary_tree(std::size_t count) {
   static std::map<std::size_t, Bvh> cache;
   auto it = cache.find(count);
-  if (it == cache.end()) it = cache.emplace(count, build_binned_sah(BuildInput::from_triangles(soup(count)), {})).first;
+  if (it == cache.end())
+    it = cache.emplace(count, build_binned_sah(BuildInput::from_triangles(soup(count)), {})).first;
   return it->second;
 }
 

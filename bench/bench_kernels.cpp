@@ -64,7 +64,9 @@ BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNormalTest>)->Name("ray_triangle/sc
 // per instruction set available here. Items are node visits, or triangles.
 template <uint32_t N>
 const WideBvh<N>& wide_tree(BlockForm form = BlockForm::kVertices) {
-  auto make = [](BlockForm f) { return compile_wide<N>(collapse_greedy(binary_tree(kPrims * 16), N), soup(kPrims * 16), f); };
+  auto make = [](BlockForm f) {
+    return compile_wide<N>(collapse_greedy(binary_tree(kPrims * 16), N), soup(kPrims * 16), f);
+  };
   static const WideBvh<N> vertices = make(BlockForm::kVertices), edges = make(BlockForm::kEdges),
                           normals = make(BlockForm::kEdgesNormals);
   return form == BlockForm::kEdges ? edges : form == BlockForm::kEdgesNormals ? normals : vertices;
@@ -111,7 +113,8 @@ void BM_WideNodeVisit(benchmark::State& state, KernelIsa isa, BoxTestKind box) {
   const auto loops = find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box});
   const auto nodes = wide_parts(wide_tree<N>(), 256).nodes;  // stays in L1/L2: the test, not memory
   const auto rs = wide_rays(box);
-  for (auto _ : state) benchmark::DoNotOptimize(loops.nodes(nodes.data(), nodes.size(), rs.data(), rs.size()));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(loops.nodes(nodes.data(), nodes.size(), rs.data(), rs.size()));
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * nodes.size() * rs.size()));
 }
 

@@ -6,9 +6,9 @@
 #include <numeric>
 
 #include "bench/bench_data.h"
-#include "builders/refit.h"
 #include "builders/binned_sah.h"
 #include "builders/collapse.h"
+#include "builders/refit.h"
 #include "builders/sweep_sah.h"
 #include "traversal/wide_bvh.h"
 

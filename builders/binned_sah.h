@@ -29,6 +29,7 @@ Bvh build_binned_sah(const BuildInput& input, const BinnedSahParams& params);
 
 /// The best binned split of primitives [begin, end) of `input`, by the same code the builder uses.
 /// Exposed so tests can compare split searches node by node.
-Split find_binned_split(const BuildInput& input, std::span<const uint32_t> prims, const BinnedSahParams& params);
+Split find_binned_split(const BuildInput& input, std::span<const uint32_t> prims,
+                        const BinnedSahParams& params);
 
 }  // namespace sahbench

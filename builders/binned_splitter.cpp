@@ -5,8 +5,8 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <bit>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -181,7 +181,9 @@ struct SweepSide {
     const Vec4f zero = simd::splat(0.0f);
     const Vec4f empty = simd::less(ex, zero) | simd::less(ey, zero) | simd::less(ez, zero);
     // SahCost::blocks: ceil(count / block) for a power-of-two block.
-    const Vec4i blocks = block_shift == 0 ? count : simd::shift_right(count + simd::splat((1u << block_shift) - 1), block_shift);
+    const Vec4i blocks = block_shift == 0
+                             ? count
+                             : simd::shift_right(count + simd::splat((1u << block_shift) - 1), block_shift);
     return simd::and_not(empty, ex * ey + ey * ez + ez * ex) * simd::to_float(blocks);
   }
 
@@ -360,7 +362,8 @@ class SplitterImpl {
   // them, and it is a candidate on every axis where they fall into different bins, always at the same
   // weighted area, half_area(a) * 1 + half_area(b) * 1 (float addition commutes). The sweep would keep
   // the lowest such axis and report the upper primitive's bin; this gives the same Split without bins.
-  Split split_pair(const NodeRange& range, const BinMapping& mapping, float parent_area, SplitBounds* sides) const {
+  Split split_pair(const NodeRange& range, const BinMapping& mapping, float parent_area,
+                   SplitBounds* sides) const {
     const PrimRef& a = refs_[range.begin];
     const PrimRef& b = refs_[range.begin + 1];
     const Vec4i bin_a = mapping.bins(PackedBox::of(a).center());
@@ -368,7 +371,8 @@ class SplitterImpl {
     const float weighted = a.bounds.half_area() + b.bounds.half_area();
     const Vec4f candidates = simd::select(simd::equal(bin_a, bin_b), simd::splat(weighted),
                                           simd::splat(std::numeric_limits<float>::infinity()));
-    const Split split = pick_axis(candidates, simd::max_u32(bin_a, bin_b), parent_area, params_.top_down.cost);
+    const Split split =
+        pick_axis(candidates, simd::max_u32(bin_a, bin_b), parent_area, params_.top_down.cost);
     if (sides && split.valid()) {
       // The primitive in the lower bin on the split axis is the left side.
       uint32_t ba[4];
@@ -382,7 +386,8 @@ class SplitterImpl {
   // The boxes of both sides of a split found in `set`: its bins below and from the split position.
   static SplitBounds side_bounds(const BinSet& set, const Split& split) {
     Bin left = Bin::empty(), right = Bin::empty();
-    for (uint32_t b = 0; b < set.bin_count; ++b) (b < split.position ? left : right).extend(set.bins[split.axis][b]);
+    for (uint32_t b = 0; b < set.bin_count; ++b)
+      (b < split.position ? left : right).extend(set.bins[split.axis][b]);
     return {left.box().aabb(), right.box().aabb()};
   }
 

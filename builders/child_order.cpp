@@ -116,7 +116,8 @@ class KeyPass {
 
 }  // namespace
 
-std::vector<double> occlusion_order_keys(const Bvh& bvh, std::span<const Triangle> triangles, const SahCost& cost) {
+std::vector<double> occlusion_order_keys(const Bvh& bvh, std::span<const Triangle> triangles,
+                                         const SahCost& cost) {
   std::vector<double> keys(bvh.nodes.size());
   if (!bvh.nodes.empty()) KeyPass(bvh, triangles, cost, keys, nullptr).visit(0, 0);
   return keys;

@@ -23,7 +23,8 @@ namespace sahbench {
 ///   count each time.
 /// - E[cost] = the SAH cost of the subtree relative to its own box, with `cost`'s constants and blocks.
 /// Indexed like bvh.nodes; empty for an empty tree.
-std::vector<double> occlusion_order_keys(const Bvh& bvh, std::span<const Triangle> triangles, const SahCost& cost);
+std::vector<double> occlusion_order_keys(const Bvh& bvh, std::span<const Triangle> triangles,
+                                         const SahCost& cost);
 
 /// Reorders the children of every inner node of `bvh` by occlusion_order_keys, largest first (stable:
 /// equal keys keep the builder's order). Only sibling order changes: the same boxes, leaves and

@@ -68,7 +68,8 @@ class WideWriter {
       out_.nodes[index].first = first_child;
       out_.nodes[index].child_count = static_cast<uint16_t>(slots.size());
       for (uint32_t s : slots) out_.nodes.push_back({in_.nodes[s].bounds, 0, 0, 0});
-      for (uint32_t c = static_cast<uint32_t>(slots.size()); c-- > 0;) stack.emplace_back(slots[c], first_child + c);
+      for (uint32_t c = static_cast<uint32_t>(slots.size()); c-- > 0;)
+        stack.emplace_back(slots[c], first_child + c);
     }
     return std::move(out_);
   }
@@ -252,7 +253,8 @@ Bvh collapse_greedy(const Bvh& bvh, uint32_t arity) {
 
 Bvh collapse_sah(const Bvh& bvh, uint32_t arity, const SahCost& cost, uint32_t max_leaf) {
   check_arity(bvh, arity, "collapse_sah");
-  if (bvh.arity != 2) throw Error("collapse_sah: needs a binary tree, got arity " + std::to_string(bvh.arity));
+  if (bvh.arity != 2)
+    throw Error("collapse_sah: needs a binary tree, got arity " + std::to_string(bvh.arity));
   if (bvh.nodes.empty()) return Bvh{{}, {}, arity};
   switch (arity) {
     case 2:

@@ -60,7 +60,8 @@ double ParamSet::get(std::string_view name) const {
 
 std::string ParamSet::to_string() const {
   std::string out;
-  for (const auto& [spec, value] : values_) out += (out.empty() ? "" : ";") + spec.name + "=" + format_value(value, spec);
+  for (const auto& [spec, value] : values_)
+    out += (out.empty() ? "" : ";") + spec.name + "=" + format_value(value, spec);
   return out;
 }
 
@@ -79,9 +80,11 @@ const std::string& ParamSet::get_choice(std::string_view name) const {
   throw Error(builder_ + ": no choice parameter '" + std::string(name) + "' is declared");
 }
 
-ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index, std::string help) {
+ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index,
+                       std::string help) {
   const double last = static_cast<double>(choices.size()) - 1.0;
-  return {std::move(name), ParamType::kChoice, double(default_index), 0.0, last, std::move(help), std::move(choices)};
+  return {std::move(name), ParamType::kChoice, double(default_index), 0.0, last,
+          std::move(help), std::move(choices)};
 }
 
 ParamSet resolve_params(std::string_view builder, const std::vector<ParamSpec>& specs,
@@ -92,8 +95,10 @@ ParamSet resolve_params(std::string_view builder, const std::vector<ParamSpec>& 
   for (const auto& [key, text] : overrides) {
     auto it = std::find_if(values.begin(), values.end(), [&](const auto& v) { return v.first.name == key; });
     if (it == values.end())
-      throw Error(std::string(builder) + ": unknown parameter '" + key + "' (known: " + known_names(specs) + ")");
-    if (!seen.insert(key).second) throw Error(std::string(builder) + ": parameter '" + key + "' is given twice");
+      throw Error(std::string(builder) + ": unknown parameter '" + key + "' (known: " + known_names(specs) +
+                  ")");
+    if (!seen.insert(key).second)
+      throw Error(std::string(builder) + ": parameter '" + key + "' is given twice");
     it->second = parse_value(builder, it->first, text);
   }
   return ParamSet(std::string(builder), std::move(values));

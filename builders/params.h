@@ -25,7 +25,8 @@ struct ParamSpec {
 };
 
 /// A kChoice parameter whose default is choices[default_index].
-ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index, std::string help);
+ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index,
+                       std::string help);
 
 using ParamOverrides = std::vector<std::pair<std::string, std::string>>;
 

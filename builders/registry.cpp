@@ -39,8 +39,9 @@ constexpr uint32_t kWideSahBlock = 4;
 std::vector<ParamSpec> binned_params(uint32_t default_block = 0) {
   auto params = top_down_params();
   if (default_block != 0)
-    params.push_back({"sah_block", ParamType::kInt, double(default_block), 1, 16,
-                      "primitives per leaf block in the SAH: a leaf costs c_isect per started block (power of two)"});
+    params.push_back(
+        {"sah_block", ParamType::kInt, double(default_block), 1, 16,
+         "primitives per leaf block in the SAH: a leaf costs c_isect per started block (power of two)"});
   const BinnedSahParams defaults;
   params.insert(params.begin(), {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins,
                                   "centroid bins per axis"},
@@ -57,15 +58,19 @@ BinnedSahParams binned_config(const ParamSet& p) {
 constexpr uint32_t kDefaultWideArity = 8;
 
 ParamSpec arity_param() {
-  return {"arity", ParamType::kInt, double(kDefaultWideArity), 2, kMaxArity, "children per inner node: 2, 4 or 8"};
+  return {"arity", ParamType::kInt, double(kDefaultWideArity),
+          2,       kMaxArity,       "children per inner node: 2, 4 or 8"};
 }
 
-uint32_t arity_of(const ParamSet& p) { return p.get_uint("arity"); }
+uint32_t arity_of(const ParamSet& p) {
+  return p.get_uint("arity");
+}
 
 BuilderInfo binned_sah_info() {
-  return {"binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", binned_params(),
-          [](const BuildInput& input, const ParamSet& p) { return build_binned_sah(input, binned_config(p)); },
-          [](const ParamSet& p) { check_config(top_down_config(p), "binned_sah"); }};
+  return {
+      "binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", binned_params(),
+      [](const BuildInput& input, const ParamSet& p) { return build_binned_sah(input, binned_config(p)); },
+      [](const ParamSet& p) { check_config(top_down_config(p), "binned_sah"); }};
 }
 
 BuilderInfo wide_binned_sah_info() {
@@ -79,8 +84,10 @@ BuilderInfo wide_binned_sah_info() {
   return {"wide_binned_sah",
           "binned SAH building wide nodes directly: the child of largest area is split until `arity` "
           "children (Wald et al. 2008; Embree's BVHN builder)",
-          std::move(params), [config](const BuildInput& input, const ParamSet& p) { return build_binned_sah(input, config(p)); },
-          [config](const ParamSet& p) { check_config(config(p).top_down, "wide_binned_sah"); }, arity_of};
+          std::move(params),
+          [config](const BuildInput& input, const ParamSet& p) { return build_binned_sah(input, config(p)); },
+          [config](const ParamSet& p) { check_config(config(p).top_down, "wide_binned_sah"); },
+          arity_of};
 }
 
 // wide_collapse's source_c_trav_scale. At 1 the binary tree is built with the SAH constants of the
@@ -144,9 +151,10 @@ BuilderInfo wide_collapse_info() {
 }
 
 BuilderInfo sweep_sah_info() {
-  return {"sweep_sah", "full-sweep SAH over presorted centroids (MacDonald and Booth 1990)", top_down_params(),
-          [](const BuildInput& input, const ParamSet& p) { return build_sweep_sah(input, {top_down_config(p)}); },
-          [](const ParamSet& p) { check_config(top_down_config(p), "sweep_sah"); }};
+  return {
+      "sweep_sah", "full-sweep SAH over presorted centroids (MacDonald and Booth 1990)", top_down_params(),
+      [](const BuildInput& input, const ParamSet& p) { return build_sweep_sah(input, {top_down_config(p)}); },
+      [](const ParamSet& p) { check_config(top_down_config(p), "sweep_sah"); }};
 }
 
 SbvhParams sbvh_params(const ParamSet& p) {
@@ -167,23 +175,25 @@ BuilderInfo sbvh_info() {
   const SbvhParams defaults;
   // alpha and max_dup as doubles, so the CSV shows 1e-05 and 0.5 rather than their float roundings.
   constexpr double kDefaultAlpha = 1e-5, kDefaultNodeOverlap = 0.1, kDefaultMaxDup = 0.5;
-  static_assert(float(kDefaultAlpha) == SbvhParams{}.alpha && float(kDefaultNodeOverlap) == SbvhParams{}.node_overlap &&
+  static_assert(float(kDefaultAlpha) == SbvhParams{}.alpha &&
+                float(kDefaultNodeOverlap) == SbvhParams{}.node_overlap &&
                 float(kDefaultMaxDup) == SbvhParams{}.max_dup);
-  params.insert(params.begin(),
-                {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins, "object-split bins per axis"},
-                 {"spatial_bins", ParamType::kInt, double(defaults.spatial_bins), kMinBins, kMaxBins,
-                  "spatial-split slabs per axis"},
-                 {"adaptive_bins", ParamType::kInt, double(defaults.adaptive_bins), 0, 1,
-                  "1: at most 4 + n/20 bins and slabs on a node of n references"},
-                 {"alpha", ParamType::kFloat, kDefaultAlpha, 0, 1,
-                  "spatial splits where object-split children overlap by more than alpha * root area (1: none)"},
-                 {"node_overlap", ParamType::kFloat, kDefaultNodeOverlap, 0, 1,
-                  "... and by at least node_overlap * node area (Embree's rule; 0: Stich et al.'s alone)"},
-                 {"max_dup", ParamType::kFloat, kDefaultMaxDup, 0, kSbvhMaxDup,
-                  "at most (1 + max_dup) * n references"},
-                 {"unsplit", ParamType::kInt, double(defaults.unsplit), 0, 1, "1: reference unsplitting"}});
+  params.insert(
+      params.begin(),
+      {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins, "object-split bins per axis"},
+       {"spatial_bins", ParamType::kInt, double(defaults.spatial_bins), kMinBins, kMaxBins,
+        "spatial-split slabs per axis"},
+       {"adaptive_bins", ParamType::kInt, double(defaults.adaptive_bins), 0, 1,
+        "1: at most 4 + n/20 bins and slabs on a node of n references"},
+       {"alpha", ParamType::kFloat, kDefaultAlpha, 0, 1,
+        "spatial splits where object-split children overlap by more than alpha * root area (1: none)"},
+       {"node_overlap", ParamType::kFloat, kDefaultNodeOverlap, 0, 1,
+        "... and by at least node_overlap * node area (Embree's rule; 0: Stich et al.'s alone)"},
+       {"max_dup", ParamType::kFloat, kDefaultMaxDup, 0, kSbvhMaxDup, "at most (1 + max_dup) * n references"},
+       {"unsplit", ParamType::kInt, double(defaults.unsplit), 0, 1, "1: reference unsplitting"}});
   return {"sbvh", "spatial-split BVH (Stich, Friedrich and Dietrich 2009), object and spatial binned SAH",
-          std::move(params), [](const BuildInput& input, const ParamSet& p) { return build_sbvh(input, sbvh_params(p)); },
+          std::move(params),
+          [](const BuildInput& input, const ParamSet& p) { return build_sbvh(input, sbvh_params(p)); },
           [](const ParamSet& p) { check_sbvh_params(sbvh_params(p)); }};
 }
 
@@ -212,7 +222,9 @@ std::vector<BuilderInfo>& registry() {
 
 }  // namespace
 
-std::span<const BuilderInfo> builders() { return registry(); }
+std::span<const BuilderInfo> builders() {
+  return registry();
+}
 
 void register_builder(BuilderInfo info) {
   auto& all = registry();

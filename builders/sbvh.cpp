@@ -143,9 +143,13 @@ inline Box4 outward(Vec4d lo, Vec4d hi, Vec4d pad) {
   return {simd::to_float(below - (simd::abs(below) * step_ulp + smallest)),
           simd::to_float(above + (simd::abs(above) * step_ulp + smallest))};
 }
-inline Box4 outward(Vec4d x, Vec4d pad) { return outward(x, x, pad); }
+inline Box4 outward(Vec4d x, Vec4d pad) {
+  return outward(x, x, pad);
+}
 
-inline Vec4d to_vec4d(const ClipPolygon::Point& p) { return simd::make4d(p[0], p[1], p[2], 0.0); }
+inline Vec4d to_vec4d(const ClipPolygon::Point& p) {
+  return simd::make4d(p[0], p[1], p[2], 0.0);
+}
 
 // The parts of one reference's triangle: the triangle clipped to the reference's box (the box bounds
 // the part the reference stands for), then cut by slab planes. The clipped polygon and its vertices'
@@ -188,11 +192,13 @@ class RefClipper {
   // rounding made several planes equal, the slabs between them are empty and the vertex is a corner of
   // the part in the slab below all of them (it was left out of that part once, and the leaves of a
   // spatial split then missed a sliver of the triangle). Returns its slab.
-  uint32_t add_vertex(const SlabGrid& grid, int axis, uint32_t first, uint32_t last, int i, Box4* parts) const {
+  uint32_t add_vertex(const SlabGrid& grid, int axis, uint32_t first, uint32_t last, int i,
+                      Box4* parts) const {
     const double x = polygon_.v[i][axis];
     const uint32_t s = slab_of(grid, axis, first, last, x);
     parts[s].extend(point_[i]);
-    for (uint32_t below = s; below > first && grid.plane(axis, below) == x; --below) parts[below - 1].extend(point_[i]);
+    for (uint32_t below = s; below > first && grid.plane(axis, below) == x; --below)
+      parts[below - 1].extend(point_[i]);
     return s;
   }
 
@@ -327,7 +333,8 @@ struct SlabRange {
   return {f, l, true};
 }
 
-inline SlabRange slab_range(const SlabGrid& grid, int axis, const Aabb& box, RefClipper& clipper, Box4* parts) {
+inline SlabRange slab_range(const SlabGrid& grid, int axis, const Aabb& box, RefClipper& clipper,
+                            Box4* parts) {
   const uint32_t first = grid.slab_from_below(axis, box.min[axis]);
   const uint32_t last = grid.slab_from_above(axis, box.max[axis]);
   // last < first: a box flat on a plane, held by the slab above it.
@@ -431,7 +438,9 @@ class SbvhSplitter {
     return overlap > min_overlap_ && overlap >= params_.node_overlap * parent_area;
   }
 
-  uint32_t slab_count(uint32_t refs) const { return bins_for(params_.spatial_bins, params_.adaptive_bins, refs); }
+  uint32_t slab_count(uint32_t refs) const {
+    return bins_for(params_.spatial_bins, params_.adaptive_bins, refs);
+  }
 
   void bin_refs(const SlabGrid& grid, uint32_t begin, uint32_t end, SlabBins& bins) const {
     std::array<Box4, kMaxBins> parts;
@@ -460,7 +469,9 @@ class SbvhSplitter {
 
     BinBody(const SbvhSplitter& s, const SlabGrid& g) : splitter(s), grid(g), bins(g.count()) {}
     BinBody(BinBody& other, tbb::split) : BinBody(other.splitter, other.grid) {}
-    void operator()(const tbb::blocked_range<uint32_t>& r) { splitter.bin_refs(grid, r.begin(), r.end(), bins); }
+    void operator()(const tbb::blocked_range<uint32_t>& r) {
+      splitter.bin_refs(grid, r.begin(), r.end(), bins);
+    }
     void join(const BinBody& other) { bins.merge(other.bins); }
   };
 
@@ -522,7 +533,8 @@ class SbvhSplitter {
         }
       }
     }
-    if (best_weighted < kInf) best.cost = params_.top_down.cost.split_cost_from_weighted(parent_area, best_weighted);
+    if (best_weighted < kInf)
+      best.cost = params_.top_down.cost.split_cost_from_weighted(parent_area, best_weighted);
     return best;
   }
 
@@ -572,10 +584,12 @@ class SbvhSplitter {
     std::vector<Placement> placed(n);
     auto classify = [&](uint32_t begin, uint32_t end) {
       std::array<Box4, kMaxBins> parts;
-      for (uint32_t i = begin; i < end; ++i) placed[i] = place_ref(grid, split, refs_[range.begin + i], parts.data());
+      for (uint32_t i = begin; i < end; ++i)
+        placed[i] = place_ref(grid, split, refs_[range.begin + i], parts.data());
     };
     if (n >= kParallelThreshold) {
-      tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kChunk), [&](const auto& r) { classify(r.begin(), r.end()); });
+      tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kChunk),
+                        [&](const auto& r) { classify(r.begin(), r.end()); });
     } else {
       classify(0, n);
     }
@@ -588,9 +602,9 @@ class SbvhSplitter {
     }
     const uint32_t duplicates = left_count + right_count - n;
     if (duplicates > range.spare || left_count == 0 || right_count == 0)
-      throw Error(std::string(kName) + ": internal error: a spatial split of " + std::to_string(n) + " references gave " +
-                  std::to_string(left_count) + " + " + std::to_string(right_count) + " with " +
-                  std::to_string(range.spare) + " spare");
+      throw Error(std::string(kName) + ": internal error: a spatial split of " + std::to_string(n) +
+                  " references gave " + std::to_string(left_count) + " + " + std::to_string(right_count) +
+                  " with " + std::to_string(range.spare) + " spare");
     const auto [left_spare, right_spare] = share_spare(range.spare - duplicates, left_count, right_count);
 
     // Written from a copy: the right side's new positions overlap the node's old ones.
@@ -650,8 +664,8 @@ void check_sbvh_params(const SbvhParams& params) {
   const std::string name(kName);
   auto check_bins = [&](const char* key, uint32_t bins) {
     if (bins < kMinBins || bins > kMaxBins)
-      throw Error(name + ": " + key + " = " + std::to_string(bins) + " is outside [" + std::to_string(kMinBins) +
-                  ", " + std::to_string(kMaxBins) + "]");
+      throw Error(name + ": " + key + " = " + std::to_string(bins) + " is outside [" +
+                  std::to_string(kMinBins) + ", " + std::to_string(kMaxBins) + "]");
   };
   check_bins("bins", params.bins);
   check_bins("spatial_bins", params.spatial_bins);
@@ -670,13 +684,14 @@ Bvh build_sbvh(const BuildInput& input, const SbvhParams& params) {
   check_prim_count(input.size(), kName);
   const std::size_t n = input.size();
   if (input.triangles.size() != n)
-    throw Error(std::string(kName) + ": needs the triangles in the BuildInput (" + std::to_string(input.triangles.size()) +
-                " triangles for " + std::to_string(n) + " bounds)");
+    throw Error(std::string(kName) + ": needs the triangles in the BuildInput (" +
+                std::to_string(input.triangles.size()) + " triangles for " + std::to_string(n) + " bounds)");
   if (n == 0) return Bvh{};
   const auto spare = static_cast<uint64_t>(std::floor(double(params.max_dup) * double(n)));
   if (n + spare > kMaxCapacity)
-    throw Error(std::string(kName) + ": " + std::to_string(n) + " primitives with max_dup = " +
-                std::to_string(params.max_dup) + " exceed the limit of " + std::to_string(kMaxCapacity) + " references");
+    throw Error(std::string(kName) + ": " + std::to_string(n) +
+                " primitives with max_dup = " + std::to_string(params.max_dup) + " exceed the limit of " +
+                std::to_string(kMaxCapacity) + " references");
   PrimRefArray refs(n + spare);
   NodeRange root = make_prim_refs(input, refs.span().first(n));
   root.spare = static_cast<uint32_t>(spare);

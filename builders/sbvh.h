@@ -23,7 +23,7 @@
 namespace sahbench {
 
 struct SbvhParams {
-  uint32_t bins = 32;          ///< object-split bins per axis, as binned_sah
+  uint32_t bins = 32;  ///< object-split bins per axis, as binned_sah
   /// Spatial-split slabs per axis. 16 as in Embree's spatial-split builder (SPATIAL_BINS in
   /// kernels/builders/heuristic_spatial_array.h): on Sponza 16 slabs built 16% faster than 32, traced 1-3%
   /// faster, and cost 1% more SAH (65.45 against 64.71, still below Embree high's 65.64).

@@ -116,8 +116,10 @@ class SweepSplitter {
     uint32_t out = range.begin;
     for (uint32_t i = range.begin; i < range.end; ++i) {
       const uint32_t p = order[i];
-      if (side_[p]) order[out++] = p;
-      else right.push_back(p);
+      if (side_[p])
+        order[out++] = p;
+      else
+        right.push_back(p);
     }
     std::copy(right.begin(), right.end(), order.begin() + out);
   }
@@ -160,7 +162,8 @@ Bvh build_sweep_sah(const BuildInput& input, const SweepSahParams& params) {
   return build_top_down(splitter, params.top_down, root_range(input, prims));
 }
 
-Split find_sweep_split(const BuildInput& input, std::span<const uint32_t> prims, const SweepSahParams& params) {
+Split find_sweep_split(const BuildInput& input, std::span<const uint32_t> prims,
+                       const SweepSahParams& params) {
   SweepSplitter splitter(input, prims, params.top_down.cost);
   return splitter.find_split(root_range(input, prims));
 }

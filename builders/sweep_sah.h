@@ -18,6 +18,7 @@ struct SweepSahParams {
 Bvh build_sweep_sah(const BuildInput& input, const SweepSahParams& params);
 
 /// The best full-sweep split of the primitives `prims` of `input`, by the same code the builder uses.
-Split find_sweep_split(const BuildInput& input, std::span<const uint32_t> prims, const SweepSahParams& params);
+Split find_sweep_split(const BuildInput& input, std::span<const uint32_t> prims,
+                       const SweepSahParams& params);
 
 }  // namespace sahbench

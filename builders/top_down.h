@@ -121,7 +121,9 @@ inline constexpr uint32_t kSpawnThreshold = 1024;
 // down to single ones takes ceil(log2 n) = bit_width(n - 1) more levels, and each median split lowers
 // that by one; an SAH split may be arbitrarily unbalanced, so it is allowed only while one more level
 // would still leave room to halve. Only pathological inputs get here (trees are ~30 deep at 1M).
-inline bool must_halve(uint32_t depth, uint32_t n) { return depth + std::bit_width(n - 1) >= kMaxDepth - 1; }
+inline bool must_halve(uint32_t depth, uint32_t n) {
+  return depth + std::bit_width(n - 1) >= kMaxDepth - 1;
+}
 
 template <class Splitter>
 class TopDownBuilder {
@@ -129,7 +131,8 @@ class TopDownBuilder {
   TopDownBuilder(Splitter& splitter, const TopDownConfig& config, uint32_t capacity)
       // Raw storage from operator new, not huge pages: a 2 MiB page is zeroed in full when any slot on
       // it is written, and the used slots are spread over the whole buffer.
-      : splitter_(splitter), config_(config),
+      : splitter_(splitter),
+        config_(config),
         slots_(static_cast<SlotNode*>(::operator new(sizeof(SlotNode) * (2 * std::size_t{capacity} - 1)))) {}
 
   Bvh build(const NodeRange& root) {
@@ -169,7 +172,8 @@ class TopDownBuilder {
     // for lots of overlapping primitives this gives poor but valid trees.
     const bool informative = split.valid() && split.cost < config_.cost.c_trav + leaf_cost;
     halves = informative ? splitter_.partition(range, split) : splitter_.partition_median(range);
-    assert(halves.left.begin == range.begin && halves.right.begin == halves.left.begin + halves.left.capacity() &&
+    assert(halves.left.begin == range.begin &&
+           halves.right.begin == halves.left.begin + halves.left.capacity() &&
            halves.right.begin + halves.right.capacity() == range.begin + range.capacity());
     return true;
   }

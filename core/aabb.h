@@ -40,13 +40,15 @@ struct Aabb {
   }
 
   constexpr bool contains(const Aabb& b) const {
-    return min.x <= b.min.x && min.y <= b.min.y && min.z <= b.min.z &&
-           max.x >= b.max.x && max.y >= b.max.y && max.z >= b.max.z;
+    return min.x <= b.min.x && min.y <= b.min.y && min.z <= b.min.z && max.x >= b.max.x && max.y >= b.max.y &&
+           max.z >= b.max.z;
   }
 
   friend constexpr bool operator==(const Aabb&, const Aabb&) = default;
 };
 
-constexpr Aabb merge(Aabb a, const Aabb& b) { return a.extend(b); }
+constexpr Aabb merge(Aabb a, const Aabb& b) {
+  return a.extend(b);
+}
 
 }  // namespace sahbench

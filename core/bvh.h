@@ -24,9 +24,9 @@ struct Node {
 static_assert(sizeof(Node) == 32, "the common node format is 32 bytes");
 
 struct Bvh {
-  std::vector<Node> nodes;           ///< nodes[0] is the root
-  std::vector<uint32_t> prim_refs;   ///< scene triangle indices; may repeat (spatial splits)
-  uint32_t arity = 2;                ///< the most children any node may have: 2, 4 or 8
+  std::vector<Node> nodes;          ///< nodes[0] is the root
+  std::vector<uint32_t> prim_refs;  ///< scene triangle indices; may repeat (spatial splits)
+  uint32_t arity = 2;               ///< the most children any node may have: 2, 4 or 8
 
   const Node& root() const { return nodes.front(); }
 

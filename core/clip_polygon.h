@@ -61,7 +61,8 @@ struct ClipPolygon {
       return d < 0 ? -1 : (d > 0 ? 1 : 0);
     };
     auto push = [&](const Point& p, bool is_original) {
-      if (n == kMaxVertices) throw Error("ClipPolygon: more than " + std::to_string(kMaxVertices) + " vertices");
+      if (n == kMaxVertices)
+        throw Error("ClipPolygon: more than " + std::to_string(kMaxVertices) + " vertices");
       out_original |= uint32_t{is_original} << n;
       out[n++] = p;
     };

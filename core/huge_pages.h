@@ -47,7 +47,8 @@ class HugePageAllocator {
     if (bytes >= kHugePageBytes) {
       // Map one huge page more than needed, then unmap the parts before and after the aligned range.
       const std::size_t size = rounded(bytes);
-      void* mapped = mmap(nullptr, size + kHugePageBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+      void* mapped =
+          mmap(nullptr, size + kHugePageBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
       if (mapped == MAP_FAILED) throw std::bad_alloc();
       char* const start = static_cast<char*>(mapped);
       const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(start);
@@ -60,7 +61,7 @@ class HugePageAllocator {
       return reinterpret_cast<T*>(aligned);
     }
 #endif
-    return static_cast<T*>(::operator new(bytes, std::align_val_t{kAlignment}));
+    return static_cast<T*>(::operator new (bytes, std::align_val_t{kAlignment}));
   }
 
   void deallocate(T* p, std::size_t n) noexcept {
@@ -71,16 +72,20 @@ class HugePageAllocator {
       return;
     }
 #endif
-    ::operator delete(p, std::align_val_t{kAlignment});
+    ::operator delete (p, std::align_val_t{kAlignment});
   }
 
   template <class U, class... Args>
   void construct(U* p, Args&&... args) {
-    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
-    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    if constexpr (sizeof...(Args) == 0)
+      ::new (static_cast<void*>(p)) U;
+    else
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
   }
 
-  friend bool operator==(const HugePageAllocator&, const HugePageAllocator&) { return true; }
+  friend bool operator==(const HugePageAllocator&, const HugePageAllocator&) {
+    return true;
+  }
 
  private:
   static constexpr std::size_t kAlignment = alignof(T) > 64 ? alignof(T) : 64;

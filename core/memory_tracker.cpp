@@ -15,13 +15,23 @@ void note_allocation(int64_t bytes) {
   while (now > peak && !g_heap_peak.compare_exchange_weak(peak, now, std::memory_order_relaxed)) {
   }
 }
-void note_free(int64_t bytes) { g_heap_bytes.fetch_sub(bytes, std::memory_order_relaxed); }
+void note_free(int64_t bytes) {
+  g_heap_bytes.fetch_sub(bytes, std::memory_order_relaxed);
+}
 }  // namespace detail
 
-bool tracking_enabled() { return detail::g_tracking.load(); }
-int64_t heap_bytes() { return detail::g_heap_bytes.load(); }
-void reset_heap_peak() { detail::g_heap_peak.store(detail::g_heap_bytes.load()); }
-int64_t heap_peak_bytes() { return detail::g_heap_peak.load(); }
+bool tracking_enabled() {
+  return detail::g_tracking.load();
+}
+int64_t heap_bytes() {
+  return detail::g_heap_bytes.load();
+}
+void reset_heap_peak() {
+  detail::g_heap_peak.store(detail::g_heap_bytes.load());
+}
+int64_t heap_peak_bytes() {
+  return detail::g_heap_peak.load();
+}
 // Only where operator new is counted too, so that tests (no tracking) still see zeros.
 void note_mapped(int64_t bytes) {
   if (tracking_enabled()) detail::note_allocation(bytes);

@@ -22,8 +22,8 @@ struct Ray {
 /// NaN, which the box tests read as "inside", and would take a wide kernel into its empty child slots).
 inline bool traceable(const Ray& ray) {
   auto finite = [](float x) { return x - x == 0.0f; };  // false for +-inf and NaN
-  return finite(ray.org.x) && finite(ray.org.y) && finite(ray.org.z) && finite(ray.dir.x) && finite(ray.dir.y) &&
-         finite(ray.dir.z) && ray.tmin == ray.tmin && ray.tmax == ray.tmax;
+  return finite(ray.org.x) && finite(ray.org.y) && finite(ray.org.z) && finite(ray.dir.x) &&
+         finite(ray.dir.y) && finite(ray.dir.z) && ray.tmin == ray.tmin && ray.tmax == ray.tmax;
 }
 
 inline constexpr uint32_t kInvalidPrim = 0xFFFFFFFFu;

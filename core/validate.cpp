@@ -41,7 +41,8 @@ class Checker {
   ValidationReport run() {
     if (bvh_.nodes.empty()) {
       // An empty scene has an empty tree; any primitive makes a root necessary.
-      if (!prim_bounds_.empty()) fail("the tree has no nodes but there are " + std::to_string(prim_bounds_.size()) + " primitives");
+      if (!prim_bounds_.empty())
+        fail("the tree has no nodes but there are " + std::to_string(prim_bounds_.size()) + " primitives");
       return std::move(report_);
     }
     if (bvh_.arity != 2 && bvh_.arity != 4 && bvh_.arity != 8)
@@ -93,7 +94,8 @@ class Checker {
       }
       for (uint32_t c = node.first; c < node.first + node.child_count; ++c) {
         if (seen[c]) {
-          fail("node " + std::to_string(c) + " is reached twice (cycle or shared child), again from " + where);
+          fail("node " + std::to_string(c) + " is reached twice (cycle or shared child), again from " +
+               where);
           continue;
         }
         seen[c] = 1;
@@ -202,12 +204,14 @@ class Checker {
           }
         }
       }
-      if (next.size() > kMaxCoveragePieces) return "too many pieces to check (over " + std::to_string(kMaxCoveragePieces) + ")";
+      if (next.size() > kMaxCoveragePieces)
+        return "too many pieces to check (over " + std::to_string(kMaxCoveragePieces) + ")";
       std::swap(pieces, next);
       if (pieces.empty()) return {};
     }
     const auto& p = pieces.front().v[0];
-    return "e.g. near (" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " + std::to_string(p[2]) + ")";
+    return "e.g. near (" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " + std::to_string(p[2]) +
+           ")";
   }
 
   void check_coverage() {
@@ -217,8 +221,8 @@ class Checker {
       if (!referenced_[p] && missing++ == 0) first_missing = static_cast<uint32_t>(p);
     }
     if (missing)
-      fail(std::to_string(missing) + " primitives are not referenced by any leaf (first: " +
-           std::to_string(first_missing) + ")");
+      fail(std::to_string(missing) +
+           " primitives are not referenced by any leaf (first: " + std::to_string(first_missing) + ")");
   }
 
   const Bvh& bvh_;

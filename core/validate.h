@@ -13,7 +13,7 @@ namespace sahbench {
 struct ValidationReport {
   std::vector<std::string> errors;  ///< empty when the tree is valid; capped at a few dozen messages
   bool ok() const { return errors.empty(); }
-  std::string summary() const;      ///< the errors joined by newlines
+  std::string summary() const;  ///< the errors joined by newlines
 };
 
 /// Checks: nodes[0] exists; every child index in range and every node reached exactly once from the

@@ -269,16 +269,17 @@ class AnimationRunner {
   void run_rebuild(const FrameData& frame, const AnimatedBuilder& b, int threads, CsvWriter& csv) {
     Bvh bvh;
     // The previous repetition's tree is freed before the clock starts, as in a static run.
-    const auto [build_t, peak] =
-        time_builds(cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
-                   [&] { bvh = Bvh{}; });
+    const auto [build_t, peak] = time_builds(
+        cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
+        [&] { bvh = Bvh{}; });
     trace_ours(frame, b, threads, bvh, build_t, peak, nullptr, csv);
   }
 
   void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, RefitState& state,
                  CsvWriter& csv) {
     // Every refit recomputes every box, so repeating it on the same frame times the same work.
-    const auto [refit_t, peak] = time_builds(cfg_.reps, [&] { refit(state.tree, frame.scene.triangles); }, [] {});
+    const auto [refit_t, peak] = time_builds(
+        cfg_.reps, [&] { refit(state.tree, frame.scene.triangles); }, [] {});
     trace_ours(frame, b, threads, state.tree, refit_t, peak, &state, csv);
   }
 
@@ -325,7 +326,9 @@ class AnimationRunner {
       double layout_time = 0.0;  // median ms of the compile or of the layout refit
       if (valid && refit_state) {
         compiled = &refit_layout(*refit_state, layout_name, scene.triangles);
-        const TimingSummary t = time_builds(cfg_.reps, [&] { compiled->refit(scene.triangles); }, [] {}).time;
+        const TimingSummary t = time_builds(
+                                    cfg_.reps, [&] { compiled->refit(scene.triangles); }, [] {})
+                                    .time;
         layout_time = t.median;
       } else if (valid) {
         TimedCompile timed = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
@@ -353,9 +356,8 @@ class AnimationRunner {
         }
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t =
-            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
-                       [&] { trace_layout(*compiled, rs, hits, occluded); });
+        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
+                                                 [&] { trace_layout(*compiled, rs, hits, occluded); });
         const TraceCounts counts = count_layout(*compiled, rs);
         const Reference& ref = frame.references[s];
         row[refit_state ? "layout_refit_ms" : "layout_ms"] = fmt::format("{:.4f}", layout_time);
@@ -409,9 +411,8 @@ class AnimationRunner {
         if (!wanted(scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        const TimingSummary trace_t =
-            time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
-                       [&] { trace_embree(*built, layout, rs, hits, occluded); });
+        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
+                                                 [&] { trace_embree(*built, layout, rs, hits, occluded); });
         const Reference& ref = frame.references[s];
         CsvRow row = base_row(frame, b, threads);
         row["isa"] = "embree:" + embree_isa(device);

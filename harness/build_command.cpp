@@ -1,10 +1,9 @@
 #include "harness/build_command.h"
 
-#include <unistd.h>
-
 #include <fmt/format.h>
 #include <fmt/ostream.h>
 #include <tbb/global_control.h>
+#include <unistd.h>
 
 #include <memory>
 #include <optional>
@@ -33,7 +32,9 @@ struct Candidate {
   int64_t embree_bytes = 0;
 
   std::string label() const { return spec.name; }
-  std::string params_text() const { return info ? params.to_string() : "quality=" + to_string(*embree_quality); }
+  std::string params_text() const {
+    return info ? params.to_string() : "quality=" + to_string(*embree_quality);
+  }
 };
 
 std::vector<Candidate> resolve(const BuildCommandOptions& options) {
@@ -83,18 +84,26 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
   Scene scene;
   const double load_ms = time_ms([&] { scene = load_scene(options.scene); });
   const Environment env = current_environment();
-  fmt::print(out, "# scene {} ({}): {} triangles, {} removed (non-finite {}, bad index {}, zero area {}), loaded in {:.1f} ms\n",
-             scene.name, scene.source, scene.triangles.size(), scene.removed.total(), scene.removed.non_finite,
-             scene.removed.bad_index, scene.removed.zero_area, load_ms);
-  fmt::print(out, "# commit {} | cpu {} | isa {} | {} | {}\n", env.git_commit, env.cpu, env.isa, env.compiler, env.embree);
-  fmt::print(out, "# build ms: median [min, max] of {} reps after {} warm-up, interleaved across builders; ours include\n"
-                  "#   per-primitive bounds, Embree's is rtcCommitScene alone\n", options.reps, options.warmup);
-  fmt::print(out, "{:>7} {:<16} {:<46} {:>10} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n", "threads", "builder",
-             "params", "build_ms", "[min, max]", "vs_emb_m", "nodes", "leaves", "depth", "leaf", "sah", "bytes", "valid");
+  fmt::print(out,
+             "# scene {} ({}): {} triangles, {} removed (non-finite {}, bad index {}, zero area {}), loaded "
+             "in {:.1f} ms\n",
+             scene.name, scene.source, scene.triangles.size(), scene.removed.total(),
+             scene.removed.non_finite, scene.removed.bad_index, scene.removed.zero_area, load_ms);
+  fmt::print(out, "# commit {} | cpu {} | isa {} | {} | {}\n", env.git_commit, env.cpu, env.isa, env.compiler,
+             env.embree);
+  fmt::print(
+      out,
+      "# build ms: median [min, max] of {} reps after {} warm-up, interleaved across builders; ours include\n"
+      "#   per-primitive bounds, Embree's is rtcCommitScene alone\n",
+      options.reps, options.warmup);
+  fmt::print(out, "{:>7} {:<16} {:<46} {:>10} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
+             "threads", "builder", "params", "build_ms", "[min, max]", "vs_emb_m", "nodes", "leaves", "depth",
+             "leaf", "sah", "bytes", "valid");
 
   int exit_code = 0;
   for (int threads : options.threads) {
-    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(threads));
     std::unique_ptr<EmbreeDevice> device;
     for (auto& c : candidates) c.samples_ms.clear();
 
@@ -130,14 +139,17 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
       const std::string ratio = embree_medium_ms ? fmt::format("{:.2f}", t.median / *embree_medium_ms) : "-";
       const std::string spread = fmt::format("[{:.2f}, {:.2f}]", t.min, t.max);
       if (c.embree_quality) {
-        fmt::print(out, "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n", threads,
-                   c.label(), c.params_text(), t.median, spread, ratio, "-", "-", "-", "-", "-", c.embree_bytes, "-");
+        fmt::print(out,
+                   "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
+                   threads, c.label(), c.params_text(), t.median, spread, ratio, "-", "-", "-", "-", "-",
+                   c.embree_bytes, "-");
         continue;
       }
       const BvhStats s = compute_stats(c.last_tree, scene.triangles.size(), sah_cost_of(c.params));
       const ValidationReport report = validate(c.last_tree, std::span<const Triangle>(scene.triangles));
       if (!report.ok()) exit_code = 1;
-      fmt::print(out, "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6.2f} {:>9.3f} {:>12} {}\n",
+      fmt::print(out,
+                 "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6.2f} {:>9.3f} {:>12} {}\n",
                  threads, c.label(), c.params_text(), t.median, spread, ratio, s.nodes, s.leaves, s.max_depth,
                  s.mean_leaf_size, s.sah_cost, s.bytes, report.ok() ? "ok" : "INVALID");
       if (!report.ok()) log << c.label() << ": invalid tree:\n" << report.summary();

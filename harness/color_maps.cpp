@@ -26,16 +26,23 @@ Rgb8 interpolate(std::span<const Stop> stops, float t) {
 }
 
 // viridis at 0, 1/4, 1/2, 3/4, 1: #440154 #3b528b #21918c #5ec962 #fde725.
-constexpr Stop kViridis[] = {
-    {0.00f, 68, 1, 84}, {0.25f, 59, 82, 139}, {0.50f, 33, 145, 140}, {0.75f, 94, 201, 98}, {1.00f, 253, 231, 37}};
+constexpr Stop kViridis[] = {{0.00f, 68, 1, 84},
+                             {0.25f, 59, 82, 139},
+                             {0.50f, 33, 145, 140},
+                             {0.75f, 94, 201, 98},
+                             {1.00f, 253, 231, 37}};
 
 // Moreland 2009: the cool-warm end points and the grey at its centre (sRGB).
 constexpr Stop kCoolWarm[] = {{-1.0f, 59, 76, 192}, {0.0f, 221, 221, 221}, {1.0f, 180, 4, 38}};
 
 }  // namespace
 
-Rgb8 sequential_color(float t) { return interpolate(kViridis, t); }
+Rgb8 sequential_color(float t) {
+  return interpolate(kViridis, t);
+}
 
-Rgb8 diverging_color(float t) { return interpolate(kCoolWarm, t); }
+Rgb8 diverging_color(float t) {
+  return interpolate(kCoolWarm, t);
+}
 
 }  // namespace sahbench

@@ -16,9 +16,9 @@ namespace sahbench {
 struct CompareOptions {
   std::filesystem::path baseline;
   std::filesystem::path current;
-  bool deterministic_only = false;             ///< ignore timings (CI on a shared machine)
-  std::optional<std::filesystem::path> json;   ///< write github-action-benchmark style JSON here
-  double min_timing_margin = 0.10;             ///< noise floor for timing ratios (machines vary 10-25%)
+  bool deterministic_only = false;            ///< ignore timings (CI on a shared machine)
+  std::optional<std::filesystem::path> json;  ///< write github-action-benchmark style JSON here
+  double min_timing_margin = 0.10;            ///< noise floor for timing ratios (machines vary 10-25%)
 };
 
 /// One deterministic metric: its column, whether larger is worse, and the relative tolerance within

@@ -301,14 +301,16 @@ void read_animation(const Source& src, const toml::node& node, ExperimentConfig&
   const auto* frames = table.get("frames");
   const auto* times = table.get("times");
   if (frames && times) src.fail(*times, "animation.times and animation.frames exclude each other: give one");
-  if (frames) animation.frames = static_cast<uint32_t>(read_int(src, *frames, "animation.frames", 1, kMaxFrames));
+  if (frames)
+    animation.frames = static_cast<uint32_t>(read_int(src, *frames, "animation.frames", 1, kMaxFrames));
   if (times) {
     const std::string must = "animation.times must be a list of numbers (seconds)";
     const toml::node* previous = nullptr;
     for (const auto& item : read_list(src, *times, "animation.times", "numbers")) {
       if (!item.is_number()) src.fail(item, must + ", not contain " + type_name(item));
       const double t = item.is_integer() ? double(item.as_integer()->get()) : item.as_floating_point()->get();
-      if (!std::isfinite(t)) src.fail(item, "animation.times: " + param_text(src, item, "times") + " is not finite");
+      if (!std::isfinite(t))
+        src.fail(item, "animation.times: " + param_text(src, item, "times") + " is not finite");
       if (previous && t <= animation.times.back())
         src.fail(item, "animation.times must increase: " + param_text(src, item, "times") + " follows " +
                            param_text(src, *previous, "times"));
@@ -374,8 +376,9 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
     for (const auto& [text, at] : sweep.values) {
       try {
         if (embree && text == "refit" && !animation)
-          throw Error("Embree quality 'refit' applies only to animation experiments (an [animation] table); "
-                      "a static experiment takes low, medium, high");
+          throw Error(
+              "Embree quality 'refit' applies only to animation experiments (an [animation] table); "
+              "a static experiment takes low, medium, high");
         if (embree)
           parse_embree_quality(text);
         else

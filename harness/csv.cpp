@@ -9,8 +9,8 @@ namespace sahbench {
 namespace {
 
 // Splits one record starting at `pos`; handles quoted fields spanning lines. Returns false at EOF.
-bool next_record(const std::string& text, std::size_t& pos, std::vector<std::string>& fields, std::size_t& line,
-                 const std::filesystem::path& path) {
+bool next_record(const std::string& text, std::size_t& pos, std::vector<std::string>& fields,
+                 std::size_t& line, const std::filesystem::path& path) {
   fields.clear();
   if (pos >= text.size()) return false;
   std::string field;
@@ -52,12 +52,43 @@ bool next_record(const std::string& text, std::size_t& pos, std::vector<std::str
 }  // namespace
 
 const std::vector<std::string>& design_columns() {
-  static const std::vector<std::string> columns = {
-      "run_id", "git_commit", "cpu", "isa", "compiler", "threads", "scene", "scene_triangles", "frame", "builder",
-      "builder_params", "layout", "build_ms_median", "build_ms_min", "build_ms_max", "build_reps", "layout_ms",
-      "mem_bytes", "mem_peak_bytes", "nodes", "leaves", "arity", "max_depth", "refs_per_prim", "sah_cost",
-      "sah_c_trav", "sah_c_isect", "ray_set", "ray_count", "trace_mrays_median", "trace_mrays_min",
-      "trace_mrays_max", "trace_reps", "nodes_per_ray", "prims_per_ray", "reference", "mismatches"};
+  static const std::vector<std::string> columns = {"run_id",
+                                                   "git_commit",
+                                                   "cpu",
+                                                   "isa",
+                                                   "compiler",
+                                                   "threads",
+                                                   "scene",
+                                                   "scene_triangles",
+                                                   "frame",
+                                                   "builder",
+                                                   "builder_params",
+                                                   "layout",
+                                                   "build_ms_median",
+                                                   "build_ms_min",
+                                                   "build_ms_max",
+                                                   "build_reps",
+                                                   "layout_ms",
+                                                   "mem_bytes",
+                                                   "mem_peak_bytes",
+                                                   "nodes",
+                                                   "leaves",
+                                                   "arity",
+                                                   "max_depth",
+                                                   "refs_per_prim",
+                                                   "sah_cost",
+                                                   "sah_c_trav",
+                                                   "sah_c_isect",
+                                                   "ray_set",
+                                                   "ray_count",
+                                                   "trace_mrays_median",
+                                                   "trace_mrays_min",
+                                                   "trace_mrays_max",
+                                                   "trace_reps",
+                                                   "nodes_per_ray",
+                                                   "prims_per_ray",
+                                                   "reference",
+                                                   "mismatches"};
   return columns;
 }
 
@@ -100,8 +131,8 @@ CsvWriter::CsvWriter(std::filesystem::path path, std::vector<std::string> column
       const std::string have = i < header.size() ? header[i] : "(none)";
       const std::string want = i < columns_.size() ? columns_[i] : "(none)";
       if (have != want)
-        throw Error(path_.string() + ": existing header differs at column " + std::to_string(i + 1) + ": '" + have +
-                    "', this version writes '" + want + "'; write to a new file");
+        throw Error(path_.string() + ": existing header differs at column " + std::to_string(i + 1) + ": '" +
+                    have + "', this version writes '" + want + "'; write to a new file");
     }
   }
   if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path());

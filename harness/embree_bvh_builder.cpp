@@ -47,7 +47,9 @@ struct BuildContext {
   std::span<const Triangle> triangles;
 };
 
-Aabb to_aabb(const RTCBounds& b) { return {{b.lower_x, b.lower_y, b.lower_z}, {b.upper_x, b.upper_y, b.upper_z}}; }
+Aabb to_aabb(const RTCBounds& b) {
+  return {{b.lower_x, b.lower_y, b.lower_z}, {b.upper_x, b.upper_y, b.upper_z}};
+}
 
 // RTCCreateNodeFunction: an empty inner node in Embree's thread-local allocator. Embree releases that
 // memory with the RTCBVH, after we have flattened the tree.
@@ -76,7 +78,8 @@ void set_node_bounds(void* node_ptr, const RTCBounds** bounds, unsigned count, v
 }
 
 // RTCCreateLeafFunction: the node and its primitive ids in one allocation.
-void* create_leaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, size_t count, void* /*user*/) {
+void* create_leaf(RTCThreadLocalAllocator alloc, const RTCBuildPrimitive* prims, size_t count,
+                  void* /*user*/) {
   void* memory = rtcThreadLocalAlloc(alloc, sizeof(TempNode) + count * sizeof(uint32_t), kTempNodeAlign);
   auto* node = new (memory) TempNode;
   node->prim_count = static_cast<uint32_t>(count);
@@ -95,8 +98,12 @@ static_assert(sizeof(Vec3) == sizeof(Floats), "Vec3 must be three packed floats"
 // unlike nextafter on the rounded value, whose 50/50 branches dominated the split callback's time.
 constexpr double kRelativeUlp = 0x1p-23;
 constexpr double kAbsolutePad = std::numeric_limits<float>::min();
-float round_down(double x) { return static_cast<float>(x - (std::fabs(x) * kRelativeUlp + kAbsolutePad)); }
-float round_up(double x) { return static_cast<float>(x + (std::fabs(x) * kRelativeUlp + kAbsolutePad)); }
+float round_down(double x) {
+  return static_cast<float>(x - (std::fabs(x) * kRelativeUlp + kAbsolutePad));
+}
+float round_up(double x) {
+  return static_cast<float>(x + (std::fabs(x) * kRelativeUlp + kAbsolutePad));
+}
 
 // A box as two float arrays, extended and clipped per axis.
 struct Box {
@@ -123,7 +130,8 @@ void split_primitive(const RTCBuildPrimitive* prim, unsigned dim, float pos, RTC
   // should it ever pass a plane on or outside the box.
   pos = std::clamp(pos, box_lo[dim], box_hi[dim]);
 
-  const Floats v[3] = {std::bit_cast<Floats>(tri.v0), std::bit_cast<Floats>(tri.v1), std::bit_cast<Floats>(tri.v2)};
+  const Floats v[3] = {std::bit_cast<Floats>(tri.v0), std::bit_cast<Floats>(tri.v1),
+                       std::bit_cast<Floats>(tri.v2)};
   constexpr float kInf = std::numeric_limits<float>::infinity();
   Box left, right;
   // Selects instead of branches: which side a vertex lies on and whether an edge crosses are coin
@@ -174,27 +182,34 @@ int caller_threads() {
 
 // Checks that need no input; run when a config is loaded, before any cell.
 void check_param_values(const EmbreeBvhParams& p) {
-  auto fail = [](const std::string& what) { throw Error(std::string("builder '") + kBuilderName + "': " + what); };
+  auto fail = [](const std::string& what) {
+    throw Error(std::string("builder '") + kBuilderName + "': " + what);
+  };
   if (p.min_leaf < 1 || p.max_leaf < 1 || p.max_leaf > kEmbreeMaxLeafPrims)
-    fail("leaf sizes must lie in 1.." + std::to_string(kEmbreeMaxLeafPrims) + " (min_leaf=" +
-         std::to_string(p.min_leaf) + ", max_leaf=" + std::to_string(p.max_leaf) + ")");
+    fail("leaf sizes must lie in 1.." + std::to_string(kEmbreeMaxLeafPrims) +
+         " (min_leaf=" + std::to_string(p.min_leaf) + ", max_leaf=" + std::to_string(p.max_leaf) + ")");
   if (p.min_leaf > p.max_leaf)
     fail("min_leaf=" + std::to_string(p.min_leaf) + " is larger than max_leaf=" + std::to_string(p.max_leaf));
   if (p.arity != 2 && p.arity != 4 && p.arity != 8)
     fail("arity=" + std::to_string(p.arity) + " is not 2, 4 or 8");
   if (p.max_depth < 1 || p.max_depth > kMaxDepth)
     fail("max_depth=" + std::to_string(p.max_depth) + " is outside 1.." + std::to_string(kMaxDepth));
-  if (!std::has_single_bit(p.sah_block)) fail("sah_block=" + std::to_string(p.sah_block) + " is not a power of two");
+  if (!std::has_single_bit(p.sah_block))
+    fail("sah_block=" + std::to_string(p.sah_block) + " is not a power of two");
   if (!(p.split_factor >= 1.0f && p.split_factor <= kEmbreeMaxSplitFactor))
-    fail("split_factor=" + std::to_string(p.split_factor) + " is outside 1.." + std::to_string(kEmbreeMaxSplitFactor));
+    fail("split_factor=" + std::to_string(p.split_factor) + " is outside 1.." +
+         std::to_string(kEmbreeMaxSplitFactor));
 }
 
 void check_params(const BuildInput& input, const EmbreeBvhParams& p) {
-  auto fail = [](const std::string& what) { throw Error(std::string("builder '") + kBuilderName + "': " + what); };
+  auto fail = [](const std::string& what) {
+    throw Error(std::string("builder '") + kBuilderName + "': " + what);
+  };
   check_param_values(p);
   if (p.quality == EmbreeQuality::kHigh && input.triangles.size() != input.size())
     fail("quality high (spatial splits) needs the triangles in the BuildInput (" +
-         std::to_string(input.triangles.size()) + " triangles for " + std::to_string(input.size()) + " bounds)");
+         std::to_string(input.triangles.size()) + " triangles for " + std::to_string(input.size()) +
+         " bounds)");
   if (input.size() > std::numeric_limits<uint32_t>::max() / 4)
     fail(std::to_string(input.size()) + " primitives are too many for 32-bit references");
 }
@@ -222,15 +237,16 @@ Bvh flatten(const TempNode* root, const Aabb& root_bounds, std::size_t reference
     const Item item = stack.back();
     stack.pop_back();
     if (item.depth > kMaxDepth)
-      throw Error(std::string("builder '") + kBuilderName + "': Embree's tree is deeper than " + std::to_string(kMaxDepth));
+      throw Error(std::string("builder '") + kBuilderName + "': Embree's tree is deeper than " +
+                  std::to_string(kMaxDepth));
     const TempNode& t = *item.node;
     if (t.child_count > arity)
       throw Error(std::string("builder '") + kBuilderName + "': Embree made a node of " +
                   std::to_string(t.child_count) + " children for arity " + std::to_string(arity));
     if (t.child_count == 0) {
       if (t.prim_count == 0 || t.prim_count > kMaxLeafPrims)
-        throw Error(std::string("builder '") + kBuilderName + "': Embree made a leaf of " + std::to_string(t.prim_count) +
-                    " primitives");
+        throw Error(std::string("builder '") + kBuilderName + "': Embree made a leaf of " +
+                    std::to_string(t.prim_count) + " primitives");
       Node& leaf = bvh.nodes[item.index];
       leaf.first = static_cast<uint32_t>(bvh.prim_refs.size());
       leaf.prim_count = static_cast<uint16_t>(t.prim_count);
@@ -242,7 +258,8 @@ Bvh flatten(const TempNode* root, const Aabb& root_bounds, std::size_t reference
     bvh.nodes[item.index].child_count = static_cast<uint16_t>(t.child_count);
     for (uint32_t c = 0; c < t.child_count; ++c) bvh.nodes.push_back({t.child_bounds[c], 0, 0, 0});
     // Last child pushed first so the first child's subtree is laid out right after the children.
-    for (uint32_t c = t.child_count; c-- > 0;) stack.push_back({skip_single(t.children[c]), first + c, item.depth + 1});
+    for (uint32_t c = t.child_count; c-- > 0;)
+      stack.push_back({skip_single(t.children[c]), first + c, item.depth + 1});
   }
   return bvh;
 }
@@ -277,7 +294,8 @@ Bvh build_embree_bvh(const BuildInput& input, const EmbreeBvhParams& params) {
   if (n < kParallelFill) {
     fill(0, n);
   } else {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const auto& r) { fill(r.begin(), r.end()); });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n),
+                      [&](const auto& r) { fill(r.begin(), r.end()); });
   }
   for (std::size_t i = 0; i < n; ++i) root_bounds.extend(input.bounds[i]);
 

@@ -11,14 +11,22 @@ namespace {
 
 const char* error_name(RTCError code) {
   switch (code) {
-    case RTC_ERROR_NONE: return "none";
-    case RTC_ERROR_UNKNOWN: return "unknown error";
-    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
-    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
-    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
-    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
-    case RTC_ERROR_CANCELLED: return "cancelled";
-    default: return "unknown error";
+    case RTC_ERROR_NONE:
+      return "none";
+    case RTC_ERROR_UNKNOWN:
+      return "unknown error";
+    case RTC_ERROR_INVALID_ARGUMENT:
+      return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION:
+      return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY:
+      return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU:
+      return "unsupported CPU";
+    case RTC_ERROR_CANCELLED:
+      return "cancelled";
+    default:
+      return "unknown error";
   }
 }
 
@@ -34,20 +42,28 @@ EmbreeQuality parse_embree_quality(std::string_view text) {
 
 RTCBuildQuality to_rtc(EmbreeQuality quality) {
   switch (quality) {
-    case EmbreeQuality::kLow: return RTC_BUILD_QUALITY_LOW;
-    case EmbreeQuality::kMedium: return RTC_BUILD_QUALITY_MEDIUM;
-    case EmbreeQuality::kHigh: return RTC_BUILD_QUALITY_HIGH;
-    case EmbreeQuality::kRefit: return RTC_BUILD_QUALITY_REFIT;
+    case EmbreeQuality::kLow:
+      return RTC_BUILD_QUALITY_LOW;
+    case EmbreeQuality::kMedium:
+      return RTC_BUILD_QUALITY_MEDIUM;
+    case EmbreeQuality::kHigh:
+      return RTC_BUILD_QUALITY_HIGH;
+    case EmbreeQuality::kRefit:
+      return RTC_BUILD_QUALITY_REFIT;
   }
   return RTC_BUILD_QUALITY_MEDIUM;
 }
 
 std::string to_string(EmbreeQuality quality) {
   switch (quality) {
-    case EmbreeQuality::kLow: return "low";
-    case EmbreeQuality::kMedium: return "medium";
-    case EmbreeQuality::kHigh: return "high";
-    case EmbreeQuality::kRefit: return "refit";
+    case EmbreeQuality::kLow:
+      return "low";
+    case EmbreeQuality::kMedium:
+      return "medium";
+    case EmbreeQuality::kHigh:
+      return "high";
+    case EmbreeQuality::kRefit:
+      return "refit";
   }
   return "?";
 }
@@ -57,12 +73,15 @@ EmbreeDevice::EmbreeDevice(int threads) {
   // No "threads=" at all for 0: Embree's "threads=0" means the same, but leaving it out says so.
   const std::string config = threads > 0 ? "threads=" + std::to_string(threads) : std::string();
   device_ = rtcNewDevice(config.c_str());
-  if (!device_) throw Error("Embree: rtcNewDevice(\"" + config + "\") failed: " + error_name(rtcGetDeviceError(nullptr)));
+  if (!device_)
+    throw Error("Embree: rtcNewDevice(\"" + config + "\") failed: " + error_name(rtcGetDeviceError(nullptr)));
   rtcSetDeviceMemoryMonitorFunction(device_, &EmbreeDevice::monitor, this);
   rtcSetDeviceErrorFunction(device_, &EmbreeDevice::on_error, this);
 }
 
-EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }
+EmbreeDevice::~EmbreeDevice() {
+  rtcReleaseDevice(device_);
+}
 
 bool EmbreeDevice::monitor(void* user, ssize_t bytes, bool /*post*/) {
   auto* self = static_cast<EmbreeDevice*>(user);
@@ -118,8 +137,8 @@ EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangl
   rtcSetGeometryBuildQuality(geometry, q);
   const std::size_t n = triangles.size();
   // Embree-managed buffers: the vertex buffer gets Embree's own padding.
-  auto* vertices = static_cast<float*>(
-      rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * n));
   auto* indices = static_cast<uint32_t*>(
       rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), n));
   try {
@@ -154,12 +173,14 @@ EmbreeScene::EmbreeScene(EmbreeDevice& device, std::span<const Triangle> triangl
   guard.armed = false;
 }
 
-EmbreeScene::~EmbreeScene() { rtcReleaseScene(scene_); }
+EmbreeScene::~EmbreeScene() {
+  rtcReleaseScene(scene_);
+}
 
 double EmbreeScene::update_vertices(std::span<const Triangle> triangles) {
   if (triangles.size() != triangle_count_)
-    throw Error("Embree: update_vertices got " + std::to_string(triangles.size()) + " triangles for a scene of " +
-                std::to_string(triangle_count_));
+    throw Error("Embree: update_vertices got " + std::to_string(triangles.size()) +
+                " triangles for a scene of " + std::to_string(triangle_count_));
   // Triangle is three packed Vec3, the layout of the RTC_FORMAT_FLOAT3 buffer of 3n vertices.
   static_assert(sizeof(Triangle) == 9 * sizeof(float));
   if (!triangles.empty()) std::memcpy(vertices_, triangles.data(), triangles.size() * sizeof(Triangle));
@@ -167,7 +188,8 @@ double EmbreeScene::update_vertices(std::span<const Triangle> triangles) {
   rtcUpdateGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0);
   rtcCommitGeometry(geometry_);
   rtcCommitScene(scene_);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   device_->check("rtcCommitScene after a vertex update");
   return ms;
 }

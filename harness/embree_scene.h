@@ -102,8 +102,8 @@ class EmbreeScene {
   EmbreeDevice& device() const { return *device_; }
   const EmbreeSceneOptions& options() const { return options_; }
   std::size_t triangle_count() const { return triangle_count_; }
-  double commit_ms() const { return commit_ms_; }   ///< time of rtcCommitScene alone
-  int64_t bytes() const { return bytes_; }          ///< Embree's bytes after the commit, buffers excluded
+  double commit_ms() const { return commit_ms_; }  ///< time of rtcCommitScene alone
+  int64_t bytes() const { return bytes_; }         ///< Embree's bytes after the commit, buffers excluded
 
   /// Moves the vertices to `triangles` (same count and order as at construction) and recommits: copies
   /// them into Embree's vertex buffer, then rtcUpdateGeometryBuffer, rtcCommitGeometry and

@@ -93,16 +93,24 @@ template <>
 struct PacketApi<8> {
   using RayHit = RTCRayHit8;
   using Ray = RTCRay8;
-  static void intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect8(valid, s, c, r); }
-  static void occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded8(valid, s, c, r); }
+  static void intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+    rtcIntersect8(valid, s, c, r);
+  }
+  static void occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* r) {
+    rtcOccluded8(valid, s, c, r);
+  }
 };
 
 template <>
 struct PacketApi<16> {
   using RayHit = RTCRayHit16;
   using Ray = RTCRay16;
-  static void intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* r) { rtcIntersect16(valid, s, c, r); }
-  static void occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* r) { rtcOccluded16(valid, s, c, r); }
+  static void intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* r) {
+    rtcIntersect16(valid, s, c, r);
+  }
+  static void occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* r) {
+    rtcOccluded16(valid, s, c, r);
+  }
 };
 
 // Fills lanes [0, active) of a packet from `rays` and masks out the rest. Inactive lanes still get a
@@ -174,7 +182,8 @@ void require_packets(const EmbreeDevice& device, int width) {
     throw Error("Embree packets: width " + std::to_string(width) + " is not supported (8 or 16)");
   if (!embree_packets_supported(device, width))
     throw Error("Embree packets: this device has no native " + std::to_string(width) +
-                "-wide packet kernels (RTC_DEVICE_PROPERTY_NATIVE_RAY" + std::to_string(width) + "_SUPPORTED is 0)");
+                "-wide packet kernels (RTC_DEVICE_PROPERTY_NATIVE_RAY" + std::to_string(width) +
+                "_SUPPORTED is 0)");
 }
 
 }  // namespace

@@ -46,7 +46,9 @@ std::string compiler() {
 #endif
 }
 
-std::string embree_version() { return RTC_VERSION_STRING; }
+std::string embree_version() {
+  return RTC_VERSION_STRING;
+}
 
 }  // namespace
 

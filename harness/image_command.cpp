@@ -50,7 +50,8 @@ void check_output_folder(const std::filesystem::path& prefix, const char* option
     throw Error(std::string(option) + " '" + prefix.string() + "': needs a file name prefix, not a folder");
   const auto folder = prefix.parent_path().empty() ? std::filesystem::path(".") : prefix.parent_path();
   if (!std::filesystem::is_directory(folder))
-    throw Error(std::string(option) + " '" + prefix.string() + "': the folder '" + folder.string() + "' does not exist");
+    throw Error(std::string(option) + " '" + prefix.string() + "': the folder '" + folder.string() +
+                "' does not exist");
 }
 
 struct Range {
@@ -98,27 +99,34 @@ Vec3 parse_vec3(const std::string& text, const char* option) {
   return out;
 }
 
-uint8_t to_byte(float v) { return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); }
+uint8_t to_byte(float v) {
+  return static_cast<uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+}
 
 }  // namespace
 
 std::vector<std::filesystem::path> image_files(const std::filesystem::path& prefix) {
   std::vector<std::filesystem::path> files;
   for (const char* map : kMapNames)
-    for (const char* ext : {".png", ".exr"}) files.push_back(with_suffix(prefix, std::string("_") + map + ext));
+    for (const char* ext : {".png", ".exr"})
+      files.push_back(with_suffix(prefix, std::string("_") + map + ext));
   return files;
 }
 
 void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   check_output_folder(options.out, "--out");
   if (options.ray_set != "primary")
-    throw Error("--ray-set '" + options.ray_set + "': per-pixel maps need one ray per pixel, which only the primary "
+    throw Error("--ray-set '" + options.ray_set +
+                "': per-pixel maps need one ray per pixel, which only the primary "
                 "set has (secondary sets start from the primary hits only)");
-  if (options.width == 0 || options.height == 0 || options.width > kMaxImageSide || options.height > kMaxImageSide)
-    throw Error(fmt::format("image size {}x{}: each side must be in 1..{}", options.width, options.height, kMaxImageSide));
+  if (options.width == 0 || options.height == 0 || options.width > kMaxImageSide ||
+      options.height > kMaxImageSide)
+    throw Error(fmt::format("image size {}x{}: each side must be in 1..{}", options.width, options.height,
+                            kMaxImageSide));
   const BuilderSpec spec = parse_builder_spec(options.builder);
   if (spec.is_embree())
-    throw Error("--builder '" + options.builder + "': Embree's own BVH cannot be traversed with counters here; "
+    throw Error("--builder '" + options.builder +
+                "': Embree's own BVH cannot be traversed with counters here; "
                 "embree_bvh builds Embree's tree in our format");
   const BuilderInfo& info = find_builder(spec.name);
   const ParamSet params = resolve_params(info.name, info.params, spec.params);
@@ -143,7 +151,8 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   if (scene.triangles.empty()) throw Error("scene '" + options.scene + "' has no triangles");
   const Bvh bvh = info.build(BuildInput::from_triangles(scene.triangles), params);
   const ValidationReport valid = validate(bvh, std::span<const Triangle>(scene.triangles));
-  if (!valid.ok()) throw Error(info.name + " built an invalid tree on '" + options.scene + "':\n" + valid.summary());
+  if (!valid.ok())
+    throw Error(info.name + " built an invalid tree on '" + options.scene + "':\n" + valid.summary());
   const auto layout = compile_layout(layout_spec, bvh, scene.triangles);
 
   RaySetConfig primary;
@@ -152,7 +161,8 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   primary.height = options.height;
   // Primary rays do not depend on the seed; 1 is the configs' default.
   const GeneratedRaySets generated = generate_ray_sets(scene, std::span<const RaySetConfig>(&primary, 1), 1);
-  if (generated.sets.empty()) throw Error("scene '" + options.scene + "': " + generated.skipped.front().second);
+  if (generated.sets.empty())
+    throw Error("scene '" + options.scene + "': " + generated.skipped.front().second);
   const std::vector<Ray>& rays = generated.sets.front().rays;
 
   std::vector<Hit> hits(rays.size());
@@ -187,7 +197,8 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
     // Near bright, far dark; a flat range (one hit distance) is drawn bright.
     const uint8_t grey = to_byte(1.0f - 0.9f * depth_range.normalise(hits[i].t));
     std::fill_n(depth_png.pixels.begin() + static_cast<std::ptrdiff_t>(3 * i), 3, grey);
-    for (int c = 0; c < 3; ++c) normal_png.pixels[3 * i + c] = to_byte(0.5f * (normal.pixels[3 * i + c] + 1.0f));
+    for (int c = 0; c < 3; ++c)
+      normal_png.pixels[3 * i + c] = to_byte(0.5f * (normal.pixels[3 * i + c] + 1.0f));
   }
 
   const Range node_scale{node_range.lo, std::max(node_range.lo, scale_top(nodes.pixels))};
@@ -202,18 +213,19 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   write_rgb_image(files[6], normal_png);
   write_float_image(files[7], normal);
 
-  fmt::print(log, "{} on {} ({} triangles), layout {}: {}x{} primary rays, {} hits\n", info.name + " " + params.to_string(),
-             scene.name, scene.triangles.size(), layout_spec.text(), w, h, hit_count);
+  fmt::print(log, "{} on {} ({} triangles), layout {}: {}x{} primary rays, {} hits\n",
+             info.name + " " + params.to_string(), scene.name, scene.triangles.size(), layout_spec.text(), w,
+             h, hit_count);
   fmt::print(log,
              "nodes visited per pixel: min {} max {} (PNG colours from {} to {})\n"
              "primitives tested per pixel: min {} max {} (PNG colours from {} to {})\n",
-             node_range.lo, node_range.hi, node_scale.lo, node_scale.hi, prim_range.lo, prim_range.hi, prim_scale.lo,
-             prim_scale.hi);
+             node_range.lo, node_range.hi, node_scale.lo, node_scale.hi, prim_range.lo, prim_range.hi,
+             prim_scale.lo, prim_scale.hi);
   if (depth_range.empty())
     fmt::print(log, "depth: no hits\n");
   else
-    fmt::print(log, "depth: min {:.6g} max {:.6g} (PNG: near bright, far dark, misses black)\n", depth_range.lo,
-               depth_range.hi);
+    fmt::print(log, "depth: min {:.6g} max {:.6g} (PNG: near bright, far dark, misses black)\n",
+               depth_range.lo, depth_range.hi);
   fmt::print(log, "wrote {}_{{nodes,prims,depth,normal}}.{{png,exr}}\n", options.out.string());
 }
 
@@ -225,8 +237,8 @@ ImageDiffResult run_image_diff_command(const ImageDiffOptions& options, std::ost
   const FloatImage b = read_float_image(options.b);
   if (a.width != b.width || a.height != b.height || a.channel_count() != b.channel_count())
     throw Error(fmt::format("{} is {}x{} with {} channels, {} is {}x{} with {} channels: not comparable",
-                            options.a.string(), a.width, a.height, a.channel_count(), options.b.string(), b.width,
-                            b.height, b.channel_count()));
+                            options.a.string(), a.width, a.height, a.channel_count(), options.b.string(),
+                            b.width, b.height, b.channel_count()));
 
   FloatImage diff{a.width, a.height, a.channels, std::vector<float>(a.pixels.size())};
   ImageDiffResult result;
@@ -278,12 +290,14 @@ ImageDiffResult run_image_diff_command(const ImageDiffOptions& options, std::ost
 
   write_float_image(with_suffix(prefix, ".exr"), diff);
   write_rgb_image(with_suffix(prefix, ".png"), png);
-  fmt::print(log, "{} - {}: {}x{}, {} channel{}: max |diff| {:.6g}, mean |diff| {:.6g}, {} of {} pixels differ{}\n",
-             options.b.string(), options.a.string(), a.width, a.height, channels, channels == 1 ? "" : "s",
-             result.max_abs, result.mean_abs, result.differing_pixels, std::size_t{a.width} * a.height,
-             result.one_sided ? fmt::format(", {} values finite in only one image (NaN in the EXR, black in the PNG)",
-                                            result.one_sided)
-                              : "");
+  fmt::print(
+      log, "{} - {}: {}x{}, {} channel{}: max |diff| {:.6g}, mean |diff| {:.6g}, {} of {} pixels differ{}\n",
+      options.b.string(), options.a.string(), a.width, a.height, channels, channels == 1 ? "" : "s",
+      result.max_abs, result.mean_abs, result.differing_pixels, std::size_t{a.width} * a.height,
+      result.one_sided
+          ? fmt::format(", {} values finite in only one image (NaN in the EXR, black in the PNG)",
+                        result.one_sided)
+          : "");
   fmt::print(log, "wrote {}.exr (B - A) and {}.png (blue: B < A, red: B > A, full colour at +-{:.6g})\n",
              prefix.string(), prefix.string(), scale);
   return result;

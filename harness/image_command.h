@@ -26,15 +26,16 @@ namespace sahbench {
 
 struct ImageCommandOptions {
   std::string scene;
-  std::string builder = "binned_sah";  ///< NAME or NAME:key=value,... (a registered builder: ours or embree_bvh)
-  std::string layout = "bvh2";         ///< a layout spec, NAME[:key=value,...]
+  std::string builder =
+      "binned_sah";             ///< NAME or NAME:key=value,... (a registered builder: ours or embree_bvh)
+  std::string layout = "bvh2";  ///< a layout spec, NAME[:key=value,...]
   uint32_t width = 512, height = 512;
-  std::string ray_set = "primary";     ///< only primary rays map one to one onto pixels
+  std::string ray_set = "primary";  ///< only primary rays map one to one onto pixels
   /// A view in place of the scene's camera (harness/ray_sets.h: look_at_camera), as "x,y,z" texts; eye and
   /// target go together, up and fov need them. Empty: the scene's camera or the automatic framing.
   std::string eye, target, up = "0,1,0";
-  float fov = 45.0f;                   ///< vertical, degrees
-  std::filesystem::path out;           ///< prefix: PREFIX_nodes.png, ...
+  float fov = 45.0f;          ///< vertical, degrees
+  std::filesystem::path out;  ///< prefix: PREFIX_nodes.png, ...
 };
 
 /// The files the command writes for `prefix`, in the order above, PNG then EXR for each map.
@@ -50,7 +51,7 @@ struct ImageDiffOptions {
 };
 
 struct ImageDiffResult {
-  double max_abs = 0.0;   ///< over the values both images have (finite, or equal)
+  double max_abs = 0.0;  ///< over the values both images have (finite, or equal)
   double mean_abs = 0.0;
   uint64_t compared = 0;  ///< values compared (pixels x channels)
   uint64_t differing_pixels = 0;

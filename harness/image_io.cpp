@@ -7,7 +7,8 @@
 namespace sahbench {
 namespace {
 
-void write_pixels(const std::filesystem::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc type, const void* data) {
+void write_pixels(const std::filesystem::path& path, const OIIO::ImageSpec& spec, OIIO::TypeDesc type,
+                  const void* data) {
   const std::string name = path.string();
   auto out = OIIO::ImageOutput::create(name);
   if (!out) throw Error(name + ": cannot write this image format: " + OIIO::geterror());
@@ -18,7 +19,8 @@ void write_pixels(const std::filesystem::path& path, const OIIO::ImageSpec& spec
 
 void check_size(const std::filesystem::path& path, std::size_t have, std::size_t want) {
   if (have != want)
-    throw Error(path.string() + ": image has " + std::to_string(have) + " values, its size says " + std::to_string(want));
+    throw Error(path.string() + ": image has " + std::to_string(have) + " values, its size says " +
+                std::to_string(want));
 }
 
 }  // namespace
@@ -35,7 +37,8 @@ void write_float_image(const std::filesystem::path& path, const FloatImage& imag
 
 void write_rgb_image(const std::filesystem::path& path, const RgbImage& image) {
   check_size(path, image.pixels.size(), std::size_t{image.width} * image.height * 3);
-  OIIO::ImageSpec spec(static_cast<int>(image.width), static_cast<int>(image.height), 3, OIIO::TypeDesc::UINT8);
+  OIIO::ImageSpec spec(static_cast<int>(image.width), static_cast<int>(image.height), 3,
+                       OIIO::TypeDesc::UINT8);
   write_pixels(path, spec, OIIO::TypeDesc::UINT8, image.pixels.data());
 }
 

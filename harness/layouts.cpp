@@ -4,10 +4,10 @@
 
 #include <algorithm>
 
+#include "builders/refit.h"
 #include "core/error.h"
 #include "harness/layout.h"
 #include "harness/ray_chunks.h"
-#include "builders/refit.h"
 #include "harness/wide_layout.h"
 #include "traversal/bvh2_traversal.h"
 #include "traversal/variant_dispatch.h"
@@ -41,7 +41,8 @@ class Bvh2Layout final : public CompiledLayout {
       : bvh_(&bvh), triangles_(triangles), triangle_count_(triangles.size()), order_(order) {}
 
   /// Packed: owns a copy of the nodes in depth-first order and the triangles in leaf order.
-  static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles, AnyHitOrder order) {
+  static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles,
+                                            AnyHitOrder order) {
     auto layout = std::unique_ptr<Bvh2Layout>(new Bvh2Layout());
     layout->order_ = order;
     layout->owned_ = depth_first(bvh);
@@ -74,10 +75,14 @@ class Bvh2Layout final : public CompiledLayout {
     });
   }
   TraceCounts count_closest(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { closest_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c); });
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) {
+      closest_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c);
+    });
   }
   TraceCounts count_any(std::span<const Ray> rays) const override {
-    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) { any_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c, order_); });
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) {
+      any_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c, order_);
+    });
   }
   // Refit (builders/refit.h): as built, a copy of the borrowed tree is made the first time, and the new
   // triangles are borrowed like the old ones; packed, the packed copies are rewritten first.
@@ -101,7 +106,8 @@ class Bvh2Layout final : public CompiledLayout {
   // (the identity references are an artefact of reusing the common-format kernel and are not counted).
   std::size_t bytes() const override {
     if (ids_.empty()) return bvh_->bytes();
-    return bvh_->nodes.size() * sizeof(Node) + packed_.size() * sizeof(Triangle) + ids_.size() * sizeof(uint32_t);
+    return bvh_->nodes.size() * sizeof(Node) + packed_.size() * sizeof(Triangle) +
+           ids_.size() * sizeof(uint32_t);
   }
 
  private:
@@ -141,9 +147,9 @@ class Bvh2Layout final : public CompiledLayout {
   const Bvh* bvh_ = nullptr;
   std::span<const Triangle> triangles_;
   std::size_t triangle_count_ = 0;  // of the scene, for refit's check
-  Bvh owned_;                      // packed; as built, once refitted
-  std::vector<Triangle> packed_;   // packed only
-  std::vector<uint32_t> ids_;      // packed only: scene index of each packed triangle
+  Bvh owned_;                       // packed; as built, once refitted
+  std::vector<Triangle> packed_;    // packed only
+  std::vector<uint32_t> ids_;       // packed only: scene index of each packed triangle
   AnyHitOrder order_ = AnyHitOrder::kAuto;
 };
 
@@ -153,7 +159,8 @@ void require_binary(const Bvh& bvh, const char* layout) {
                 std::to_string(bvh.arity));
 }
 
-std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
+std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Triangle> tris,
+                                             const LayoutSpec& spec) {
   require_binary(bvh, "bvh2");
   return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
     return std::make_unique<Bvh2Layout<Tri, Box>>(bvh, tris, spec.variant.any_hit);
@@ -170,14 +177,17 @@ std::unique_ptr<CompiledLayout> compile_bvh2_packed(const Bvh& bvh, std::span<co
 
 const std::vector<LayoutInfo>& registry() {
   static const std::vector<LayoutInfo> all = {
-      {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false, compile_bvh2},
+      {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false,
+       compile_bvh2},
       {"bvh2_packed", "common-format nodes, triangles copied into leaf order", 2, false, compile_bvh2_packed},
-      {"bvh4", "4-wide SoA nodes (128 B), triangles packed 4 per block, SIMD kernels (sse/avx2/avx512)", 4, true,
+      {"bvh4", "4-wide SoA nodes (128 B), triangles packed 4 per block, SIMD kernels (sse/avx2/avx512)", 4,
+       true,
        [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
          return compile_wide_layout(4, bvh, tris, spec);
        }},
-      {"bvh8", "8-wide SoA nodes (256 B), triangles packed 4 per block, SIMD kernels (avx2/avx512, sse in halves)",
-       8, true,
+      {"bvh8",
+       "8-wide SoA nodes (256 B), triangles packed 4 per block, SIMD kernels (avx2/avx512, sse in halves)", 8,
+       true,
        [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
          return compile_wide_layout(8, bvh, tris, spec);
        }},
@@ -187,7 +197,9 @@ const std::vector<LayoutInfo>& registry() {
 
 }  // namespace
 
-std::span<const LayoutInfo> layouts() { return registry(); }
+std::span<const LayoutInfo> layouts() {
+  return registry();
+}
 
 const LayoutInfo& find_layout(std::string_view name) {
   for (const auto& l : registry())
@@ -197,7 +209,9 @@ const LayoutInfo& find_layout(std::string_view name) {
   throw Error("unknown layout '" + std::string(name) + "' (known: " + known + ")");
 }
 
-void CompiledLayout::refit(std::span<const Triangle>) { throw Error("this layout does not refit"); }
+void CompiledLayout::refit(std::span<const Triangle>) {
+  throw Error("this layout does not refit");
+}
 
 std::string LayoutSpec::text() const {
   std::string options;
@@ -228,8 +242,8 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     const std::string_view item = rest.substr(0, comma);
     const auto eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0)
-      throw Error(where + ": option '" + std::string(item) + "' is not of the form key=value (keys: tri, box, anyhit" +
-                  (info.has_isa ? ", isa)" : ")"));
+      throw Error(where + ": option '" + std::string(item) +
+                  "' is not of the form key=value (keys: tri, box, anyhit" + (info.has_isa ? ", isa)" : ")"));
     const std::string key(item.substr(0, eq));
     const std::string value(item.substr(eq + 1));
     if (std::find(seen.begin(), seen.end(), key) != seen.end())
@@ -245,14 +259,16 @@ LayoutSpec parse_layout_spec(std::string_view text) {
       spec.variant.box = *kind;
     } else if (key == "anyhit") {
       const auto order = parse_any_hit_order(value);
-      if (!order) throw Error(where + ": anyhit = '" + value + "' is not one of auto, nearest, stored, nearest_stored");
+      if (!order)
+        throw Error(where + ": anyhit = '" + value + "' is not one of auto, nearest, stored, nearest_stored");
       spec.variant.any_hit = *order;
     } else if (key == "isa" && info.has_isa) {
       const auto isa = parse_kernel_isa(value);
       if (!isa) throw Error(where + ": isa = '" + value + "' is not one of auto, scalar, sse, avx2, avx512");
       spec.isa = *isa;
     } else {
-      throw Error(where + ": unknown option '" + key + "' (known: tri, box, anyhit" + (info.has_isa ? ", isa)" : ")"));
+      throw Error(where + ": unknown option '" + key + "' (known: tri, box, anyhit" +
+                  (info.has_isa ? ", isa)" : ")"));
     }
     if (comma == std::string_view::npos) break;
     rest = rest.substr(comma + 1);

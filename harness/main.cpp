@@ -2,7 +2,6 @@
 // errors and chooses exit codes: 0 success, 1 a failed check (invalid tree), 2 bad input.
 
 #include <CLI/CLI.hpp>
-
 #include <cstdlib>
 #include <iostream>
 
@@ -28,11 +27,15 @@ int main(int argc, char** argv) {
 
   BuildCommandOptions build;
   std::vector<std::string> params;
-  auto* build_cmd = app.add_subcommand("build", "Load a scene, build, validate, and print build time and tree statistics");
-  build_cmd->add_option("--scene", build.scene, "scene file, shared-scene name, or proc:KIND[:key=value,...]")->required();
-  build_cmd->add_option("--builder", build.builders,
-                        "builder NAME or NAME:key=value,...; repeatable; embree_low|embree_medium|embree_high "
-                        "for Embree's rtcCommitScene")->required();
+  auto* build_cmd =
+      app.add_subcommand("build", "Load a scene, build, validate, and print build time and tree statistics");
+  build_cmd->add_option("--scene", build.scene, "scene file, shared-scene name, or proc:KIND[:key=value,...]")
+      ->required();
+  build_cmd
+      ->add_option("--builder", build.builders,
+                   "builder NAME or NAME:key=value,...; repeatable; embree_low|embree_medium|embree_high "
+                   "for Embree's rtcCommitScene")
+      ->required();
   build_cmd->add_option("--param", params, "key=value for every one of our builders; repeatable");
   build_cmd->add_option("--threads", build.threads, "thread counts, e.g. 1,2")->delimiter(',');
   build_cmd->add_option("--reps", build.reps, "timed repetitions (median reported)")->capture_default_str();
@@ -40,49 +43,65 @@ int main(int argc, char** argv) {
 
   RunOptions run;
   std::string run_output;
-  auto* run_cmd = app.add_subcommand("run", "Run an experiment config: cells of scene x builder x layout x threads x ray set");
+  auto* run_cmd = app.add_subcommand(
+      "run", "Run an experiment config: cells of scene x builder x layout x threads x ray set");
   run_cmd->add_option("config", run.config, "experiment config (TOML)")->required();
   run_cmd->add_flag("--resume", run.resume, "skip cells whose rows are already in the output CSV");
-  run_cmd->add_option("--only", run.only, "run only cells whose key scene|builder|params|layout|threads|ray_set|frame contains this text");
+  run_cmd->add_option(
+      "--only", run.only,
+      "run only cells whose key scene|builder|params|layout|threads|ray_set|frame contains this text");
   run_cmd->add_option("--output", run_output, "CSV path instead of the config's");
 
   StressOptions stress;
   stress.config = "configs/stress.toml";
   std::string stress_output;
-  auto* stress_cmd = app.add_subcommand("stress", "Numerical stress suite: extreme generated cases, every builder, layout "
-                                                  "variant and Embree mode against an exact reference");
+  auto* stress_cmd =
+      app.add_subcommand("stress",
+                         "Numerical stress suite: extreme generated cases, every builder, layout "
+                         "variant and Embree mode against an exact reference");
   stress_cmd->add_option("config", stress.config, "stress config (TOML)")->capture_default_str();
   stress_cmd->add_option("--output", stress_output, "CSV path instead of the config's");
   stress_cmd->add_option("--only", stress.only, "run only cases whose name contains this text");
 
   ReportOptions report;
   std::string report_format = "markdown";
-  auto* report_cmd = app.add_subcommand("report", "Markdown or LaTeX tables from result CSVs, with ratios to Embree medium");
+  auto* report_cmd =
+      app.add_subcommand("report", "Markdown or LaTeX tables from result CSVs, with ratios to Embree medium");
   report_cmd->add_option("csv", report.inputs, "result CSV files")->required();
   report_cmd->add_option("--run", report.run_id, "run_id to report (default: the latest)");
   report_cmd->add_option("--format", report_format, "markdown | latex (booktabs)")->capture_default_str();
   report_cmd->add_option("--output", report.output, "write the report to this file instead of stdout");
 
   TraceCommandOptions trace;
-  auto* trace_cmd = app.add_subcommand("trace", "Trace rays from a file on one builder's tree; one output line per ray");
-  trace_cmd->add_option("--scene", trace.scene, "scene file, shared-scene name or procedural spec")->required();
+  auto* trace_cmd =
+      app.add_subcommand("trace", "Trace rays from a file on one builder's tree; one output line per ray");
+  trace_cmd->add_option("--scene", trace.scene, "scene file, shared-scene name or procedural spec")
+      ->required();
   trace_cmd->add_option("--builder", trace.builder, "NAME or NAME:key=value,...")->capture_default_str();
   trace_cmd->add_option("--layout", trace.layout, "layout")->capture_default_str();
-  trace_cmd->add_option("--rays", trace.rays, "ray file: 'ox oy oz dx dy dz [tmin tmax]' per line")->required();
+  trace_cmd->add_option("--rays", trace.rays, "ray file: 'ox oy oz dx dy dz [tmin tmax]' per line")
+      ->required();
   trace_cmd->add_option("--out", trace.out, "output CSV: ray,hit,prim,t,u,v")->required();
 
   CompareOptions compare;
   std::string compare_json;
-  auto* compare_cmd = app.add_subcommand("compare", "Regression check of a result CSV against a baseline (exit 1 on a regression)");
+  auto* compare_cmd = app.add_subcommand(
+      "compare", "Regression check of a result CSV against a baseline (exit 1 on a regression)");
   compare_cmd->add_option("baseline", compare.baseline, "baseline CSV")->required();
   compare_cmd->add_option("current", compare.current, "new CSV")->required();
-  compare_cmd->add_flag("--deterministic-only", compare.deterministic_only, "compare SAH, counts, bytes, mismatches; ignore timings");
-  compare_cmd->add_option("--margin", compare.min_timing_margin, "smallest noise margin for timing ratios")->capture_default_str();
-  compare_cmd->add_option("--json", compare_json, "write smaller-is-better metrics here and bigger-is-better ones to NAME-bigger.json");
+  compare_cmd->add_flag("--deterministic-only", compare.deterministic_only,
+                        "compare SAH, counts, bytes, mismatches; ignore timings");
+  compare_cmd->add_option("--margin", compare.min_timing_margin, "smallest noise margin for timing ratios")
+      ->capture_default_str();
+  compare_cmd->add_option(
+      "--json", compare_json,
+      "write smaller-is-better metrics here and bigger-is-better ones to NAME-bigger.json");
 
   ImageCommandOptions image;
-  auto* image_cmd = app.add_subcommand("image", "Per-pixel maps of primary rays: nodes visited, primitives tested, depth, normal (PNG + EXR)");
-  image_cmd->add_option("--scene", image.scene, "scene file, shared-scene name or procedural spec")->required();
+  auto* image_cmd = app.add_subcommand(
+      "image", "Per-pixel maps of primary rays: nodes visited, primitives tested, depth, normal (PNG + EXR)");
+  image_cmd->add_option("--scene", image.scene, "scene file, shared-scene name or procedural spec")
+      ->required();
   image_cmd->add_option("--builder", image.builder, "NAME or NAME:key=value,...")->capture_default_str();
   image_cmd->add_option("--layout", image.layout, "layout spec")->capture_default_str();
   image_cmd->add_option("--width", image.width, "pixels")->capture_default_str();
@@ -101,12 +120,14 @@ int main(int argc, char** argv) {
       ->needs(eye_opt);
 
   ImageDiffOptions image_diff;
-  auto* image_diff_cmd = app.add_subcommand("image-diff", "B - A of two images (EXR signed, PNG diverging), max and mean |B - A|");
+  auto* image_diff_cmd = app.add_subcommand(
+      "image-diff", "B - A of two images (EXR signed, PNG diverging), max and mean |B - A|");
   image_diff_cmd->add_option("a", image_diff.a, "image A (EXR)")->required();
   image_diff_cmd->add_option("b", image_diff.b, "image B (EXR)")->required();
   image_diff_cmd->add_option("--out", image_diff.out, "prefix: OUT.exr and OUT.png")->required();
 
-  auto* list_cmd = app.add_subcommand("list", "Builders and their parameters, procedural scene kinds, shared scenes found");
+  auto* list_cmd = app.add_subcommand(
+      "list", "Builders and their parameters, procedural scene kinds, shared scenes found");
   auto* list_scenes_cmd = app.add_subcommand("list-scenes", "Names of the shared scenes found, one per line");
 
   CLI11_PARSE(app, argc, argv);

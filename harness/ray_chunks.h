@@ -31,7 +31,9 @@ TraceCounts sum_over_ray_chunks(std::size_t count, std::size_t chunk, Counts cou
   };
   return tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, count, chunk), TraceCounts{},
-      [&](const tbb::blocked_range<std::size_t>& r, TraceCounts acc) { return add(acc, counts(r.begin(), r.end())); },
+      [&](const tbb::blocked_range<std::size_t>& r, TraceCounts acc) {
+        return add(acc, counts(r.begin(), r.end()));
+      },
       add);
 }
 

@@ -26,7 +26,8 @@ uint64_t splitmix64(uint64_t x) {
 
 class RayRng {
  public:
-  RayRng(uint64_t seed, uint64_t set, uint64_t index) : state_(splitmix64(seed ^ splitmix64(set * 0x100000001B3ull + index))) {}
+  RayRng(uint64_t seed, uint64_t set, uint64_t index)
+      : state_(splitmix64(seed ^ splitmix64(set * 0x100000001B3ull + index))) {}
   /// Uniform in [0, 1): the top 24 bits, exactly representable as a float.
   float next() {
     state_ = splitmix64(state_);
@@ -106,8 +107,10 @@ std::vector<Ray> primary_rays(const Scene& scene, const RaySetConfig& cfg, const
   std::vector<Ray> rays(std::size_t{cfg.width} * cfg.height);
   tbb::parallel_for(uint32_t{0}, cfg.height, [&](uint32_t y) {
     for (uint32_t x = 0; x < cfg.width; ++x) {
-      const float sx = (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(cfg.width) - 1.0f) * half_w;
-      const float sy = (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(cfg.height)) * half_h;
+      const float sx =
+          (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(cfg.width) - 1.0f) * half_w;
+      const float sy =
+          (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(cfg.height)) * half_h;
       Ray& r = rays[std::size_t{y} * cfg.width + x];
       r.org = eye;
       r.dir = normalize(forward + right * sx + true_up * sy);
@@ -121,7 +124,8 @@ std::vector<Hitpoint> primary_hits(const Scene& scene, std::span<const Ray> rays
   const BuildInput input = BuildInput::from_triangles(scene.triangles);
   const Bvh bvh = build_binned_sah(input, {});
   std::vector<Hit> hits(rays.size());
-  tbb::parallel_for(std::size_t{0}, rays.size(), [&](std::size_t i) { hits[i] = closest_hit(bvh, scene.triangles, rays[i]); });
+  tbb::parallel_for(std::size_t{0}, rays.size(),
+                    [&](std::size_t i) { hits[i] = closest_hit(bvh, scene.triangles, rays[i]); });
   std::vector<Hitpoint> out;
   for (std::size_t i = 0; i < rays.size(); ++i) {
     if (!hits[i].found()) continue;
@@ -172,11 +176,16 @@ Camera to_camera(const CameraConfig& camera) {
 
 std::string to_string(RayKind kind) {
   switch (kind) {
-    case RayKind::kPrimary: return "primary";
-    case RayKind::kShadow: return "shadow";
-    case RayKind::kDiffuse: return "diffuse";
-    case RayKind::kAmbientOcclusion: return "ao";
-    case RayKind::kRandom: return "random";
+    case RayKind::kPrimary:
+      return "primary";
+    case RayKind::kShadow:
+      return "shadow";
+    case RayKind::kDiffuse:
+      return "diffuse";
+    case RayKind::kAmbientOcclusion:
+      return "ao";
+    case RayKind::kRandom:
+      return "random";
   }
   return "?";
 }
@@ -206,13 +215,15 @@ GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetCon
   auto hits_for = [&](const RaySetConfig& cfg) -> const std::vector<Hitpoint>& {
     for (const auto& [size, hits] : hit_cache)
       if (size == std::make_pair(cfg.width, cfg.height)) return hits;
-    hit_cache.emplace_back(std::make_pair(cfg.width, cfg.height), primary_hits(scene, primary_rays(scene, cfg, box)));
+    hit_cache.emplace_back(std::make_pair(cfg.width, cfg.height),
+                           primary_hits(scene, primary_rays(scene, cfg, box)));
     return hit_cache.back().second;
   };
 
   for (std::size_t set_index = 0; set_index < configs.size(); ++set_index) {
     const RaySetConfig& cfg = configs[set_index];
-    RaySet set{cfg.name, cfg.kind, cfg.kind == RayKind::kShadow || cfg.kind == RayKind::kAmbientOcclusion, {}};
+    RaySet set{
+        cfg.name, cfg.kind, cfg.kind == RayKind::kShadow || cfg.kind == RayKind::kAmbientOcclusion, {}};
     if (cfg.kind == RayKind::kPrimary) {
       set.rays = primary_rays(scene, cfg, box);
       out.sets.push_back(std::move(set));
@@ -235,7 +246,8 @@ GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetCon
     if (cfg.kind == RayKind::kShadow) {
       lights = cfg.light_source == "scene" ? scene.lights : automatic_lights(scene, cfg.lights, seed);
       if (lights.empty()) {
-        out.skipped.emplace_back(cfg.name, cfg.light_source == "scene" ? "the scene has no lights" : "lights = 0");
+        out.skipped.emplace_back(cfg.name,
+                                 cfg.light_source == "scene" ? "the scene has no lights" : "lights = 0");
         continue;
       }
     }

@@ -44,7 +44,8 @@ std::vector<std::pair<std::string, std::string>> split_params(const std::string&
     const std::size_t end = std::min(params.find(';', start), params.size());
     const std::string item = params.substr(start, end - start);
     const std::size_t eq = item.find('=');
-    if (!item.empty()) out.emplace_back(item.substr(0, eq), eq == std::string::npos ? "" : item.substr(eq + 1));
+    if (!item.empty())
+      out.emplace_back(item.substr(0, eq), eq == std::string::npos ? "" : item.substr(eq + 1));
     start = end + 1;
   }
   return out;
@@ -54,7 +55,8 @@ std::vector<std::pair<std::string, std::string>> split_params(const std::string&
 /// builder's rows of the table; the shared ones are returned (per builder) for the caption.
 std::map<std::string, std::string> short_labels(const std::vector<const CsvRow*>& rows,
                                                 std::vector<std::string>& shared) {
-  std::map<std::string, std::map<std::string, std::vector<std::string>>> values;  // builder -> key -> values seen
+  std::map<std::string, std::map<std::string, std::vector<std::string>>>
+      values;  // builder -> key -> values seen
   std::map<std::string, std::vector<std::string>> key_order;
   for (const CsvRow* r : rows) {
     const std::string builder = field(*r, "builder");
@@ -76,7 +78,8 @@ std::map<std::string, std::string> short_labels(const std::vector<const CsvRow*>
   for (const auto& [builder, order] : key_order) {
     std::string common;
     for (const auto& k : order)
-      if (values[builder][k].size() == 1) common += (common.empty() ? "" : ", ") + k + "=" + values[builder][k][0];
+      if (values[builder][k].size() == 1)
+        common += (common.empty() ? "" : ", ") + k + "=" + values[builder][k][0];
     if (!common.empty()) shared.push_back(builder + " " + common);
   }
   return labels;
@@ -109,9 +112,10 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   const CsvRow& first = *group.front();
   const std::string threads_text = key.threads + (key.threads == "1" ? " thread" : " threads");
   const std::string frame_text = key.frame == "0" ? "" : ", frame " + key.frame;
-  table.title = fmt::format("{} ({} triangles), {}{}", key.scene, field(first, "scene_triangles", "?"), threads_text,
-                            frame_text);
-  table.label = "tab:" + label_key(key.scene) + "-t" + key.threads + (key.frame == "0" ? "" : "-f" + key.frame);
+  table.title = fmt::format("{} ({} triangles), {}{}", key.scene, field(first, "scene_triangles", "?"),
+                            threads_text, frame_text);
+  table.label =
+      "tab:" + label_key(key.scene) + "-t" + key.threads + (key.frame == "0" ? "" : "-f" + key.frame);
   table.columns = {{"build ms", "Build (ms)", 1, false},
                    {"memory MiB", "Memory (MiB)", 1, false},
                    {"SAH", "SAH cost", 2, false}};
@@ -131,7 +135,8 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   for (const auto& k : kernel_isas) kernels += (kernels.empty() ? "" : ", ") + k;
   table.caption = fmt::format(
       "{}; {}{}, commit {}; medians of {} builds and {} traces; kernels: {}. In parentheses: ratio to Embree "
-      "(quality=medium, rtcIntersect1/rtcOccluded1) in the same run. Best of each column in bold: least build "
+      "(quality=medium, rtcIntersect1/rtcOccluded1) in the same run. Best of each column in bold: least "
+      "build "
       "time, memory and SAH cost, most rays/s.",
       table.title, field(first, "cpu", "unknown CPU"), isa.empty() ? "" : " (built for " + isa + ")",
       field(first, "git_commit", "unknown"), field(first, "build_reps", "?"), field(first, "trace_reps", "?"),
@@ -202,14 +207,17 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     return a ? csv_number(*a, column) : std::nullopt;
   };
   constexpr double kMiB = 1 << 20;
-  auto mib = [&](std::optional<double> bytes) { return bytes ? std::optional<double>(*bytes / kMiB) : std::nullopt; };
+  auto mib = [&](std::optional<double> bytes) {
+    return bytes ? std::optional<double>(*bytes / kMiB) : std::nullopt;
+  };
   for (const auto& [label, layout] : keys) {
     std::map<std::string, const CsvRow*> by_set;
     for (const CsvRow* r : group)
       if (row_label(*r) == label && field(*r, "layout") == layout) by_set[field(*r, "ray_set")] = r;
     const CsvRow& any = *by_set.begin()->second;
     ReportRow row{label, short_label.at(label), layout, {}};
-    row.cells.push_back(cell(csv_number(any, "build_ms_median"), anchor_number(any_anchor, "build_ms_median")));
+    row.cells.push_back(
+        cell(csv_number(any, "build_ms_median"), anchor_number(any_anchor, "build_ms_median")));
     row.cells.push_back(cell(mib(csv_number(any, "mem_bytes")), mib(anchor_number(any_anchor, "mem_bytes"))));
     row.cells.push_back(cell(csv_number(any, "sah_cost"), anchor_number(any_anchor, "sah_cost")));
     if (row.cells.back().value) row.cells.back().note = model_note(any);
@@ -253,17 +261,24 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   const CsvRow& first = rows.front();
   const bool latex = options.format == ReportFormat::kLatex;
   if (latex)
-    fmt::print(out, "% sahbench report: run {}, commit {}, {}, {}, {}; config {}\n% Needs \\usepackage{{booktabs}}.\n\n",
-               run, field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
-               field(first, "embree_version"), field(first, "config"));
+    fmt::print(
+        out,
+        "% sahbench report: run {}, commit {}, {}, {}, {}; config {}\n% Needs \\usepackage{{booktabs}}.\n\n",
+        run, field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
+        field(first, "embree_version"), field(first, "config"));
   else
-    fmt::print(out, "# sahbench report: run {}\n\ncommit {}, {}, {}, {}; build reps {}, trace reps {}; config {}\n\n", run,
-               field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"), field(first, "embree_version"),
-               field(first, "build_reps"), field(first, "trace_reps"), field(first, "config"));
+    fmt::print(
+        out,
+        "# sahbench report: run {}\n\ncommit {}, {}, {}, {}; build reps {}, trace reps {}; config {}\n\n",
+        run, field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
+        field(first, "embree_version"), field(first, "build_reps"), field(first, "trace_reps"),
+        field(first, "config"));
 
   // Group by (scene, threads, frame); keep first-seen order.
   std::vector<GroupKey> groups;
-  auto key_of = [](const CsvRow& r) { return GroupKey{field(r, "scene"), field(r, "threads"), field(r, "frame", "0")}; };
+  auto key_of = [](const CsvRow& r) {
+    return GroupKey{field(r, "scene"), field(r, "threads"), field(r, "frame", "0")};
+  };
   for (const auto& r : rows)
     if (std::find(groups.begin(), groups.end(), key_of(r)) == groups.end()) groups.push_back(key_of(r));
   for (const auto& key : groups) {
@@ -277,9 +292,12 @@ void print_report(const ReportOptions& options, std::ostream& out) {
       render_markdown(table, out);
   }
   if (!latex)
-    fmt::print(out, "Ratios are to embree [quality=medium] with rtcIntersect1/rtcOccluded1 in the same run; build ms and\n"
-                    "Mrays/s are medians over the repetitions. Memory is the traversed structure's exact bytes. The best\n"
-                    "value of each column is in bold.\n");
+    fmt::print(out,
+               "Ratios are to embree [quality=medium] with rtcIntersect1/rtcOccluded1 in the same run; build "
+               "ms and\n"
+               "Mrays/s are medians over the repetitions. Memory is the traversed structure's exact bytes. "
+               "The best\n"
+               "value of each column is in bold.\n");
 }
 
 void run_report_command(const ReportOptions& options, std::ostream& out) {

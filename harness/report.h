@@ -26,7 +26,7 @@ struct ReportOptions {
       : inputs(std::move(inputs_)), run_id(std::move(run_id_)), format(format_), output(std::move(output_)) {}
 
   std::vector<std::filesystem::path> inputs;
-  std::string run_id;            ///< only rows of this run; empty: the latest run_id in the files
+  std::string run_id;  ///< only rows of this run; empty: the latest run_id in the files
   ReportFormat format;
   std::filesystem::path output;  ///< run_report_command writes here; empty: to its stream
 };

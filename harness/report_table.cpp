@@ -81,7 +81,8 @@ void render_markdown(const ReportTable& table, std::ostream& out) {
   for (const ReportRow& row : table.rows) {
     fmt::print(out, "| {} | {} |", row.builder, row.layout);
     for (std::size_t c = 0; c < table.columns.size(); ++c)
-      fmt::print(out, " {} |", c < row.cells.size() ? markdown_cell(row.cells[c], table.columns[c].decimals) : "-");
+      fmt::print(out, " {} |",
+                 c < row.cells.size() ? markdown_cell(row.cells[c], table.columns[c].decimals) : "-");
     fmt::print(out, "\n");
   }
   // pandoc reads a "Table:" paragraph next to a pipe table as its caption.
@@ -93,13 +94,15 @@ void render_latex(const ReportTable& table, std::ostream& out) {
   fmt::print(out, "\\begin{{table}}[htbp]\n  \\centering\n  \\small\n");
   if (!table.caption.empty()) fmt::print(out, "  \\caption{{{}}}\n", latex_escape(table.caption));
   if (!table.label.empty()) fmt::print(out, "  \\label{{{}}}\n", table.label);
-  fmt::print(out, "  \\begin{{tabular}}{{ll{}}}\n    \\toprule\n    Builder & Layout", std::string(table.columns.size(), 'r'));
+  fmt::print(out, "  \\begin{{tabular}}{{ll{}}}\n    \\toprule\n    Builder & Layout",
+             std::string(table.columns.size(), 'r'));
   for (const auto& column : table.columns) fmt::print(out, " & {}", column.latex_header);
   fmt::print(out, " \\\\\n    \\midrule\n");
   for (const ReportRow& row : table.rows) {
     fmt::print(out, "    {} & {}", latex_escape(row.builder_short), latex_escape(row.layout));
     for (std::size_t c = 0; c < table.columns.size(); ++c)
-      fmt::print(out, " & {}", c < row.cells.size() ? latex_cell(row.cells[c], table.columns[c].decimals) : "--");
+      fmt::print(out, " & {}",
+                 c < row.cells.size() ? latex_cell(row.cells[c], table.columns[c].decimals) : "--");
     fmt::print(out, " \\\\\n");
   }
   fmt::print(out, "    \\bottomrule\n  \\end{{tabular}}\n\\end{{table}}\n\n");
@@ -110,18 +113,37 @@ std::string latex_escape(std::string_view text) {
   out.reserve(text.size());
   for (const char c : text) {
     switch (c) {
-      case '\\': out += "\\textbackslash{}"; break;
-      case '&': case '%': case '$': case '#': case '_': case '{': case '}':
+      case '\\':
+        out += "\\textbackslash{}";
+        break;
+      case '&':
+      case '%':
+      case '$':
+      case '#':
+      case '_':
+      case '{':
+      case '}':
         out += '\\';
         out += c;
         break;
-      case '~': out += "\\textasciitilde{}"; break;
-      case '^': out += "\\textasciicircum{}"; break;
+      case '~':
+        out += "\\textasciitilde{}";
+        break;
+      case '^':
+        out += "\\textasciicircum{}";
+        break;
       // In text mode with the default OT1 encoding these print as other glyphs.
-      case '<': out += "\\textless{}"; break;
-      case '>': out += "\\textgreater{}"; break;
-      case '|': out += "\\textbar{}"; break;
-      default: out += c;
+      case '<':
+        out += "\\textless{}";
+        break;
+      case '>':
+        out += "\\textgreater{}";
+        break;
+      case '|':
+        out += "\\textbar{}";
+        break;
+      default:
+        out += c;
     }
   }
   return out;

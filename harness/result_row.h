@@ -8,8 +8,8 @@
 #include <string>
 
 #include "core/bvh_stats.h"
-#include "core/sah.h"
 #include "core/ray.h"
+#include "core/sah.h"
 #include "harness/csv.h"
 #include "harness/layout.h"
 #include "harness/ray_sets.h"

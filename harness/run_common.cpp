@@ -138,8 +138,8 @@ std::string camera_note(const CameraConfig& camera) {
 }
 
 CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
-                  const Scene& scene, uint32_t frame, const std::string& builder, const std::string& params_text,
-                  int threads) {
+                  const Scene& scene, uint32_t frame, const std::string& builder,
+                  const std::string& params_text, int threads) {
   CsvRow row;
   row["run_id"] = run_id;
   row["git_commit"] = env.git_commit;
@@ -164,9 +164,11 @@ CsvRow common_row(const std::string& run_id, const Environment& env, const Exper
   return row;
 }
 
-BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device, std::span<const Triangle> triangles,
-                               EmbreeQuality quality, std::unique_ptr<EmbreeScene>& built) {
-  for (int w = 0; w < reps.build_warmup; ++w) built = std::make_unique<EmbreeScene>(device, triangles, quality);
+BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device,
+                               std::span<const Triangle> triangles, EmbreeQuality quality,
+                               std::unique_ptr<EmbreeScene>& built) {
+  for (int w = 0; w < reps.build_warmup; ++w)
+    built = std::make_unique<EmbreeScene>(device, triangles, quality);
   std::vector<double> build_ms;
   int64_t peak = 0;
   for (int r = 0; r < reps.build; ++r) {
@@ -192,7 +194,8 @@ TimedCompile compile_timed(const LayoutSpec& spec, const Bvh& bvh, std::span<con
   return out;
 }
 
-void trace_layout(const CompiledLayout& layout, const RaySet& rs, std::span<Hit> hits, std::span<uint8_t> occluded) {
+void trace_layout(const CompiledLayout& layout, const RaySet& rs, std::span<Hit> hits,
+                  std::span<uint8_t> occluded) {
   if (rs.occlusion)
     layout.trace_any(rs.rays, occluded);
   else

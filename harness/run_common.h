@@ -86,8 +86,8 @@ void add_note(CsvRow& row, const std::string& note);
 std::string camera_note(const CameraConfig& camera);
 
 CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
-                  const Scene& scene, uint32_t frame, const std::string& builder, const std::string& params_text,
-                  int threads);
+                  const Scene& scene, uint32_t frame, const std::string& builder,
+                  const std::string& params_text, int threads);
 
 /// A build's time over its repetitions (ms), and the bytes it allocated at its peak in the first timed one.
 struct BuildTiming {
@@ -116,8 +116,9 @@ BuildTiming time_builds(const Repetitions& reps, Step step, Reset reset) {
 /// Embree's build of `triangles` at `quality`, timed the same way: warm-up builds, then timed ones, each
 /// after freeing the last; the time is rtcCommitScene's (EmbreeScene::commit_ms) and the peak the
 /// device's over the first timed build. `built` keeps the last build.
-BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device, std::span<const Triangle> triangles,
-                               EmbreeQuality quality, std::unique_ptr<EmbreeScene>& built);
+BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device,
+                               std::span<const Triangle> triangles, EmbreeQuality quality,
+                               std::unique_ptr<EmbreeScene>& built);
 
 /// A layout compiled max(1, reps.build) times, each after freeing the one before: the last compile and
 /// the median of their times (ms).
@@ -130,7 +131,8 @@ TimedCompile compile_timed(const LayoutSpec& spec, const Bvh& bvh, std::span<con
 
 /// One pass of `layout` over `rs`: closest hits into `hits`, or for an any-hit set occlusion into
 /// `occluded`.
-void trace_layout(const CompiledLayout& layout, const RaySet& rs, std::span<Hit> hits, std::span<uint8_t> occluded);
+void trace_layout(const CompiledLayout& layout, const RaySet& rs, std::span<Hit> hits,
+                  std::span<uint8_t> occluded);
 
 /// The counting pass of `layout` over `rs` (count_closest, or count_any for an any-hit set).
 TraceCounts count_layout(const CompiledLayout& layout, const RaySet& rs);

@@ -38,8 +38,9 @@ namespace {
 
 // Columns written after DESIGN.md's (never renamed; these may grow).
 const std::vector<std::string>& extra_columns() {
-  static const std::vector<std::string> columns = {"config", "seed", "scene_source", "scene_removed", "query",
-                                                   "embree_version", "notes", "build_isa", "bytes_per_tri", "sah_block"};
+  static const std::vector<std::string> columns = {
+      "config",         "seed",  "scene_source", "scene_removed", "query",
+      "embree_version", "notes", "build_isa",    "bytes_per_tri", "sah_block"};
   return columns;
 }
 
@@ -51,7 +52,8 @@ std::vector<std::string> all_columns() {
 
 class Progress {
  public:
-  Progress(std::size_t total, std::ostream& log) : total_(total), log_(log), start_(std::chrono::steady_clock::now()) {}
+  Progress(std::size_t total, std::ostream& log)
+      : total_(total), log_(log), start_(std::chrono::steady_clock::now()) {}
   /// Interleaved cells finish together: announcing the batch first makes the time left reckon with all
   /// of it from its first line on, rather than with one cell for the whole batch's time.
   void batch(std::size_t cells) { batch_end_ = std::min(total_, done_ + cells); }
@@ -64,7 +66,9 @@ class Progress {
                         format_duration(left));
   }
   void skip(std::size_t cells) { total_ -= std::min(total_, cells); }
-  double elapsed_s() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+  double elapsed_s() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
 
  private:
   std::size_t total_, done_ = 0, batch_end_ = 0;
@@ -86,13 +90,19 @@ std::vector<ResolvedBuilder> resolve_builders(const ExperimentConfig& cfg) {
 class ExperimentRunner {
  public:
   ExperimentRunner(const ExperimentConfig& cfg, const RunOptions& options, std::ostream& log)
-      : cfg_(cfg), options_(options), log_(log), env_(current_environment()), builders_(resolve_builders(cfg)),
-        output_(options.output ? *options.output : cfg.output), run_id_(cfg.name + "-" + now_stamp()) {}
+      : cfg_(cfg),
+        options_(options),
+        log_(log),
+        env_(current_environment()),
+        builders_(resolve_builders(cfg)),
+        output_(options.output ? *options.output : cfg.output),
+        run_id_(cfg.name + "-" + now_stamp()) {}
 
   int run() {
     // The writer first: it checks the header and removes a row cut off by a crash before anything reads.
     CsvWriter csv(output_, all_columns());
-    if (csv.dropped_partial_row()) log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
+    if (csv.dropped_partial_row())
+      log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
     std::set<std::string> finished;
     if (options_.resume) finished = finished_cells(output_, cfg_, run_id_, log_);
 
@@ -101,7 +111,8 @@ class ExperimentRunner {
     // Plan: which cells of each scene are still to do.
     std::size_t total = 0;
     for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
-    log_ << fmt::format("run {}: {} cells to run over {} scenes; writing {}\n", run_id_, total, scenes.size(), output_.string());
+    log_ << fmt::format("run {}: {} cells to run over {} scenes; writing {}\n", run_id_, total, scenes.size(),
+                        output_.string());
     Progress progress(total, log_);
     for (const auto& scene : scenes) {
       const auto pending = pending_cells(scene, finished);
@@ -110,10 +121,11 @@ class ExperimentRunner {
     const double total_s = progress.elapsed_s();
     const double overhead_s = (load_ms_ + rays_ms_ + csv_ms_) / 1e3;
     log_ << fmt::format("done in {}; rows in {}\n", format_duration(total_s), output_.string());
-    log_ << fmt::format("harness overhead: loading {:.1f} s, ray generation {:.1f} s, CSV {:.2f} s = {:.1f}% of the run; "
-                        "reference hits {:.1f} s ({:.1f}%)\n", load_ms_ / 1e3, rays_ms_ / 1e3, csv_ms_ / 1e3,
-                        100.0 * overhead_s / std::max(total_s, 1e-9), reference_ms_ / 1e3,
-                        100.0 * reference_ms_ / 1e3 / std::max(total_s, 1e-9));
+    log_ << fmt::format(
+        "harness overhead: loading {:.1f} s, ray generation {:.1f} s, CSV {:.2f} s = {:.1f}% of the run; "
+        "reference hits {:.1f} s ({:.1f}%)\n",
+        load_ms_ / 1e3, rays_ms_ / 1e3, csv_ms_ / 1e3, 100.0 * overhead_s / std::max(total_s, 1e-9),
+        reference_ms_ / 1e3, 100.0 * reference_ms_ / 1e3 / std::max(total_s, 1e-9));
     return exit_code_;
   }
 
@@ -157,21 +169,25 @@ class ExperimentRunner {
       std::size_t skipped = 0;
       for (const auto& key : pending)
         if (key.ends_with("|" + set + "|0")) ++skipped;
-      log_ << fmt::format("scene {}: skipping ray set '{}' ({} cells): {}\n", scene_name, set, skipped, reason);
+      log_ << fmt::format("scene {}: skipping ray set '{}' ({} cells): {}\n", scene_name, set, skipped,
+                          reason);
       progress.skip(skipped);
     }
     std::vector<Reference> references(generated.sets.size());
     reference_ms_ += time_ms([&] {
       for (std::size_t i = 0; i < generated.sets.size(); ++i)
-        references[i] = make_reference(scene, generated.sets[i], cfg_.reference, cfg_.brute_force_max_triangles);
+        references[i] =
+            make_reference(scene, generated.sets[i], cfg_.reference, cfg_.brute_force_max_triangles);
     });
 
     for (int threads : cfg_.threads) {
-      const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+      const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                      static_cast<std::size_t>(threads));
       std::vector<TraceCell> cells;
       for (const auto& b : builders_) {
         auto wanted = [&](const std::string& layout, const RaySet& rs) {
-          return pending.count(cell_key(scene_name, b.run.name, b.params_text, layout, threads, rs.name, 0)) > 0;
+          return pending.count(cell_key(scene_name, b.run.name, b.params_text, layout, threads, rs.name, 0)) >
+                 0;
         };
         bool any = false;
         for (const auto& layout : layouts_for(b))
@@ -210,9 +226,9 @@ class ExperimentRunner {
   };
 
   // The ray set's columns of a cell's row, its log label, and the buffers its passes write.
-  static void set_up_cell(TraceCell& cell, const Scene& scene, const ResolvedBuilder& b, const std::string& layout,
-                          int threads, const RaySet& rs, std::size_t set, double build_ms,
-                          std::shared_ptr<const void> keep_alive) {
+  static void set_up_cell(TraceCell& cell, const Scene& scene, const ResolvedBuilder& b,
+                          const std::string& layout, int threads, const RaySet& rs, std::size_t set,
+                          double build_ms, std::shared_ptr<const void> keep_alive) {
     put_ray_set(cell.row, rs);
     cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout, threads, rs.name);
     cell.build_ms = build_ms;
@@ -241,15 +257,15 @@ class ExperimentRunner {
       for (int w = 0; w < cfg_.reps.trace_warmup; ++w) cell.trace();
     const std::size_t n = cells.size();
     for (int r = 0; r < cfg_.reps.trace && n > 0; ++r) {
-      log_ << fmt::format("{} t={}: trace repetition {} of {}, {} cells in turn\n", scene_name, threads, r + 1,
-                          cfg_.reps.trace, n);
+      log_ << fmt::format("{} t={}: trace repetition {} of {}, {} cells in turn\n", scene_name, threads,
+                          r + 1, cfg_.reps.trace, n);
       for (std::size_t k = 0; k < n; ++k) time_once(cells[(k + static_cast<std::size_t>(r)) % n]);
     }
   }
 
   // Completes each timed cell's row (timings, counts, mismatches from its last pass) and writes it.
-  void finish_cells(std::vector<TraceCell>& cells, const std::vector<RaySet>& sets, const std::vector<Reference>& refs,
-                    CsvWriter& csv, Progress& progress) {
+  void finish_cells(std::vector<TraceCell>& cells, const std::vector<RaySet>& sets,
+                    const std::vector<Reference>& refs, CsvWriter& csv, Progress& progress) {
     progress.batch(cells.size());
     for (auto& cell : cells) {
       const RaySet& rs = sets[cell.set];
@@ -260,8 +276,8 @@ class ExperimentRunner {
       if (cell.count) put_per_ray_counts(row, cell.count());
       put_mismatches(row, ref, rs, diagonal_, *cell.hits, *cell.occluded);
       csv_ms_ += time_ms([&] { csv.append(row); });
-      progress.cell_done(fmt::format("{}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", cell.label, cell.build_ms,
-                                     trace_t.median, row["mismatches"]));
+      progress.cell_done(fmt::format("{}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", cell.label,
+                                     cell.build_ms, trace_t.median, row["mismatches"]));
     }
   }
 
@@ -272,8 +288,9 @@ class ExperimentRunner {
   template <class Wanted>
   // Builds (timed), checks and compiles one of our builder runs, and queues a cell per wanted layout and
   // ray set; an invalid tree's cells are written at once, untraced.
-  void prepare_ours(const Scene& scene, const ResolvedBuilder& b, int threads, const std::vector<RaySet>& sets,
-                    Wanted wanted, CsvWriter& csv, Progress& progress, std::vector<TraceCell>& cells) {
+  void prepare_ours(const Scene& scene, const ResolvedBuilder& b, int threads,
+                    const std::vector<RaySet>& sets, Wanted wanted, CsvWriter& csv, Progress& progress,
+                    std::vector<TraceCell>& cells) {
     // Build: warm-up, then timed repetitions. The peak heap is taken over the first timed build.
     auto tree = std::make_shared<Bvh>();
     Bvh& bvh = *tree;
@@ -299,8 +316,8 @@ class ExperimentRunner {
           put_ray_set(row, rs);
           add_note(row, "invalid tree, not traced: " + report.errors.front());
           csv_ms_ += time_ms([&] { csv.append(row); });
-          progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name, b.run.label(),
-                                         layout_name, threads, rs.name));
+          progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name,
+                                         b.run.label(), layout_name, threads, rs.name));
         }
       return;
     }
@@ -312,7 +329,8 @@ class ExperimentRunner {
       TimedCompile compiled = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
       // The layout borrows the tree (bvh2 as built): both stay alive with the cells.
       std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled.layout));
-      auto keep = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::shared_ptr<const CompiledLayout>>>(tree, shared_layout);
+      auto keep = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::shared_ptr<const CompiledLayout>>>(
+          tree, shared_layout);
       const double compile_median = compiled.median_ms;
       for (std::size_t s = 0; s < sets.size(); ++s) {
         const RaySet& rs = sets[s];
@@ -350,8 +368,8 @@ class ExperimentRunner {
 
   // Builds (timed) an Embree scene and queues a cell per supported Embree layout and wanted ray set.
   template <class Wanted>
-  void prepare_embree(const Scene& scene, const ResolvedBuilder& b, int threads, const std::vector<RaySet>& sets,
-                      Wanted wanted, std::vector<TraceCell>& cells) {
+  void prepare_embree(const Scene& scene, const ResolvedBuilder& b, int threads,
+                      const std::vector<RaySet>& sets, Wanted wanted, std::vector<TraceCell>& cells) {
     auto held = std::make_shared<EmbreeBuild>(threads);
     EmbreeDevice& device = held->device;
     std::unique_ptr<EmbreeScene>& built = held->scene;

@@ -12,14 +12,14 @@ namespace sahbench {
 
 struct RunOptions {
   std::filesystem::path config;
-  bool resume = false;          ///< skip cells whose row is already in the output CSV
-  std::string only;             ///< run only cells whose key contains this text (see cell_key)
+  bool resume = false;  ///< skip cells whose row is already in the output CSV
+  std::string only;     ///< run only cells whose key contains this text (see cell_key)
   std::optional<std::filesystem::path> output;  ///< overrides the config's output path
 };
 
 /// Runs the experiment (an animation experiment, with an [animation] table, through
-/// run_animation_experiment). Returns 0, or 1 when a tree failed validation (its cells are still written, with
-/// the failure in `notes`). Bad input throws sahbench::Error.
+/// run_animation_experiment). Returns 0, or 1 when a tree failed validation (its cells are still written,
+/// with the failure in `notes`). Bad input throws sahbench::Error.
 int run_experiment(const RunOptions& options, std::ostream& log);
 
 /// The CSV columns of a run: DESIGN.md's, then config, seed, scene_source, scene_removed, query,

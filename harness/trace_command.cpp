@@ -47,7 +47,8 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
     }
     if (tokens.empty() || tokens.front().front() == '#') continue;
     if (tokens.size() != 6 && tokens.size() != 8)
-      throw Error(where + ": expected 6 or 8 numbers (ox oy oz dx dy dz [tmin tmax]), found " + std::to_string(tokens.size()));
+      throw Error(where + ": expected 6 or 8 numbers (ox oy oz dx dy dz [tmin tmax]), found " +
+                  std::to_string(tokens.size()));
     float v[8] = {0, 0, 0, 0, 0, 0, 0, std::numeric_limits<float>::infinity()};
     for (std::size_t i = 0; i < tokens.size(); ++i) v[i] = parse_float(tokens[i], where);
     Ray ray;
@@ -86,8 +87,9 @@ void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
     }
   }
   if (!out) throw Error(options.out.string() + ": write failed");
-  log << fmt::format("{} rays, {} hits, {} on {} ({} triangles) -> {}\n", rays.size(), found, info.name + " " + params.to_string(),
-                     scene.name, scene.triangles.size(), options.out.string());
+  log << fmt::format("{} rays, {} hits, {} on {} ({} triangles) -> {}\n", rays.size(), found,
+                     info.name + " " + params.to_string(), scene.name, scene.triangles.size(),
+                     options.out.string());
 }
 
 }  // namespace sahbench

@@ -35,7 +35,8 @@ class WideLayout final : public CompiledLayout {
     count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
     count_any_ = find_wide_kernel(KernelIsa::kScalar, N, variant, true, true);
     if (!closest_ || !any_ || !count_closest_ || !count_any_)
-      throw Error("layout bvh" + std::to_string(N) + ": no " + std::string(to_string(isa)) + " kernels compiled in");
+      throw Error("layout bvh" + std::to_string(N) + ": no " + std::string(to_string(isa)) +
+                  " kernels compiled in");
   }
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
@@ -113,7 +114,8 @@ class WideLayout final : public CompiledLayout {
 
 }  // namespace
 
-std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh, std::span<const Triangle> triangles,
+std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh,
+                                                    std::span<const Triangle> triangles,
                                                     const LayoutSpec& spec) {
   KernelIsa isa = spec.isa == KernelIsa::kAuto ? preferred_kernel_isa() : spec.isa;
   if (!kernel_isa_available(isa))
@@ -123,11 +125,11 @@ std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& b
   const AnyHitOrder any_hit_order = resolve_any_hit_order(bvh, spec.variant.any_hit);
   const BlockForm form = block_form_for(spec.variant.triangle);
   if (width == 4)
-    return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles, form), triangles.size(), isa, spec.variant,
-                                           any_hit_order);
+    return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles, form), triangles.size(), isa,
+                                           spec.variant, any_hit_order);
   if (width == 8)
-    return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles, form), triangles.size(), isa, spec.variant,
-                                           any_hit_order);
+    return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles, form), triangles.size(), isa,
+                                           spec.variant, any_hit_order);
   throw Error("no " + std::to_string(width) + "-wide layout");
 }
 

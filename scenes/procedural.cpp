@@ -34,7 +34,8 @@ const std::vector<ProcKindInfo>& kinds() {
        {kTris, kSeed, {"outer", ProcParamType::kReal, 1000, 2, 1e30, "half-size of the enclosing cube"}}},
       {"wave",
        "animated: Gerstner-wave sheet over [-1,1]^2, looping over t in [0, 1] s (the static scene is t = 0)",
-       {kTris, kSeed,
+       {kTris,
+        kSeed,
         {"amplitude", ProcParamType::kReal, 0.1, 0, 10, "height of a wave of wavelength 1"},
         {"waves", ProcParamType::kInteger, 4, 1, 64, "Gerstner waves summed"}}},
   };
@@ -68,7 +69,8 @@ bool is_animated_kind(std::string_view kind) {
 }
 
 WaveParams wave_params(const ProcSpec& spec) {
-  return {spec.integer("tris"), spec.integer("seed"), spec.real("amplitude"), static_cast<int>(spec.integer("waves"))};
+  return {spec.integer("tris"), spec.integer("seed"), spec.real("amplitude"),
+          static_cast<int>(spec.integer("waves"))};
 }
 
 Scene generate_procedural(std::string_view spec) {

@@ -25,9 +25,9 @@ bool is_animated_kind(std::string_view kind);
 /// The wave generator's parameters from a parsed "proc:wave" spec.
 WaveParams wave_params(const ProcSpec& spec);
 
-/// Generates the scene (an animated kind at t = 0). Scene::name is `spec` as given; Scene::source is the normalised spec with every
-/// parameter's value (e.g. "proc:soup:tris=1000000,seed=1"). Throws Error for an unknown kind or key
-/// or a bad value, naming it.
+/// Generates the scene (an animated kind at t = 0). Scene::name is `spec` as given; Scene::source is the
+/// normalised spec with every parameter's value (e.g. "proc:soup:tris=1000000,seed=1"). Throws Error for an
+/// unknown kind or key or a bad value, naming it.
 Scene generate_procedural(std::string_view spec);
 
 }  // namespace sahbench

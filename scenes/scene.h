@@ -13,9 +13,9 @@ namespace sahbench {
 /// Triangles removed at load time, by reason (DESIGN.md, numerical policy). Never silent: the CLI
 /// prints these and the harness records them.
 struct RemovedTriangles {
-  std::size_t non_finite = 0;    ///< a NaN or infinite coordinate
-  std::size_t bad_index = 0;     ///< an index outside the vertex array
-  std::size_t zero_area = 0;     ///< zero area (repeated vertices, collinear, or the cross product underflows)
+  std::size_t non_finite = 0;  ///< a NaN or infinite coordinate
+  std::size_t bad_index = 0;   ///< an index outside the vertex array
+  std::size_t zero_area = 0;   ///< zero area (repeated vertices, collinear, or the cross product underflows)
   std::size_t total() const { return non_finite + bad_index + zero_area; }
 };
 
@@ -29,12 +29,12 @@ struct Camera {
 };
 
 struct Scene {
-  std::string name;                 ///< what the user asked for: a path, a shared-scene name or a procedural spec
-  std::string source;               ///< the resolved file path, or the normalised procedural spec
+  std::string name;    ///< what the user asked for: a path, a shared-scene name or a procedural spec
+  std::string source;  ///< the resolved file path, or the normalised procedural spec
   std::vector<Triangle> triangles;  ///< valid triangles only
   RemovedTriangles removed;
-  std::optional<Camera> camera;    ///< the file's first perspective camera, if any
-  std::vector<Vec3> lights;        ///< positions of the file's point and spot lights (KHR_lights_punctual)
+  std::optional<Camera> camera;  ///< the file's first perspective camera, if any
+  std::vector<Vec3> lights;      ///< positions of the file's point and spot lights (KHR_lights_punctual)
   /// What the scene declares: animated when the file has animations (glTF) or the procedural kind moves
   /// (proc:wave), static otherwise. The triangles are the static pose (node transforms, no skinning or
   /// morphing; proc:wave at t = 0); per-frame positions come from load_animated (scenes/animation.h), with

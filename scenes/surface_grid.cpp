@@ -9,9 +9,10 @@ namespace sahbench {
 
 SurfaceGrid surface_grid(uint64_t tris) {
   SurfaceGrid g;
-  g.nx = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(std::sqrt(static_cast<double>(tris) / 2.0))));
-  g.nz = std::max<std::size_t>(
-      1, static_cast<std::size_t>(std::llround(static_cast<double>(tris) / (2.0 * static_cast<double>(g.nx)))));
+  g.nx = std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::llround(std::sqrt(static_cast<double>(tris) / 2.0))));
+  g.nz = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(static_cast<double>(tris) /
+                                                                        (2.0 * static_cast<double>(g.nx)))));
   g.cell = 2.0 / static_cast<double>(g.nx);
   g.z0 = -0.5 * g.cell * static_cast<double>(g.nz);
   return g;

@@ -63,7 +63,6 @@ inline AnyHitOrder resolve_any_hit_order(const Bvh& bvh, AnyHitOrder order = Any
 
 namespace detail {
 
-
 // Stack bound. Popping an inner node at depth d and pushing its (at most kMaxArity) children leaves at
 // most kMaxArity - 1 entries per level from the root down, and inner nodes lie at depth
 // <= kMaxDepth - 1 when leaves lie at depth <= kMaxDepth. So the stack never holds more than
@@ -152,7 +151,8 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
     if (any_order == AnyHitOrder::kStored) {
       // Storage order: pushed last child first, so the first child entered is popped first.
       for (uint32_t child = end; child-- > node.first;)
-        if (box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) stack[size++] = {child, t_entry};
+        if (box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry))
+          stack[size++] = {child, t_entry};
       continue;
     }
     if (any_order == AnyHitOrder::kNearestStored) {
@@ -189,7 +189,8 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
 /// wins. An empty `bvh` (no nodes) is a miss. Throws sahbench::Error for a tree deeper than kMaxDepth.
 template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
 Hit closest_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray) {
-  return detail::traverse<TriangleTest, BoxTest, false, false>(bvh, triangles, ray, nullptr, AnyHitOrder::kAuto);
+  return detail::traverse<TriangleTest, BoxTest, false, false>(bvh, triangles, ray, nullptr,
+                                                               AnyHitOrder::kAuto);
 }
 
 /// Whether any triangle is hit within [ray.tmin, ray.tmax] (shadow rays): stops at the first hit found.
@@ -204,7 +205,8 @@ bool any_hit(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
 template <class TriangleTest = WatertightTriangleTest, class BoxTest = RobustRayBox>
 Hit closest_hit_counted(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
                         TraversalCounters& counters) {
-  return detail::traverse<TriangleTest, BoxTest, false, true>(bvh, triangles, ray, &counters, AnyHitOrder::kAuto);
+  return detail::traverse<TriangleTest, BoxTest, false, true>(bvh, triangles, ray, &counters,
+                                                              AnyHitOrder::kAuto);
 }
 
 /// any_hit, also adding this ray's work to `counters`. Same traversal, same result; not for timing.

@@ -39,7 +39,8 @@ std::string_view name_of(const std::array<std::pair<Enum, std::string_view>, N>&
 }
 
 template <class Enum, std::size_t N>
-std::optional<Enum> value_of(const std::array<std::pair<Enum, std::string_view>, N>& names, std::string_view name) {
+std::optional<Enum> value_of(const std::array<std::pair<Enum, std::string_view>, N>& names,
+                             std::string_view name) {
   for (const auto& [v, n] : names)
     if (n == name) return v;
   return std::nullopt;
@@ -50,17 +51,21 @@ std::optional<Enum> value_of(const std::array<std::pair<Enum, std::string_view>,
 bool cpu_supports(KernelIsa isa) {
 #if defined(__x86_64__) || defined(__i386__)
   switch (isa) {
-    case KernelIsa::kScalar: return true;
-    case KernelIsa::kSse: return __builtin_cpu_supports("sse4.2");
+    case KernelIsa::kScalar:
+      return true;
+    case KernelIsa::kSse:
+      return __builtin_cpu_supports("sse4.2");
     // x86-64-v3, the level the AVX2 kernels are compiled for.
     case KernelIsa::kAvx2:
-      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
+      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+             __builtin_cpu_supports("bmi2");
     // x86-64-v4: AVX-512 F, BW, CD, DQ and VL.
     case KernelIsa::kAvx512:
       return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
              __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512dq") &&
              __builtin_cpu_supports("avx512vl");
-    case KernelIsa::kAuto: return false;
+    case KernelIsa::kAuto:
+      return false;
   }
   return false;
 #else
@@ -71,26 +76,45 @@ bool cpu_supports(KernelIsa isa) {
 // Which kernels traversal/CMakeLists.txt compiled in (it defines these when the target is x86-64).
 bool compiled_in(KernelIsa isa) {
   switch (isa) {
-    case KernelIsa::kScalar: return true;
+    case KernelIsa::kScalar:
+      return true;
 #if defined(SAHBENCH_HAVE_X86_KERNELS)
     case KernelIsa::kSse:
     case KernelIsa::kAvx2:
-    case KernelIsa::kAvx512: return true;
+    case KernelIsa::kAvx512:
+      return true;
 #endif
-    default: return false;
+    default:
+      return false;
   }
 }
 
 }  // namespace
 
-std::string_view to_string(TriangleTestKind kind) { return name_of(kTriangleNames, kind); }
-std::string_view to_string(BoxTestKind kind) { return name_of(kBoxNames, kind); }
-std::string_view to_string(KernelIsa isa) { return name_of(kIsaNames, isa); }
-std::string_view to_string(AnyHitOrder order) { return name_of(kAnyHitOrderNames, order); }
-std::optional<TriangleTestKind> parse_triangle_test(std::string_view name) { return value_of(kTriangleNames, name); }
-std::optional<BoxTestKind> parse_box_test(std::string_view name) { return value_of(kBoxNames, name); }
-std::optional<KernelIsa> parse_kernel_isa(std::string_view name) { return value_of(kIsaNames, name); }
-std::optional<AnyHitOrder> parse_any_hit_order(std::string_view name) { return value_of(kAnyHitOrderNames, name); }
+std::string_view to_string(TriangleTestKind kind) {
+  return name_of(kTriangleNames, kind);
+}
+std::string_view to_string(BoxTestKind kind) {
+  return name_of(kBoxNames, kind);
+}
+std::string_view to_string(KernelIsa isa) {
+  return name_of(kIsaNames, isa);
+}
+std::string_view to_string(AnyHitOrder order) {
+  return name_of(kAnyHitOrderNames, order);
+}
+std::optional<TriangleTestKind> parse_triangle_test(std::string_view name) {
+  return value_of(kTriangleNames, name);
+}
+std::optional<BoxTestKind> parse_box_test(std::string_view name) {
+  return value_of(kBoxNames, name);
+}
+std::optional<KernelIsa> parse_kernel_isa(std::string_view name) {
+  return value_of(kIsaNames, name);
+}
+std::optional<AnyHitOrder> parse_any_hit_order(std::string_view name) {
+  return value_of(kAnyHitOrderNames, name);
+}
 
 bool kernel_isa_available(KernelIsa isa) {
   if (isa == KernelIsa::kAuto) return false;

@@ -133,7 +133,9 @@ class FmaRayBox {
 
   /// The direction component the test takes the reciprocal of: shared with the wide kernels' ray set-up
   /// (wide_bvh.cpp), so that both compute the same distances.
-  static float safe_direction(float d) { return std::abs(d) < kMinDirection ? std::copysign(kMinDirection, d) : d; }
+  static float safe_direction(float d) {
+    return std::abs(d) < kMinDirection ? std::copysign(kMinDirection, d) : d;
+  }
 
   explicit FmaRayBox(const Ray& ray) : setup_(ray) {
     for (std::size_t axis = 0; axis < 3; ++axis) {

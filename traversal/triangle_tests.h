@@ -79,8 +79,8 @@ inline bool watertight_det_ok(float det, float scaled_t) {
 /// rounded once, so each edge function's sign is exact (section 4) and two triangles sharing an edge
 /// still get opposite values for it; the distance is computed in double and rounded once. Used by
 /// WatertightTriangleTest and by the SIMD kernels' lanes (wide_kernels.inl repeats it, see there).
-inline bool watertight_in_double(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
-                                 float cz, float tmin, float tmax, float& t, float& u, float& v) {
+inline bool watertight_in_double(float ax, float ay, float az, float bx, float by, float bz, float cx,
+                                 float cy, float cz, float tmin, float tmax, float& t, float& u, float& v) {
   const double e0 = static_cast<double>(cx) * by - static_cast<double>(cy) * bx;
   const double e1 = static_cast<double>(ax) * cy - static_cast<double>(ay) * cx;
   const double e2 = static_cast<double>(bx) * ay - static_cast<double>(by) * ax;
@@ -101,8 +101,9 @@ inline bool watertight_in_double(float ax, float ay, float az, float bx, float b
 /// triangle, so two triangles sharing an edge evaluate that edge's 2D edge function from identical
 /// inputs and cannot both miss a ray through it. Where an edge function comes out exactly 0, or the
 /// products leave float's range, the test is finished in double (section 4: a product of two floats is
-/// exact in double), so the signs stay exact. A ray through a shared edge or vertex hits at least one of the triangles sharing it (unless
-/// the edge is a silhouette seen along the ray, where the surface itself folds away).
+/// exact in double), so the signs stay exact. A ray through a shared edge or vertex hits at least one of the
+/// triangles sharing it (unless the edge is a silhouette seen along the ray, where the surface itself folds
+/// away).
 ///
 /// The argument needs fl(a*b) - fl(c*d) with both products rounded, so that swapping the two vertices of
 /// an edge negates its edge function exactly. A fused multiply-add breaks that, so every target using

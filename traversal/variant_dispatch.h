@@ -18,12 +18,14 @@ decltype(auto) with_test_types(const KernelVariant& variant, F&& f) {
     return f.template operator()<Tri, RobustRayBox>();
   };
   switch (variant.triangle) {
-    case TriangleTestKind::kMollerTrumbore: return with_box.template operator()<MollerTrumboreTest>();
+    case TriangleTestKind::kMollerTrumbore:
+      return with_box.template operator()<MollerTrumboreTest>();
     case TriangleTestKind::kMollerTrumboreNoEpsilon:
       return with_box.template operator()<MollerTrumboreNoEpsilonTest>();
     case TriangleTestKind::kMollerTrumboreNormal:
       return with_box.template operator()<MollerTrumboreNormalTest>();
-    case TriangleTestKind::kWatertight: break;
+    case TriangleTestKind::kWatertight:
+      break;
   }
   return with_box.template operator()<WatertightTriangleTest>();
 }

@@ -85,7 +85,9 @@ void fill_blocks(std::span<const uint32_t> refs, std::span<const Triangle> trian
   }
 }
 
-uint32_t blocks_for(uint32_t prims) { return (prims + kBlockWidth - 1) / kBlockWidth; }
+uint32_t blocks_for(uint32_t prims) {
+  return (prims + kBlockWidth - 1) / kBlockWidth;
+}
 
 }  // namespace
 
@@ -199,8 +201,8 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
   if (bvh.nodes.empty()) return out;
   for (uint32_t ref : bvh.prim_refs)
     if (ref >= triangles.size())
-      throw Error("layout bvh" + std::to_string(N) + ": reference " + std::to_string(ref) + " is beyond the " +
-                  std::to_string(triangles.size()) + " triangles");
+      throw Error("layout bvh" + std::to_string(N) + ": reference " + std::to_string(ref) +
+                  " is beyond the " + std::to_string(triangles.size()) + " triangles");
   for (uint32_t axis = 0; axis < 3; ++axis) {
     out.root_planes[2 * axis] = finite_or(bvh.root().bounds.min[axis], -kInf);
     out.root_planes[2 * axis + 1] = finite_or(bvh.root().bounds.max[axis], kInf);
@@ -224,8 +226,10 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
     used += kNodeUnits;
     return plan.back().ref;
   };
-  if (bvh.root().is_leaf()) add_node(0, 1, 0);
-  else add_node(bvh.root().first, bvh.root().child_count, 0);
+  if (bvh.root().is_leaf())
+    add_node(0, 1, 0);
+  else
+    add_node(bvh.root().first, bvh.root().child_count, 0);
   std::vector<std::size_t> stack{0};
   while (!stack.empty()) {
     const WidePlan p = plan[stack.back()];
@@ -233,8 +237,8 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
     // The kernels' stack holds (N - 1) kMaxDepth + 1 entries (wide_kernels.inl), enough for wide nodes
     // at depths 0 .. kMaxDepth - 1.
     if (p.depth >= kMaxDepth)
-      throw Error("layout bvh" + std::to_string(N) + ": the tree is deeper than " + std::to_string(kMaxDepth) +
-                  " levels");
+      throw Error("layout bvh" + std::to_string(N) + ": the tree is deeper than " +
+                  std::to_string(kMaxDepth) + " levels");
     for (uint32_t c = p.first; c < p.first + p.count; ++c) {
       if (!bvh.nodes[c].is_leaf()) continue;
       ref_of[c] = static_cast<uint32_t>(used);
@@ -254,22 +258,23 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
 
   // Then the nodes and blocks themselves, in parallel.
   out.arena.resize(used);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, plan.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      WideNode<N> node = empty_node<N>();
-      for (uint32_t slot = 0; slot < plan[i].count; ++slot) {
-        const uint32_t c = plan[i].first + slot;
-        const Node& child = bvh.nodes[c];
-        set_box(node, slot, child.bounds);
-        node.child[slot] = ref_of[c];
-        if (!child.is_leaf()) continue;
-        node.count[slot] = blocks_for(child.prim_count);
-        fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count), triangles, form,
-                    out.arena.data() + ref_of[c]);
-      }
-      out.node(plan[i].ref) = node;
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, plan.size(), 64),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        WideNode<N> node = empty_node<N>();
+                        for (uint32_t slot = 0; slot < plan[i].count; ++slot) {
+                          const uint32_t c = plan[i].first + slot;
+                          const Node& child = bvh.nodes[c];
+                          set_box(node, slot, child.bounds);
+                          node.child[slot] = ref_of[c];
+                          if (!child.is_leaf()) continue;
+                          node.count[slot] = blocks_for(child.prim_count);
+                          fill_blocks(std::span(bvh.prim_refs).subspan(child.first, child.prim_count),
+                                      triangles, form, out.arena.data() + ref_of[c]);
+                        }
+                        out.node(plan[i].ref) = node;
+                      }
+                    });
   out.node_count = plan.size();
   return out;
 }
@@ -296,8 +301,10 @@ class WideRefitter {
     WideNode<N>& node = wide_.node(ref);
     std::array<Aabb, N> boxes;
     auto refit_slot = [&](uint32_t i) {
-      if (node.count[i] != 0) boxes[i] = refit_leaf(node.child[i], node.count[i]);
-      else if (node.child[i] != 0) boxes[i] = refit(node.child[i], depth + 1);  // 0: empty (no child is the root)
+      if (node.count[i] != 0)
+        boxes[i] = refit_leaf(node.child[i], node.count[i]);
+      else if (node.child[i] != 0)
+        boxes[i] = refit(node.child[i], depth + 1);  // 0: empty (no child is the root)
     };
     if (depth < spawn_depth_) {
       tbb::parallel_for(uint32_t{0}, N, refit_slot);
@@ -341,7 +348,8 @@ void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles) {
   const int threads = tbb::this_task_arena::max_concurrency();
   uint32_t spawn_depth = 0;
   if (threads > 1)
-    spawn_depth = static_cast<uint32_t>(std::ceil(std::log(double(threads) * kRefitTasksPerThread) / std::log(double(N))));
+    spawn_depth = static_cast<uint32_t>(
+        std::ceil(std::log(double(threads) * kRefitTasksPerThread) / std::log(double(N))));
   const Aabb root = WideRefitter<N>(wide, triangles, spawn_depth).refit(0, 0);
   for (uint32_t axis = 0; axis < 3; ++axis) {
     wide.root_planes[2 * axis] = finite_or(root.min[axis], -kInf);
@@ -354,15 +362,21 @@ template WideBvh<8> compile_wide<8>(const Bvh&, std::span<const Triangle>, Block
 template void refit_wide<4>(WideBvh<4>&, std::span<const Triangle>);
 template void refit_wide<8>(WideBvh<8>&, std::span<const Triangle>);
 
-WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit, bool counting) {
-  if (isa == KernelIsa::kScalar) return detail::wide_kernel_scalar(width, variant.triangle, variant.box, any_hit, counting);
+WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit,
+                            bool counting) {
+  if (isa == KernelIsa::kScalar)
+    return detail::wide_kernel_scalar(width, variant.triangle, variant.box, any_hit, counting);
   if (counting) return nullptr;
 #if defined(SAHBENCH_HAVE_X86_KERNELS)
   switch (isa) {
-    case KernelIsa::kSse: return detail::wide_kernel_sse(width, variant.triangle, variant.box, any_hit);
-    case KernelIsa::kAvx2: return detail::wide_kernel_avx2(width, variant.triangle, variant.box, any_hit);
-    case KernelIsa::kAvx512: return detail::wide_kernel_avx512(width, variant.triangle, variant.box, any_hit);
-    default: break;
+    case KernelIsa::kSse:
+      return detail::wide_kernel_sse(width, variant.triangle, variant.box, any_hit);
+    case KernelIsa::kAvx2:
+      return detail::wide_kernel_avx2(width, variant.triangle, variant.box, any_hit);
+    case KernelIsa::kAvx512:
+      return detail::wide_kernel_avx512(width, variant.triangle, variant.box, any_hit);
+    default:
+      break;
   }
 #endif
   return nullptr;
@@ -370,13 +384,18 @@ WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& 
 
 WideBenchLoops find_wide_bench_loops(KernelIsa isa, uint32_t width, const KernelVariant& v) {
   switch (isa) {
-    case KernelIsa::kScalar: return detail::wide_bench_loops_scalar(width, v.triangle, v.box);
+    case KernelIsa::kScalar:
+      return detail::wide_bench_loops_scalar(width, v.triangle, v.box);
 #if defined(SAHBENCH_HAVE_X86_KERNELS)
-    case KernelIsa::kSse: return detail::wide_bench_loops_sse(width, v.triangle, v.box);
-    case KernelIsa::kAvx2: return detail::wide_bench_loops_avx2(width, v.triangle, v.box);
-    case KernelIsa::kAvx512: return detail::wide_bench_loops_avx512(width, v.triangle, v.box);
+    case KernelIsa::kSse:
+      return detail::wide_bench_loops_sse(width, v.triangle, v.box);
+    case KernelIsa::kAvx2:
+      return detail::wide_bench_loops_avx2(width, v.triangle, v.box);
+    case KernelIsa::kAvx512:
+      return detail::wide_bench_loops_avx512(width, v.triangle, v.box);
 #endif
-    default: return {};
+    default:
+      return {};
   }
 }
 

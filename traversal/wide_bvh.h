@@ -158,7 +158,9 @@ struct WideBvh {
   bool empty() const { return arena.empty(); }
   std::size_t bytes() const { return arena.size() * sizeof(WideUnit); }
   WideNode<N>& node(uint32_t ref) { return *reinterpret_cast<WideNode<N>*>(arena.data() + ref); }
-  const WideNode<N>& node(uint32_t ref) const { return *reinterpret_cast<const WideNode<N>*>(arena.data() + ref); }
+  const WideNode<N>& node(uint32_t ref) const {
+    return *reinterpret_cast<const WideNode<N>*>(arena.data() + ref);
+  }
   /// Block `i` of the leaf whose first block is at `ref` (in every form; a NormalBlock starts with it).
   TriangleBlock& block(uint32_t ref, uint32_t i = 0) {
     return *reinterpret_cast<TriangleBlock*>(arena.data() + ref + i * block_units(form));
@@ -181,7 +183,8 @@ struct WideBvh {
 /// test). Throws Error for a wider or deeper tree than the kernels take (arity > N, depth > kMaxDepth) or
 /// a leaf reference out of range.
 template <uint32_t N>
-WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, BlockForm form = BlockForm::kVertices);
+WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles,
+                        BlockForm form = BlockForm::kVertices);
 
 /// Refit: copies the new positions of `triangles` (same indices as at compile time) into the blocks and
 /// recomputes every child box bottom up, subtrees near the root in parallel. The topology is
@@ -225,7 +228,8 @@ using WideKernel = void (*)(const WideBatch&);
 /// The kernel for a width, variant and query, compiled for `isa` (not kAuto). Counting kernels exist for
 /// kScalar only: every instruction set computes the same distances and visits nodes in the same order,
 /// so the counts are the same. Null when that combination is not compiled in.
-WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit, bool counting);
+WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit,
+                            bool counting);
 
 /// Micro-benchmark loops (bench/): `ray_count` rays each against `count` nodes (of the width asked) or
 /// triangle blocks in turn, returning a checksum.

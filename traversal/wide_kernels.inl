@@ -37,8 +37,10 @@ inline constexpr float kWideMtEpsilon = kMollerTrumboreEpsilon;
 // with the ray's finite reciprocal; the others: subtract, then multiply).
 template <BoxTestKind kBox>
 SAHBENCH_KERNEL_INLINE float plane_distance(float plane, const WideRay& r, uint32_t axis) {
-  if constexpr (kBox == BoxTestKind::kFma) return __builtin_fmaf(plane, r.inv_dir[axis], -r.org_inv[axis]);
-  else return (plane - r.org[axis]) * r.inv_dir[axis];
+  if constexpr (kBox == BoxTestKind::kFma)
+    return __builtin_fmaf(plane, r.inv_dir[axis], -r.org_inv[axis]);
+  else
+    return (plane - r.org[axis]) * r.inv_dir[axis];
 }
 
 // box=fma with integer min and max (kInt below): the maximum and minimum of the slab distances, and the
@@ -147,8 +149,8 @@ SAHBENCH_KERNEL_INLINE __m128 plane_distances4(__m128 planes, const WideRay& r, 
 }
 
 template <BoxTestKind kBox, IntOrder kInt = IntOrder::kNone>
-SAHBENCH_KERNEL_INLINE uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, float tmin, float tmax,
-                                    float* t_entry, uint32_t stride) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_children4(const float (*planes)[4], const WideRay& r, float tmin,
+                                                    float tmax, float* t_entry, uint32_t stride) {
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
   if constexpr (kInt != IntOrder::kNone) {
     static_assert(kBox == BoxTestKind::kFma, "the integer order is box=fma's");
@@ -156,16 +158,18 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children4(const float (*planes)[4], co
       return _mm_castps_si128(_mm_fmadd_ps(_mm_load_ps(planes[plane * stride]), _mm_set1_ps(r.inv_dir[axis]),
                                            _mm_set1_ps(-r.org_inv[axis] + 0.0f)));
     };
-    const __m128i t_near =
-        _mm_max_epi32(_mm_max_epi32(distances(r.near_plane[0], 0), distances(r.near_plane[1], 1)),
-                      _mm_max_epi32(distances(r.near_plane[2], 2), _mm_set1_epi32(__builtin_bit_cast(int, tmin))));
+    const __m128i t_near = _mm_max_epi32(
+        _mm_max_epi32(distances(r.near_plane[0], 0), distances(r.near_plane[1], 1)),
+        _mm_max_epi32(distances(r.near_plane[2], 2), _mm_set1_epi32(__builtin_bit_cast(int, tmin))));
     const __m128i t_far =
         _mm_min_epi32(_mm_min_epi32(distances(r.far_plane[0], 0), distances(r.far_plane[1], 1)),
-                      _mm_min_epi32(distances(r.far_plane[2], 2), _mm_set1_epi32(__builtin_bit_cast(int, tmax) & 0x7fffffff)));
+                      _mm_min_epi32(distances(r.far_plane[2], 2),
+                                    _mm_set1_epi32(__builtin_bit_cast(int, tmax) & 0x7fffffff)));
     // A far distance of -0 (see the exception above) makes its lane's minimum INT_MIN: that node is
     // tested again on the float path. Off the path to the mask, and a branch that is never taken.
     if constexpr (kInt == IntOrder::kGuarded) {
-      if (__builtin_expect(!_mm_testz_si128(_mm_cmpeq_epi32(t_far, _mm_set1_epi32(INT32_MIN)), _mm_set1_epi32(-1)), 0))
+      if (__builtin_expect(
+              !_mm_testz_si128(_mm_cmpeq_epi32(t_far, _mm_set1_epi32(INT32_MIN)), _mm_set1_epi32(-1)), 0))
         return intersect_children4<kBox>(planes, r, tmin, tmax, t_entry, stride);
     }
     _mm_storeu_si128(reinterpret_cast<__m128i*>(t_entry), t_near);
@@ -191,32 +195,33 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children4(const float (*planes)[4], co
 
 template <uint32_t N, BoxTestKind kBox, IntOrder kInt = IntOrder::kNone>
 SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, const WideRay& r,
-                                                   [[maybe_unused]] const RaySlabs& slabs, float tmin, float tmax,
-                                                   float* t_entry) {
+                                                   [[maybe_unused]] const RaySlabs& slabs, float tmin,
+                                                   float tmax, float* t_entry) {
   if constexpr (N == 4) {
-    return intersect_children4<kBox, kInt>(reinterpret_cast<const float (*)[4]>(node.planes), r, tmin, tmax,
-                                                t_entry, 1);
+    return intersect_children4<kBox, kInt>(reinterpret_cast<const float(*)[4]>(node.planes), r, tmin, tmax,
+                                           t_entry, 1);
   } else {
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
     if constexpr (kInt != IntOrder::kNone) {
       static_assert(kBox == BoxTestKind::kFma, "the integer order is box=fma's");
       // Both extremes as trees of two levels: each distance is one fused multiply-subtract from the load.
       auto distances = [&](uint32_t plane, uint32_t axis) __attribute__((always_inline)) {
-        return _mm256_castps_si256(_mm256_fmadd_ps(_mm256_load_ps(node.planes[plane]), slabs.inv[axis],
-                                                   slabs.base[axis]));
+        return _mm256_castps_si256(
+            _mm256_fmadd_ps(_mm256_load_ps(node.planes[plane]), slabs.inv[axis], slabs.base[axis]));
       };
       const __m256i t_near = _mm256_max_epi32(
           _mm256_max_epi32(distances(r.near_plane[0], 0), distances(r.near_plane[1], 1)),
           _mm256_max_epi32(distances(r.near_plane[2], 2), _mm256_set1_epi32(__builtin_bit_cast(int, tmin))));
-      const __m256i t_far = _mm256_min_epi32(
-          _mm256_min_epi32(distances(r.far_plane[0], 0), distances(r.far_plane[1], 1)),
-          _mm256_min_epi32(distances(r.far_plane[2], 2), _mm256_set1_epi32(__builtin_bit_cast(int, tmax) & 0x7fffffff)));
+      const __m256i t_far =
+          _mm256_min_epi32(_mm256_min_epi32(distances(r.far_plane[0], 0), distances(r.far_plane[1], 1)),
+                           _mm256_min_epi32(distances(r.far_plane[2], 2),
+                                            _mm256_set1_epi32(__builtin_bit_cast(int, tmax) & 0x7fffffff)));
       if constexpr (kInt == IntOrder::kGuarded) {
 #if defined(SAHBENCH_WIDE_AVX512)
         const bool negative_zero = _mm256_cmpeq_epi32_mask(t_far, _mm256_set1_epi32(INT32_MIN)) != 0;
 #else
-        const bool negative_zero = !_mm256_testz_si256(_mm256_cmpeq_epi32(t_far, _mm256_set1_epi32(INT32_MIN)),
-                                                       _mm256_set1_epi32(-1));
+        const bool negative_zero = !_mm256_testz_si256(
+            _mm256_cmpeq_epi32(t_far, _mm256_set1_epi32(INT32_MIN)), _mm256_set1_epi32(-1));
 #endif
         if (__builtin_expect(negative_zero, 0))
           return intersect_children<N, kBox>(node, r, slabs, tmin, tmax, t_entry);
@@ -225,7 +230,9 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, cons
 #if defined(SAHBENCH_WIDE_AVX512)
       return static_cast<uint32_t>(_mm256_cmple_epi32_mask(t_near, t_far));
 #else
-      return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(t_near, t_far)))) ^ 0xFFu;
+      return static_cast<uint32_t>(
+                 _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(t_near, t_far)))) ^
+             0xFFu;
 #endif
     }
 #endif
@@ -257,7 +264,7 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, cons
 #else
     // SSE: the two halves of the eight children. planes[p] is 8 floats; as [4]-rows, plane p's first
     // half is row 2p and its second half row 2p + 1.
-    const auto* rows = reinterpret_cast<const float (*)[4]>(node.planes);
+    const auto* rows = reinterpret_cast<const float(*)[4]>(node.planes);
     static_assert(kInt == IntOrder::kNone, "no integer order without fused multiply-adds");
     const uint32_t lo = intersect_children4<kBox>(rows, r, tmin, tmax, t_entry, 2);
     const uint32_t hi = intersect_children4<kBox>(rows + 1, r, tmin, tmax, t_entry + 4, 2);
@@ -271,8 +278,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_children(const WideNode<N>& node, cons
 // The watertight test's double-precision finish, for lanes whose float edge functions are zero or out
 // of range (triangle_tests.h: watertight_in_double, repeated here because this file may call nothing
 // from shared headers; the layout tests check that both give the same answers bit for bit).
-inline bool lane_in_double(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy, float cz,
-                           float tmin, float tmax, float& t, float& u, float& v) {
+inline bool lane_in_double(float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
+                           float cz, float tmin, float tmax, float& t, float& u, float& v) {
   const double e0 = static_cast<double>(cx) * by - static_cast<double>(cy) * bx;
   const double e1 = static_cast<double>(ax) * cy - static_cast<double>(ay) * cx;
   const double e2 = static_cast<double>(bx) * ay - static_cast<double>(by) * ax;
@@ -290,8 +297,8 @@ inline bool lane_in_double(float ax, float ay, float az, float bx, float by, flo
 // triangle_tests.h's watertight_float_ok and watertight_det_ok, for one lane.
 SAHBENCH_KERNEL_INLINE bool lane_float_ok(float e0, float e1, float e2) {
   constexpr float kInf = __builtin_inff();
-  return __builtin_fabsf(e0) < kInf && __builtin_fabsf(e1) < kInf && __builtin_fabsf(e2) < kInf && e0 != 0.0f &&
-         e1 != 0.0f && e2 != 0.0f;
+  return __builtin_fabsf(e0) < kInf && __builtin_fabsf(e1) < kInf && __builtin_fabsf(e2) < kInf &&
+         e0 != 0.0f && e1 != 0.0f && e2 != 0.0f;
 }
 SAHBENCH_KERNEL_INLINE bool lane_det_ok(float det, float scaled_t) {
   constexpr float kInf = __builtin_inff();
@@ -312,8 +319,8 @@ SAHBENCH_KERNEL_INLINE float flip_sign(float x, uint32_t sign) {
 
 // One lane of MollerTrumboreNormalTest: the scalar kernels' test, and the SSE kernels' (SSE has no fused
 // multiply-add; fmaf is exact there, and slow). The same operations as triangle_tests.h, in the same order.
-SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const WideRay& r, float tmin, float tmax,
-                                     float& t_out, float& u_out, float& v_out) {
+SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const WideRay& r, float tmin,
+                                     float tmax, float& t_out, float& u_out, float& v_out) {
   const TriangleBlock& e = b.tri;  // edge form
   const float cx = e.v0[0][i] - r.org[0], cy = e.v0[1][i] - r.org[1], cz = e.v0[2][i] - r.org[2];
   const float dx = r.dir[0], dy = r.dir[1], dz = r.dir[2];
@@ -325,7 +332,8 @@ SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const Wid
   const float abs_det = flip_sign(det, sign);
   const float su = flip_sign(__builtin_fmaf(e.v2[0][i], rx, __builtin_fmaf(e.v2[1][i], ry, e.v2[2][i] * rz)),
                              sign ^ 0x80000000u);
-  const float sv = flip_sign(__builtin_fmaf(e.v1[0][i], rx, __builtin_fmaf(e.v1[1][i], ry, e.v1[2][i] * rz)), sign);
+  const float sv =
+      flip_sign(__builtin_fmaf(e.v1[0][i], rx, __builtin_fmaf(e.v1[1][i], ry, e.v1[2][i] * rz)), sign);
   if (!(abs_det >= __FLT_MIN__ && su >= 0.0f && sv >= 0.0f && su + sv <= abs_det)) return false;
   const float st = flip_sign(__builtin_fmaf(cx, nx, __builtin_fmaf(cy, ny, cz * nz)), sign);
   if (!(st >= abs_det * tmin && st <= abs_det * tmax)) return false;
@@ -337,27 +345,33 @@ SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const Wid
 }
 
 #if !defined(SAHBENCH_WIDE_AVX2) && !defined(SAHBENCH_WIDE_AVX512)
-SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const WideRay& r, float tmin, float tmax,
-                                                    float* t_out, float* u_out, float* v_out) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const WideRay& r, float tmin,
+                                                    float tmax, float* t_out, float* u_out, float* v_out) {
   uint32_t mask = 0;
   for (uint32_t i = 0; i < kBlockWidth; ++i)
-    if (b.tri.prim[i] != kInvalidPrim && mtn_lane(b, i, r, tmin, tmax, t_out[i], u_out[i], v_out[i])) mask |= 1u << i;
+    if (b.tri.prim[i] != kInvalidPrim && mtn_lane(b, i, r, tmin, tmax, t_out[i], u_out[i], v_out[i]))
+      mask |= 1u << i;
   return mask;
 }
 #endif
 
 #if defined(SAHBENCH_WIDE_SCALAR)
 
-SAHBENCH_KERNEL_INLINE float component(const float (&v)[3][kBlockWidth], uint32_t axis, uint32_t lane) { return v[axis][lane]; }
+SAHBENCH_KERNEL_INLINE float component(const float (&v)[3][kBlockWidth], uint32_t axis, uint32_t lane) {
+  return v[axis][lane];
+}
 
 inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
                                            float* t_out, float* u_out, float* v_out) {
   uint32_t mask = 0;
   for (uint32_t i = 0; i < kBlockWidth; ++i) {
     if (b.prim[i] == kInvalidPrim) continue;
-    const float a_x = b.v0[r.kx][i] - r.org[r.kx], a_y = b.v0[r.ky][i] - r.org[r.ky], a_z = b.v0[r.kz][i] - r.org[r.kz];
-    const float b_x = b.v1[r.kx][i] - r.org[r.kx], b_y = b.v1[r.ky][i] - r.org[r.ky], b_z = b.v1[r.kz][i] - r.org[r.kz];
-    const float c_x = b.v2[r.kx][i] - r.org[r.kx], c_y = b.v2[r.ky][i] - r.org[r.ky], c_z = b.v2[r.kz][i] - r.org[r.kz];
+    const float a_x = b.v0[r.kx][i] - r.org[r.kx], a_y = b.v0[r.ky][i] - r.org[r.ky],
+                a_z = b.v0[r.kz][i] - r.org[r.kz];
+    const float b_x = b.v1[r.kx][i] - r.org[r.kx], b_y = b.v1[r.ky][i] - r.org[r.ky],
+                b_z = b.v1[r.kz][i] - r.org[r.kz];
+    const float c_x = b.v2[r.kx][i] - r.org[r.kx], c_y = b.v2[r.ky][i] - r.org[r.ky],
+                c_z = b.v2[r.kz][i] - r.org[r.kz];
     const float ax = a_x - r.sx * a_z, ay = a_y - r.sy * a_z;
     const float bx = b_x - r.sx * b_z, by = b_y - r.sy * b_z;
     const float cx = c_x - r.sx * c_z, cy = c_y - r.sy * c_z;
@@ -366,14 +380,16 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
     const float e1 = ax * cy - ay * cx;
     const float e2 = bx * ay - by * ax;
     if (!lane_float_ok(e0, e1, e2)) {
-      if (lane_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, tmin, tmax, t_out[i], u_out[i], v_out[i])) mask |= 1u << i;
+      if (lane_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, tmin, tmax, t_out[i], u_out[i], v_out[i]))
+        mask |= 1u << i;
       continue;
     }
     if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) continue;
     const float det = e0 + e1 + e2;
     const float scaled_t = e0 * az + e1 * bz + e2 * cz;
     if (!lane_det_ok(det, scaled_t)) {
-      if (lane_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, tmin, tmax, t_out[i], u_out[i], v_out[i])) mask |= 1u << i;
+      if (lane_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, tmin, tmax, t_out[i], u_out[i], v_out[i]))
+        mask |= 1u << i;
       continue;
     }
     const float abs_det = det < 0.0f ? -det : det;
@@ -390,8 +406,9 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
   return mask;
 }
 
-SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,
-                                   float* t_out, float* u_out, float* v_out) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin,
+                                                   float tmax, float epsilon, float* t_out, float* u_out,
+                                                   float* v_out) {
   uint32_t mask = 0;
   for (uint32_t i = 0; i < kBlockWidth; ++i) {
     if (b.prim[i] == kInvalidPrim) continue;
@@ -455,9 +472,9 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
   const __m128 inf = _mm_set1_ps(__builtin_inff());
   auto finite = [&](__m128 x) { return _mm_cmplt_ps(_mm_andnot_ps(sign, x), inf); };
   // Lanes the float path cannot decide (lane_float_ok): finished in double below.
-  const __m128 float_ok =
-      _mm_and_ps(_mm_and_ps(_mm_and_ps(finite(e0), finite(e1)), finite(e2)),
-                 _mm_and_ps(_mm_and_ps(_mm_cmpneq_ps(e0, zero), _mm_cmpneq_ps(e1, zero)), _mm_cmpneq_ps(e2, zero)));
+  const __m128 float_ok = _mm_and_ps(
+      _mm_and_ps(_mm_and_ps(finite(e0), finite(e1)), finite(e2)),
+      _mm_and_ps(_mm_and_ps(_mm_cmpneq_ps(e0, zero), _mm_cmpneq_ps(e1, zero)), _mm_cmpneq_ps(e2, zero)));
   int in_double = _mm_movemask_ps(_mm_andnot_ps(float_ok, valid));
   // Inside when no edge function has the wrong sign.
   const __m128 some_negative =
@@ -469,8 +486,9 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
   const __m128 scaled_t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
   // lane_det_ok: det normal and the scaled distance finite, else the lane is finished in double.
   const __m128 abs_det = _mm_andnot_ps(sign, det);
-  const __m128 det_ok = _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(abs_det, _mm_set1_ps(__FLT_MIN__)), _mm_cmplt_ps(abs_det, inf)),
-                                   finite(scaled_t));
+  const __m128 det_ok =
+      _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(abs_det, _mm_set1_ps(__FLT_MIN__)), _mm_cmplt_ps(abs_det, inf)),
+                 finite(scaled_t));
   in_double |= _mm_movemask_ps(_mm_andnot_ps(det_ok, hit));
   hit = _mm_and_ps(hit, det_ok);
 
@@ -497,16 +515,17 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
     for (int k = 0; k < 9; ++k) _mm_store_ps(lanes[k], regs[k]);
     for (int i = 0; i < 4; ++i) {
       if (!(in_double & (1 << i))) continue;
-      if (lane_in_double(lanes[0][i], lanes[1][i], lanes[2][i], lanes[3][i], lanes[4][i], lanes[5][i], lanes[6][i],
-                         lanes[7][i], lanes[8][i], tmin, tmax, t_out[i], u_out[i], v_out[i]))
+      if (lane_in_double(lanes[0][i], lanes[1][i], lanes[2][i], lanes[3][i], lanes[4][i], lanes[5][i],
+                         lanes[6][i], lanes[7][i], lanes[8][i], tmin, tmax, t_out[i], u_out[i], v_out[i]))
         mask |= 1u << i;
     }
   }
   return mask;
 }
 
-SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, float epsilon,
-                                   float* t_out, float* u_out, float* v_out) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin,
+                                                   float tmax, float epsilon, float* t_out, float* u_out,
+                                                   float* v_out) {
   const __m128 valid = lanes_valid(b);
   const __m128 v0x = _mm_load_ps(b.v0[0]), v0y = _mm_load_ps(b.v0[1]), v0z = _mm_load_ps(b.v0[2]);
   // The block is in edge form (BlockForm::kEdges).
@@ -524,15 +543,18 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const
   const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
   const __m128 sx = _mm_sub_ps(_mm_set1_ps(r.org[0]), v0x), sy = _mm_sub_ps(_mm_set1_ps(r.org[1]), v0y),
                sz = _mm_sub_ps(_mm_set1_ps(r.org[2]), v0z);
-  const __m128 u = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(sx, px), _mm_mul_ps(sy, py)), _mm_mul_ps(sz, pz)), inv_det);
+  const __m128 u =
+      _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(sx, px), _mm_mul_ps(sy, py)), _mm_mul_ps(sz, pz)), inv_det);
   const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
   hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmple_ps(u, one)));
   const __m128 qx = _mm_sub_ps(_mm_mul_ps(sy, e1z), _mm_mul_ps(sz, e1y));
   const __m128 qy = _mm_sub_ps(_mm_mul_ps(sz, e1x), _mm_mul_ps(sx, e1z));
   const __m128 qz = _mm_sub_ps(_mm_mul_ps(sx, e1y), _mm_mul_ps(sy, e1x));
-  const __m128 v = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)), inv_det);
+  const __m128 v =
+      _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)), _mm_mul_ps(dz, qz)), inv_det);
   hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(v, zero), _mm_cmple_ps(_mm_add_ps(u, v), one)));
-  const __m128 t = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)), _mm_mul_ps(e2z, qz)), inv_det);
+  const __m128 t = _mm_mul_ps(
+      _mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)), _mm_mul_ps(e2z, qz)), inv_det);
   hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(tmin)), _mm_cmple_ps(t, _mm_set1_ps(tmax))));
   _mm_storeu_ps(t_out, t);
   _mm_storeu_ps(u_out, u);
@@ -551,15 +573,16 @@ SAHBENCH_KERNEL_INLINE __m256 load_pair(const float* lo, const float* hi) {
 
 // All ones in the lanes of two blocks that hold a triangle (lanes_valid for 8 lanes).
 SAHBENCH_KERNEL_INLINE __m256 pair_lanes_valid(const TriangleBlock& lo, const TriangleBlock& hi) {
-  const __m256i prim =
-      _mm256_insertf128_si256(_mm256_castsi128_si256(_mm_load_si128(reinterpret_cast<const __m128i*>(lo.prim))),
-                              _mm_load_si128(reinterpret_cast<const __m128i*>(hi.prim)), 1);
+  const __m256i prim = _mm256_insertf128_si256(
+      _mm256_castsi128_si256(_mm_load_si128(reinterpret_cast<const __m128i*>(lo.prim))),
+      _mm_load_si128(reinterpret_cast<const __m128i*>(hi.prim)), 1);
   const __m256i all = _mm256_set1_epi32(-1);
   return _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(prim, all), all));
 }
 
-SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, const WideRay& r, float tmin, float tmax,
-                                                        float epsilon, float* t_out, float* u_out, float* v_out) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, const WideRay& r, float tmin,
+                                                        float tmax, float epsilon, float* t_out, float* u_out,
+                                                        float* v_out) {
   const __m256 valid = pair_lanes_valid(b[0], b[1]);
   const __m256 v0x = load_pair(b[0].v0[0], b[1].v0[0]), v0y = load_pair(b[0].v0[1], b[1].v0[1]),
                v0z = load_pair(b[0].v0[2], b[1].v0[2]);
@@ -574,24 +597,30 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, 
   const __m256 det =
       _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e1x, px), _mm256_mul_ps(e1y, py)), _mm256_mul_ps(e1z, pz));
   const __m256 sign = _mm256_set1_ps(-0.0f);
-  __m256 hit = _mm256_and_ps(valid, _mm256_cmp_ps(_mm256_andnot_ps(sign, det), _mm256_set1_ps(epsilon), _CMP_GT_OQ));
+  __m256 hit =
+      _mm256_and_ps(valid, _mm256_cmp_ps(_mm256_andnot_ps(sign, det), _mm256_set1_ps(epsilon), _CMP_GT_OQ));
   if (!_mm256_movemask_ps(hit)) return 0;
   const __m256 inv_det = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
-  const __m256 sx = _mm256_sub_ps(_mm256_set1_ps(r.org[0]), v0x), sy = _mm256_sub_ps(_mm256_set1_ps(r.org[1]), v0y),
+  const __m256 sx = _mm256_sub_ps(_mm256_set1_ps(r.org[0]), v0x),
+               sy = _mm256_sub_ps(_mm256_set1_ps(r.org[1]), v0y),
                sz = _mm256_sub_ps(_mm256_set1_ps(r.org[2]), v0z);
   const __m256 u = _mm256_mul_ps(
-      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(sx, px), _mm256_mul_ps(sy, py)), _mm256_mul_ps(sz, pz)), inv_det);
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(sx, px), _mm256_mul_ps(sy, py)), _mm256_mul_ps(sz, pz)),
+      inv_det);
   const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
-  hit = _mm256_and_ps(hit, _mm256_and_ps(_mm256_cmp_ps(u, zero, _CMP_GE_OQ), _mm256_cmp_ps(u, one, _CMP_LE_OQ)));
+  hit = _mm256_and_ps(hit,
+                      _mm256_and_ps(_mm256_cmp_ps(u, zero, _CMP_GE_OQ), _mm256_cmp_ps(u, one, _CMP_LE_OQ)));
   const __m256 qx = _mm256_sub_ps(_mm256_mul_ps(sy, e1z), _mm256_mul_ps(sz, e1y));
   const __m256 qy = _mm256_sub_ps(_mm256_mul_ps(sz, e1x), _mm256_mul_ps(sx, e1z));
   const __m256 qz = _mm256_sub_ps(_mm256_mul_ps(sx, e1y), _mm256_mul_ps(sy, e1x));
   const __m256 v = _mm256_mul_ps(
-      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, qx), _mm256_mul_ps(dy, qy)), _mm256_mul_ps(dz, qz)), inv_det);
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, qx), _mm256_mul_ps(dy, qy)), _mm256_mul_ps(dz, qz)),
+      inv_det);
   hit = _mm256_and_ps(hit, _mm256_and_ps(_mm256_cmp_ps(v, zero, _CMP_GE_OQ),
                                          _mm256_cmp_ps(_mm256_add_ps(u, v), one, _CMP_LE_OQ)));
   const __m256 t = _mm256_mul_ps(
-      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e2x, qx), _mm256_mul_ps(e2y, qy)), _mm256_mul_ps(e2z, qz)), inv_det);
+      _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(e2x, qx), _mm256_mul_ps(e2y, qy)), _mm256_mul_ps(e2z, qz)),
+      inv_det);
   hit = _mm256_and_ps(hit, _mm256_and_ps(_mm256_cmp_ps(t, _mm256_set1_ps(tmin), _CMP_GE_OQ),
                                          _mm256_cmp_ps(t, _mm256_set1_ps(tmax), _CMP_LE_OQ)));
   _mm256_storeu_ps(t_out, t);
@@ -606,8 +635,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, 
 // lane for lane, with FMA instructions where it calls fmaf. The division waits for a lane to pass, so a
 // ray that hits nothing in the block divides nothing; t is checked again once divided.
 template <class V, class Ops, class Load>
-SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const WideRay& r, float tmin, float tmax,
-                                                    float* t_out, float* u_out, float* v_out) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const WideRay& r, float tmin,
+                                                    float tmax, float* t_out, float* u_out, float* v_out) {
   const V dx = Ops::set1(r.dir[0]), dy = Ops::set1(r.dir[1]), dz = Ops::set1(r.dir[2]);
   const V cx = Ops::sub(load(0, 0), Ops::set1(r.org[0])), cy = Ops::sub(load(0, 1), Ops::set1(r.org[1])),
           cz = Ops::sub(load(0, 2), Ops::set1(r.org[2]));
@@ -620,7 +649,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const Wi
   const V abs_det = Ops::xor_(det, sign);
   const V su = Ops::xor_(Ops::fmadd(load(2, 0), rx, Ops::fmadd(load(2, 1), ry, Ops::mul(load(2, 2), rz))),
                          Ops::xor_(sign, sign_bit));
-  const V sv = Ops::xor_(Ops::fmadd(load(1, 0), rx, Ops::fmadd(load(1, 1), ry, Ops::mul(load(1, 2), rz))), sign);
+  const V sv =
+      Ops::xor_(Ops::fmadd(load(1, 0), rx, Ops::fmadd(load(1, 1), ry, Ops::mul(load(1, 2), rz))), sign);
   const V zero = Ops::set1(0.0f);
   V hit = Ops::and_(valid, Ops::and_(Ops::ge(abs_det, Ops::set1(__FLT_MIN__)),
                                      Ops::and_(Ops::ge(su, zero), Ops::ge(sv, zero))));
@@ -660,8 +690,12 @@ struct Ops256 {
   SAHBENCH_KERNEL_INLINE static __m256 sub(__m256 a, __m256 b) { return _mm256_sub_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m256 mul(__m256 a, __m256 b) { return _mm256_mul_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m256 div(__m256 a, __m256 b) { return _mm256_div_ps(a, b); }
-  SAHBENCH_KERNEL_INLINE static __m256 fmadd(__m256 a, __m256 b, __m256 c) { return _mm256_fmadd_ps(a, b, c); }
-  SAHBENCH_KERNEL_INLINE static __m256 fmsub(__m256 a, __m256 b, __m256 c) { return _mm256_fmsub_ps(a, b, c); }
+  SAHBENCH_KERNEL_INLINE static __m256 fmadd(__m256 a, __m256 b, __m256 c) {
+    return _mm256_fmadd_ps(a, b, c);
+  }
+  SAHBENCH_KERNEL_INLINE static __m256 fmsub(__m256 a, __m256 b, __m256 c) {
+    return _mm256_fmsub_ps(a, b, c);
+  }
   SAHBENCH_KERNEL_INLINE static __m256 and_(__m256 a, __m256 b) { return _mm256_and_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m256 xor_(__m256 a, __m256 b) { return _mm256_xor_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m256 ge(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
@@ -675,8 +709,8 @@ SAHBENCH_KERNEL_INLINE const float (*mtn_part(const NormalBlock& b, int part))[k
   return part == 0 ? b.tri.v0 : part == 1 ? b.tri.v1 : part == 2 ? b.tri.v2 : b.normal;
 }
 
-SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const WideRay& r, float tmin, float tmax,
-                                                    float* t_out, float* u_out, float* v_out) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const WideRay& r, float tmin,
+                                                    float tmax, float* t_out, float* u_out, float* v_out) {
   auto load = [&](int part, int axis) __attribute__((always_inline)) {
     return _mm_load_ps(mtn_part(b, part)[axis]);
   };
@@ -684,8 +718,9 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const 
 }
 
 // Two consecutive blocks, 8 lanes: bits 0-3 are the first block's lanes, 4-7 the second's.
-SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, const WideRay& r, float tmin, float tmax,
-                                                         float* t_out, float* u_out, float* v_out) {
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, const WideRay& r, float tmin,
+                                                         float tmax, float* t_out, float* u_out,
+                                                         float* v_out) {
   auto load = [&](int part, int axis) __attribute__((always_inline)) {
     return load_pair(mtn_part(b[0], part)[axis], mtn_part(b[1], part)[axis]);
   };
@@ -696,19 +731,26 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, c
 
 // The block a layout of triangle test kTri stores (wide_bvh.h: BlockForm), and its TriangleBlock part.
 template <TriangleTestKind kTri>
-using BlockOf = std::conditional_t<kTri == TriangleTestKind::kMollerTrumboreNormal, NormalBlock, TriangleBlock>;
-SAHBENCH_KERNEL_INLINE const TriangleBlock& tri_part(const TriangleBlock& b) { return b; }
-SAHBENCH_KERNEL_INLINE const TriangleBlock& tri_part(const NormalBlock& b) { return b.tri; }
+using BlockOf =
+    std::conditional_t<kTri == TriangleTestKind::kMollerTrumboreNormal, NormalBlock, TriangleBlock>;
+SAHBENCH_KERNEL_INLINE const TriangleBlock& tri_part(const TriangleBlock& b) {
+  return b;
+}
+SAHBENCH_KERNEL_INLINE const TriangleBlock& tri_part(const NormalBlock& b) {
+  return b.tri;
+}
 
 template <TriangleTestKind kTri>
-SAHBENCH_KERNEL_INLINE uint32_t intersect_block(const BlockOf<kTri>& b, const WideRay& r, float tmin, float tmax, float* t,
-                                                float* u, float* v) {
-  if constexpr (kTri == TriangleTestKind::kWatertight) return intersect_block_watertight(b, r, tmin, tmax, t, u, v);
+SAHBENCH_KERNEL_INLINE uint32_t intersect_block(const BlockOf<kTri>& b, const WideRay& r, float tmin,
+                                                float tmax, float* t, float* u, float* v) {
+  if constexpr (kTri == TriangleTestKind::kWatertight)
+    return intersect_block_watertight(b, r, tmin, tmax, t, u, v);
   else if constexpr (kTri == TriangleTestKind::kMollerTrumbore)
     return intersect_block_mt(b, r, tmin, tmax, kWideMtEpsilon, t, u, v);
   else if constexpr (kTri == TriangleTestKind::kMollerTrumboreNoEpsilon)
     return intersect_block_mt(b, r, tmin, tmax, 0.0f, t, u, v);
-  else return intersect_block_mtn(b, r, tmin, tmax, t, u, v);
+  else
+    return intersect_block_mtn(b, r, tmin, tmax, t, u, v);
 }
 
 SAHBENCH_KERNEL_INLINE uint32_t occupied_lanes(const TriangleBlock& b) {
@@ -780,8 +822,9 @@ SAHBENCH_KERNEL_INLINE void sort_keys(uint64_t* keys, uint32_t k) {
     return;
   }
   if constexpr (N == 8) {
-    constexpr uint8_t kNetwork[19][2] = {{0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}, {0, 1}, {2, 3},
-                                         {4, 5}, {6, 7}, {2, 4}, {3, 5}, {1, 4}, {3, 6}, {1, 2}, {3, 4}, {5, 6}};
+    constexpr uint8_t kNetwork[19][2] = {{0, 2}, {1, 3}, {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6},
+                                         {3, 7}, {0, 1}, {2, 3}, {4, 5}, {6, 7}, {2, 4}, {3, 5},
+                                         {1, 4}, {3, 6}, {1, 2}, {3, 4}, {5, 6}};
     for (const auto& [a, b] : kNetwork) compare_swap(keys[a], keys[b]);
   }
 }
@@ -813,8 +856,8 @@ SAHBENCH_KERNEL_INLINE void prefetch_slot(const WideUnit* arena, uint32_t child,
 // fetching them traced the shadow rays of Sponza 1%, of the bunny and the dragon 3% slower (two same-run
 // A/Bs, 6 and 8 rounds, t1 and t2; the terrain within noise; stop 21).
 template <uint32_t N, AnyHitOrder kOrder>
-SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry, const WideUnit* arena,
-                              WideStackEntry* stack, uint32_t& size) {
+SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry,
+                                              const WideUnit* arena, WideStackEntry* stack, uint32_t& size) {
   const uint32_t first = static_cast<uint32_t>(__builtin_ctz(mask));
   if ((mask & (mask - 1)) == 0) return {node.child[first], node.count[first], t_entry[first]};
   if constexpr (kOrder == AnyHitOrder::kStored || kOrder == AnyHitOrder::kNearestStored) {
@@ -969,14 +1012,17 @@ void trace_batch(const WideBatch& batch) {
     for (std::size_t i = 0; i < batch.count; ++i) {
       if constexpr (kCount) ++batch.counts->rays;
       const Hit hit = trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(batch.root_planes, batch.arena,
-                                                                             batch.rays[i], batch.counts);
-      if constexpr (kAnyHit) batch.occluded[i] = hit.prim != kInvalidPrim;
-      else batch.hits[i] = hit;
+                                                                              batch.rays[i], batch.counts);
+      if constexpr (kAnyHit)
+        batch.occluded[i] = hit.prim != kInvalidPrim;
+      else
+        batch.hits[i] = hit;
     }
   };
   auto with_order = [&]<IntOrder kInt>() {
     if constexpr (kAnyHit) {
-      if (batch.any_hit_order == AnyHitOrder::kStored) return run.template operator()<AnyHitOrder::kStored, kInt>();
+      if (batch.any_hit_order == AnyHitOrder::kStored)
+        return run.template operator()<AnyHitOrder::kStored, kInt>();
       if (batch.any_hit_order == AnyHitOrder::kNearestStored)
         return run.template operator()<AnyHitOrder::kNearestStored, kInt>();
     }
@@ -997,16 +1043,21 @@ WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, 
       return any_hit ? &trace_batch<N, kTri, kBox, true, kCount> : &trace_batch<N, kTri, kBox, false, kCount>;
     };
     switch (box) {
-      case BoxTestKind::kRobust: return with_box.template operator()<BoxTestKind::kRobust>();
-      case BoxTestKind::kFast: return with_box.template operator()<BoxTestKind::kFast>();
-      case BoxTestKind::kFma: return with_box.template operator()<BoxTestKind::kFma>();
+      case BoxTestKind::kRobust:
+        return with_box.template operator()<BoxTestKind::kRobust>();
+      case BoxTestKind::kFast:
+        return with_box.template operator()<BoxTestKind::kFast>();
+      case BoxTestKind::kFma:
+        return with_box.template operator()<BoxTestKind::kFma>();
     }
     return nullptr;
   };
   auto by_tri = [&]<uint32_t N>() -> WideKernel {
     switch (tri) {
-      case TriangleTestKind::kWatertight: return pick.template operator()<N, TriangleTestKind::kWatertight>();
-      case TriangleTestKind::kMollerTrumbore: return pick.template operator()<N, TriangleTestKind::kMollerTrumbore>();
+      case TriangleTestKind::kWatertight:
+        return pick.template operator()<N, TriangleTestKind::kWatertight>();
+      case TriangleTestKind::kMollerTrumbore:
+        return pick.template operator()<N, TriangleTestKind::kMollerTrumbore>();
       case TriangleTestKind::kMollerTrumboreNoEpsilon:
         return pick.template operator()<N, TriangleTestKind::kMollerTrumboreNoEpsilon>();
       case TriangleTestKind::kMollerTrumboreNormal:
@@ -1031,7 +1082,8 @@ double node_test_loop(const void* nodes, std::size_t node_count, const WideRay* 
   auto loop = [&]<IntOrder kInt>(const WideRay& ray) {
     const RaySlabs slabs = ray_slabs(ray);
     for (std::size_t n = 0; n < node_count; ++n)
-      sum += intersect_children<N, kBox, kInt>(typed[n], ray, slabs, ray.tmin, ray.tmax, t_entry) + t_entry[0];
+      sum +=
+          intersect_children<N, kBox, kInt>(typed[n], ray, slabs, ray.tmin, ray.tmax, t_entry) + t_entry[0];
   };
   for (std::size_t r = 0; r < ray_count; ++r) {
     // The kernels' choice of path (trace_batch), so that the tests compare the integer path as well.
@@ -1066,7 +1118,8 @@ uint32_t node_test_one(const void* node, const WideRay& ray, float* t_entry) {
 }
 
 template <TriangleTestKind kTri>
-double block_test_loop(const void* data, std::size_t block_count, const WideRay* rays, std::size_t ray_count) {
+double block_test_loop(const void* data, std::size_t block_count, const WideRay* rays,
+                       std::size_t ray_count) {
   const auto* blocks = static_cast<const BlockOf<kTri>*>(data);
   double sum = 0.0;
   alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
@@ -1097,8 +1150,12 @@ inline WideBenchLoops select_bench_loops(uint32_t width, TriangleTestKind tri, B
   if (width == 4) nodes.template operator()<4>();
   if (width == 8) nodes.template operator()<8>();
   switch (tri) {
-    case TriangleTestKind::kWatertight: loops.blocks = &block_test_loop<TriangleTestKind::kWatertight>; break;
-    case TriangleTestKind::kMollerTrumbore: loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumbore>; break;
+    case TriangleTestKind::kWatertight:
+      loops.blocks = &block_test_loop<TriangleTestKind::kWatertight>;
+      break;
+    case TriangleTestKind::kMollerTrumbore:
+      loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumbore>;
+      break;
     case TriangleTestKind::kMollerTrumboreNoEpsilon:
       loops.blocks = &block_test_loop<TriangleTestKind::kMollerTrumboreNoEpsilon>;
       break;

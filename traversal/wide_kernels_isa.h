@@ -19,7 +19,8 @@ WideBenchLoops wide_bench_loops_sse(uint32_t width, TriangleTestKind tri, BoxTes
 WideBenchLoops wide_bench_loops_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box);
 WideBenchLoops wide_bench_loops_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box);
 #endif
-WideKernel wide_kernel_scalar(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit, bool counting);
+WideKernel wide_kernel_scalar(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
+                              bool counting);
 #if defined(SAHBENCH_HAVE_X86_KERNELS)
 WideKernel wide_kernel_sse(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit);
 WideKernel wide_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit);

@@ -10,7 +10,8 @@ namespace sahbench::wide_scalar {
 
 namespace sahbench::detail {
 
-WideKernel wide_kernel_scalar(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit, bool counting) {
+WideKernel wide_kernel_scalar(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
+                              bool counting) {
   return counting ? wide_scalar::select_kernel<true>(width, tri, box, any_hit)
                   : wide_scalar::select_kernel<false>(width, tri, box, any_hit);
 }

@@ -52,7 +52,9 @@ inline std::vector<BuilderVariant> builder_variants() {
   // Spatial splits tried at every node: without unsplitting, with the fewest slabs everywhere; and with
   // the most slabs, a large budget and single-reference leaves.
   out.push_back({"sbvh", {{"alpha", "0"}, {"unsplit", "0"}, {"spatial_bins", "4"}, {"adaptive_bins", "0"}}});
-  out.push_back({"sbvh", {{"alpha", "0"}, {"max_dup", "2"}, {"max_leaf", "1"}, {"spatial_bins", "256"}, {"c_trav", "3"}}});
+  out.push_back(
+      {"sbvh",
+       {{"alpha", "0"}, {"max_dup", "2"}, {"max_leaf", "1"}, {"spatial_bins", "256"}, {"c_trav", "3"}}});
   return out;
 }
 
@@ -64,7 +66,8 @@ inline std::size_t max_references(const BuilderInfo& info, const ParamSet& param
     return static_cast<std::size_t>(std::floor((1.0 + double(SbvhParams{}.max_dup)) * double(prims)));
   for (const auto& spec : info.params)
     if (spec.name == "max_dup")
-      return static_cast<std::size_t>(std::floor((1.0 + double(params.get_float("max_dup"))) * double(prims)));
+      return static_cast<std::size_t>(
+          std::floor((1.0 + double(params.get_float("max_dup"))) * double(prims)));
   return prims;
 }
 
@@ -72,7 +75,8 @@ inline std::size_t max_references(const BuilderInfo& info, const ParamSet& param
 /// triangle, i.e. the triangle clipped to the box is not empty. The validator asks less of split
 /// triangles (their leaves together must cover them); a builder that clips only boxes can leave a
 /// reference whose box misses the triangle, but one that clips the triangles, as the SBVH does, never does.
-inline ::testing::AssertionResult leaves_hold_parts_of_their_triangles(const Bvh& bvh, std::span<const Triangle> tris) {
+inline ::testing::AssertionResult leaves_hold_parts_of_their_triangles(const Bvh& bvh,
+                                                                       std::span<const Triangle> tris) {
   for (uint32_t n = 0; n < bvh.nodes.size(); ++n) {
     const Node& node = bvh.nodes[n];
     if (!node.is_leaf()) continue;
@@ -85,8 +89,8 @@ inline ::testing::AssertionResult leaves_hold_parts_of_their_triangles(const Bvh
         part.clip(a, double(node.bounds.max[a]) + tol, true);
       }
       if (part.empty())
-        return ::testing::AssertionFailure() << "leaf " << n << " holds triangle " << bvh.prim_refs[r]
-                                             << ", which does not meet its box";
+        return ::testing::AssertionFailure()
+               << "leaf " << n << " holds triangle " << bvh.prim_refs[r] << ", which does not meet its box";
     }
   }
   return ::testing::AssertionSuccess();
@@ -97,14 +101,17 @@ struct SceneCase {
   std::vector<Triangle> triangles;
 };
 
-inline Triangle translated(Triangle t, Vec3 d) { return {t.v0 + d, t.v1 + d, t.v2 + d}; }
+inline Triangle translated(Triangle t, Vec3 d) {
+  return {t.v0 + d, t.v1 + d, t.v2 + d};
+}
 
 /// Random scenes of several sizes and adversarial ones: identical triangles, nested triangles sharing a
 /// centroid, everything in one plane, needles, a closed cube grid, tiny detail in a huge box, and one
 /// large enough to take the parallel binning and partitioning paths.
 inline std::vector<SceneCase> scene_cases() {
   std::vector<SceneCase> out;
-  for (std::size_t n : {1u, 2u, 3u, 17u, 1000u, 20000u}) out.push_back({"random" + std::to_string(n), random_triangles(n, n)});
+  for (std::size_t n : {1u, 2u, 3u, 17u, 1000u, 20000u})
+    out.push_back({"random" + std::to_string(n), random_triangles(n, n)});
   out.push_back({"random_parallel_paths", random_triangles(70000, 5, 50.0f)});
 
   const Triangle base{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
@@ -133,7 +140,8 @@ inline std::vector<SceneCase> scene_cases() {
   out.push_back({"cube_grid", cube_grid(12, 3.0f)});
 
   std::vector<Triangle> multiscale = cube_grid(2, 1000.0f);
-  for (const auto& t : random_triangles(2000, 17, 1e-2f, 1e-3f)) multiscale.push_back(translated(t, {1, 2, 3}));
+  for (const auto& t : random_triangles(2000, 17, 1e-2f, 1e-3f))
+    multiscale.push_back(translated(t, {1, 2, 3}));
   out.push_back({"multiscale", multiscale});
   return out;
 }

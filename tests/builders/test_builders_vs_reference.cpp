@@ -104,7 +104,8 @@ TEST(BuilderEdgeCases, ExtremeCoordinatesStillGiveValidTrees) {
     auto tris = test::random_triangles(5000, 8);
     for (auto& t : tris) t = {t.v0 * scale, t.v1 * scale, t.v2 * scale};
     for (const auto& info : builders()) {
-      const Bvh bvh = info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
+      const Bvh bvh =
+          info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
       EXPECT_TRUE(validate(bvh, tris).ok()) << info.name << " at scale " << scale;
     }
   }

@@ -8,8 +8,8 @@
 #include "builders/registry.h"
 #include "core/bvh_stats.h"
 #include "core/validate.h"
-#include "traversal/bvh2_traversal.h"
 #include "tests/support/test_scenes.h"
+#include "traversal/bvh2_traversal.h"
 
 namespace sahbench {
 namespace {
@@ -19,8 +19,8 @@ namespace {
 std::vector<std::vector<float>> sorted_records(const Bvh& bvh) {
   std::vector<std::vector<float>> out;
   for (const Node& n : bvh.nodes)
-    out.push_back({n.bounds.min.x, n.bounds.min.y, n.bounds.min.z, n.bounds.max.x, n.bounds.max.y, n.bounds.max.z,
-                   float(n.child_count), float(n.prim_count)});
+    out.push_back({n.bounds.min.x, n.bounds.min.y, n.bounds.min.z, n.bounds.max.x, n.bounds.max.y,
+                   n.bounds.max.z, float(n.child_count), float(n.prim_count)});
   std::sort(out.begin(), out.end());
   return out;
 }
@@ -58,8 +58,8 @@ TEST(ChildOrder, PermutesSiblingsOnlyAndKeepsTheTreeValid) {
 // put the large box first.
 TEST(ChildOrder, PutsTheLikeliestOccluderPerCostFirst) {
   std::vector<Triangle> tris;
-  tris.push_back({{0, 0, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}});                     // in a 10 x 10 x 10 box
-  tris.push_back({{20, 0, 0}, {22, 0, 0}, {20, 2, 0}});                        // half of a flat 2 x 2 box
+  tris.push_back({{0, 0, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}});  // in a 10 x 10 x 10 box
+  tris.push_back({{20, 0, 0}, {22, 0, 0}, {20, 2, 0}});     // half of a flat 2 x 2 box
   for (int i = 0; i < 9; ++i) tris.push_back({{30, 0, 0}, {32, 0, 0}, {30, 2, 0}});  // the same, 9 times
   Bvh bvh;
   bvh.arity = 4;

@@ -141,7 +141,8 @@ TEST(Collapse, ParametersAreCheckedByName) {
     resolve_params(info.name, info.params, {{"method", "best"}});
     FAIL() << "expected an error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("'method' = 'best' is not one of sah, greedy"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'method' = 'best' is not one of sah, greedy"), std::string::npos)
+        << e.what();
   }
   const ParamSet p = resolve_params(info.name, info.params, {{"method", "greedy"}, {"arity", "4"}});
   EXPECT_NE(p.to_string().find("method=greedy"), std::string::npos);
@@ -149,7 +150,10 @@ TEST(Collapse, ParametersAreCheckedByName) {
   EXPECT_THROW(resolve_params(info.name, info.params, {{"source_c_trav_scale", "1.5"}}), Error);
   EXPECT_THROW(resolve_params(info.name, info.params, {{"source_c_trav_scale", "-1"}}), Error);
   EXPECT_THROW(info.check(resolve_params(info.name, info.params, {{"arity", "5"}})), Error);
-  EXPECT_THROW(find_builder("wide_binned_sah").check(resolve_params("wide_binned_sah", find_builder("wide_binned_sah").params, {{"arity", "6"}})), Error);
+  EXPECT_THROW(
+      find_builder("wide_binned_sah")
+          .check(resolve_params("wide_binned_sah", find_builder("wide_binned_sah").params, {{"arity", "6"}})),
+      Error);
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 // Same input, same parameters: the same tree, whatever the thread count (DESIGN.md).
 
 #include <gtest/gtest.h>
-
 #include <tbb/task_arena.h>
 
 #include <string>

@@ -26,7 +26,8 @@ TEST(BuilderRegistry, KnowsBinnedAndSweep) {
 
 TEST(BuilderRegistry, DefaultsAppearInCsvForm) {
   const auto& info = find_builder("binned_sah");
-  EXPECT_EQ(resolve_params(info.name, info.params, {}).to_string(), "bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
+  EXPECT_EQ(resolve_params(info.name, info.params, {}).to_string(),
+            "bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
   EXPECT_EQ(resolve_params(info.name, info.params, {{"bins", "16"}, {"c_trav", "0.5"}}).to_string(),
             "bins=16;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=0.5;c_isect=1");
 }
@@ -51,7 +52,8 @@ TEST(BuilderRegistry, InconsistentLeafSizesAreRejectedAtBuild) {
   const auto& info = find_builder("binned_sah");
   const auto params = resolve_params(info.name, info.params, {{"min_leaf", "8"}, {"max_leaf", "4"}});
   const std::vector<Triangle> tris{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}};
-  expect_error([&] { info.build(BuildInput::from_triangles(tris), params); }, {"max_leaf = 4", "below min_leaf = 8"});
+  expect_error([&] { info.build(BuildInput::from_triangles(tris), params); },
+               {"max_leaf = 4", "below min_leaf = 8"});
 }
 
 }  // namespace

@@ -3,7 +3,6 @@
 // count. (The adversarial scene cases run through BuilderVsReference with the sbvh variants.)
 
 #include <gtest/gtest.h>
-
 #include <tbb/task_arena.h>
 
 #include <cmath>
@@ -32,7 +31,8 @@ constexpr bool kSanitized = true;
 constexpr bool kSanitized = false;
 #endif
 
-Bvh build(const std::string& builder, const std::vector<Triangle>& tris, const ParamOverrides& overrides = {}) {
+Bvh build(const std::string& builder, const std::vector<Triangle>& tris,
+          const ParamOverrides& overrides = {}) {
   const BuilderInfo& info = find_builder(builder);
   return info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, overrides));
 }
@@ -164,7 +164,8 @@ TEST(Sbvh, SharedScenesSameHitsAsBinnedSah) {
     for (std::size_t i = 0; i < rays.size(); ++i) {
       const Hit ref = closest_hit(binned, tris, rays[i]);
       hits += ref.found();
-      ASSERT_TRUE(test::same_closest_hit(closest_hit(sbvh, tris, rays[i]), ref, tris, rays[i])) << "ray " << i;
+      ASSERT_TRUE(test::same_closest_hit(closest_hit(sbvh, tris, rays[i]), ref, tris, rays[i]))
+          << "ray " << i;
       ASSERT_EQ(any_hit(sbvh, tris, rays[i]), any_hit(binned, tris, rays[i])) << "ray " << i;
     }
     EXPECT_GT(hits, rays.size() / 20);
@@ -200,7 +201,8 @@ TEST(Sbvh, VerticesOnPlanesThatRoundingMadeEqualStayInTheirParts) {
     uint32_t k = 0;
     for (Triangle& t : tris)
       for (Vec3* v : {&t.v0, &t.v1, &t.v2}) v->z = 88.0f + static_cast<float>(k++ % 5) * 0x1p-17f;
-    const Bvh bvh = build("sbvh", tris, {{"alpha", "0"}, {"max_dup", "1"}, {"spatial_bins", "16"}, {"node_overlap", "0"}});
+    const Bvh bvh = build("sbvh", tris,
+                          {{"alpha", "0"}, {"max_dup", "1"}, {"spatial_bins", "16"}, {"node_overlap", "0"}});
     const ValidationReport report = validate(bvh, std::span<const Triangle>(tris));
     ASSERT_TRUE(report.ok()) << report.summary();
     EXPECT_GT(bvh.prim_refs.size(), tris.size());

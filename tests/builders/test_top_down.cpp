@@ -41,7 +41,9 @@ class PeelSplitter {
     }
     return r;
   }
-  Partition split_at(const NodeRange& r, uint32_t mid) const { return {range(r.begin, mid), range(mid, r.end)}; }
+  Partition split_at(const NodeRange& r, uint32_t mid) const {
+    return {range(r.begin, mid), range(mid, r.end)};
+  }
 
   std::vector<Aabb> bounds_;
   std::vector<uint32_t> order_;

@@ -28,7 +28,8 @@ TEST(HugePageArray, StartsOnAHugePageAndKeepsItsElementsWhenMoved) {
 }
 
 TEST(BuildInput, HoldsEachTrianglesBounds) {
-  const std::vector<Triangle> tris = {{{0, 0, 0}, {1, 0, 0}, {0, 2, 0}}, {{-1, -1, -1}, {3, 0, 1}, {0, 0, 5}}};
+  const std::vector<Triangle> tris = {{{0, 0, 0}, {1, 0, 0}, {0, 2, 0}},
+                                      {{-1, -1, -1}, {3, 0, 1}, {0, 0, 5}}};
   const BuildInput input = BuildInput::from_triangles(tris);
   ASSERT_EQ(input.size(), 2u);
   EXPECT_EQ(input.bounds[0], tris[0].bounds());

@@ -27,7 +27,9 @@ void expect_error(const Bvh& bvh, const std::string& fragment) {
   EXPECT_NE(report.summary().find(fragment), std::string::npos) << report.summary();
 }
 
-TEST(CoreValidate, AcceptsValidTree) { EXPECT_TRUE(validate(valid_tree(), prim_boxes()).ok()); }
+TEST(CoreValidate, AcceptsValidTree) {
+  EXPECT_TRUE(validate(valid_tree(), prim_boxes()).ok());
+}
 
 TEST(CoreValidate, AcceptsEmptyTreeOnlyWithoutPrimitives) {
   EXPECT_TRUE(validate(Bvh{}, std::span<const Aabb>{}).ok());
@@ -110,7 +112,7 @@ Bvh split_tree() {
   bvh.nodes = {{{{0, 0, 0}, {3, 1, 0}}, 1, 2, 0},
                {{{0, 0, 0}, {1, 1, 0}}, 3, 2, 0},
                {{{2, 0, 0}, {3, 1, 0}}, 2, 0, 1},
-               {{{0, 0, 0}, {0.5f, 1, 0}}, 0, 0, 1},     // the part with x <= 0.5
+               {{{0, 0, 0}, {0.5f, 1, 0}}, 0, 0, 1},      // the part with x <= 0.5
                {{{0.5f, 0, 0}, {1, 0.5f, 0}}, 1, 0, 1}};  // the part with x >= 0.5 (y <= 1 - x)
   bvh.prim_refs = {0, 0, 1};
   return bvh;

@@ -59,19 +59,16 @@ TEST(HarnessAnimationConfig, FramesTimesAndDefaults) {
 
 TEST(HarnessAnimationConfig, ErrorsNameKeyAndLine) {
   expect_error(kBase + "[animation]\nframes = 0\n", 11, {"animation.frames = 0", "[1, 10000]"});
-  expect_error(kBase + "[animation]\nframes = \"ten\"\n", 11,
-               {"animation.frames must be an integer"});
+  expect_error(kBase + "[animation]\nframes = \"ten\"\n", 11, {"animation.frames must be an integer"});
   expect_error(kBase + "[animation]\nframes = 20000\n", 11, {"animation.frames = 20000"});
   expect_error(kBase + "[animation]\ntimes = [0.5, 0.2]\n", 11,
                {"animation.times must increase", "0.2", "0.5"});
   expect_error(kBase + "[animation]\ntimes = [0, \"1\"]\n", 11,
                {"animation.times must be a list of numbers"});
-  expect_error(kBase + "[animation]\ntimes = []\n", 11,
-               {"animation.times must not be an empty list"});
+  expect_error(kBase + "[animation]\ntimes = []\n", 11, {"animation.times must not be an empty list"});
   expect_error(kBase + "[animation]\ntimes = 1.5\n", 11, {"animation.times must be a list"});
   expect_error(kBase + "[animation]\nframes = 3\ntimes = [0.0]\n", 12, {"exclude each other"});
-  expect_error(kBase + "[animation]\nfps = 30\n", 11,
-               {"unknown key 'fps' in [animation]", "frames, times"});
+  expect_error(kBase + "[animation]\nfps = 30\n", 11, {"unknown key 'fps' in [animation]", "frames, times"});
   expect_error("animation = 3\n" + kBase, 1, {"[animation] must be a table"});
   expect_error(kBase + "[[builder]]\nname = \"embree\"\nquality = \"refit\"\n", 12,
                {"'refit'", "[animation]", "low, medium, high"});
@@ -230,7 +227,7 @@ TEST(HarnessAnimationRun, RefitCellsRefitTheirLayoutsInPlace) {
   std::ostringstream log;
   ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
 
-  std::set<std::string> refit_cells, rebuild_cells;  // layout|frame|ray set
+  std::set<std::string> refit_cells, rebuild_cells;      // layout|frame|ray set
   std::map<std::string, double> rebuild_sah, refit_sah;  // layout|frame
   for (const auto& row : read_csv(csv)) {
     const std::string cell = row.at("layout") + "|" + row.at("frame") + "|" + row.at("ray_set");

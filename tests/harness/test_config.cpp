@@ -289,9 +289,8 @@ TEST(HarnessConfigSweep, DuplicateRunsAreAnError) {
       std::find_if(bins.begin(), bins.end(), [](const ParamSpec& p) { return p.name == "bins"; });
   ASSERT_NE(spec, bins.end());
   const std::string default_bins = std::to_string(static_cast<int>(spec->default_value));
-  expect_error(
-      kBase + "\n[[builder]]\nname = \"binned_sah\"\nbins = [8, " + default_bins + "]\n", 11,
-      {"binned_sah[bins=" + default_bins + "]", "'binned_sah' (line 5)"});
+  expect_error(kBase + "\n[[builder]]\nname = \"binned_sah\"\nbins = [8, " + default_bins + "]\n", 11,
+               {"binned_sah[bins=" + default_bins + "]", "'binned_sah' (line 5)"});
   expect_error(kBase + R"(
 [[builder]]
 name = "sweep_sah"
@@ -332,12 +331,9 @@ bins = [8,
                {"max_leaf", "2.5", "not an integer"});
   expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = \"many\"\n", 12,
                {"bins", "many", "not a number"});
-  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = []\n", 12,
-               {"bins", "empty list"});
-  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = [[8]]\n", 12,
-               {"bins", "nest"});
-  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = 1979-05-27\n", 12,
-               {"bins", "a date"});
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = []\n", 12, {"bins", "empty list"});
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = [[8]]\n", 12, {"bins", "nest"});
+  expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = 1979-05-27\n", 12, {"bins", "a date"});
 }
 
 TEST(HarnessConfigValues, ParameterCombinationsAreCheckedWhenLoading) {
@@ -365,9 +361,9 @@ name = "embree"
 }
 
 TEST(HarnessConfigEmbree, DefaultQualityDuplicatesExplicitMedium) {
-  expect_error(kBase +
-                   "[[builder]]\nname = \"embree\"\nquality = \"medium\"\n\n[[builder]]\nname = \"embree\"\n",
-               14, {"embree[quality=medium]", "line 10"});
+  expect_error(
+      kBase + "[[builder]]\nname = \"embree\"\nquality = \"medium\"\n\n[[builder]]\nname = \"embree\"\n", 14,
+      {"embree[quality=medium]", "line 10"});
 }
 
 TEST(HarnessConfigEmbree, OnlyKnownQualities) {
@@ -399,10 +395,9 @@ scenes = ["s"]
                {"unknown key 'lights' in [[ray_set]] of kind primary", "name, kind, width, height"});
   expect_error(kBase + "[[ray_set]]\nkind = \"random\"\nwidth = 3\n", 12,
                {"unknown key 'width' in [[ray_set]] of kind random"});
-  expect_error(kBase + "[[ray_set]]\nkind = \"shadow\"\nlight_source = \"scene\"\nlights = 2\n",
-               13, {"lights", "light_source = \"auto\""});
-  expect_error(kBase + "[[ray_set]]\nkind = \"beam\"\n", 11,
-               {"ray_set.kind", "beam", "primary | shadow"});
+  expect_error(kBase + "[[ray_set]]\nkind = \"shadow\"\nlight_source = \"scene\"\nlights = 2\n", 13,
+               {"lights", "light_source = \"auto\""});
+  expect_error(kBase + "[[ray_set]]\nkind = \"beam\"\n", 11, {"ray_set.kind", "beam", "primary | shadow"});
 }
 
 TEST(HarnessConfigErrors, WrongTypes) {
@@ -430,8 +425,7 @@ TEST(HarnessConfigErrors, WrongTypes) {
                {"[[builder]]", "an integer"});
   expect_error(kBase + "[[ray_set]]\nkind = \"ao\"\nao_radius = \"far\"\n", 12,
                {"ao_radius must be a number", "a string"});
-  expect_error(kBase + "[[ray_set]]\nkind = \"ao\"\nao_radius = 0\n", 12,
-               {"ao_radius = 0", "positive"});
+  expect_error(kBase + "[[ray_set]]\nkind = \"ao\"\nao_radius = 0\n", 12, {"ao_radius = 0", "positive"});
   expect_error(kBase + "[[ray_set]]\nkind = \"random\"\ncount = 0\n", 12, {"ray_set.count = 0"});
   expect_error(kBase + "[[ray_set]]\nkind = \"diffuse\"\nwidth = 100000\n", 12,
                {"ray_set.width = 100000", "16384"});
@@ -457,9 +451,9 @@ TEST(HarnessConfigErrors, EmptyListsAndDuplicates) {
 TEST(HarnessConfigErrors, DuplicateRaySetNames) {
   expect_error(kBase + "\n[[ray_set]]\nkind = \"primary\"\nwidth = 64\n", 11,
                {"ray set name 'primary' is used twice"});
-  expect_error(kBase +
-                   "[[ray_set]]\nname = \"a\"\nkind = \"ao\"\n[[ray_set]]\nkind = \"shadow\"\nname = \"a\"\n",
-               15, {"ray set name 'a' is used twice"});
+  expect_error(
+      kBase + "[[ray_set]]\nname = \"a\"\nkind = \"ao\"\n[[ray_set]]\nkind = \"shadow\"\nname = \"a\"\n", 15,
+      {"ray set name 'a' is used twice"});
 }
 
 TEST(HarnessConfigErrors, CountsBelowMinimum) {
@@ -470,11 +464,9 @@ TEST(HarnessConfigErrors, CountsBelowMinimum) {
   };
   expect_error(experiment("threads = 0"), 4, {"experiment.threads = 0 must be at least 1"});
   expect_error(experiment("threads = [1, -2]"), 4, {"experiment.threads = -2"});
-  expect_error(kBase + "[repetitions]\nbuild = 0\n", 11,
-               {"repetitions.build = 0 must be at least 1"});
+  expect_error(kBase + "[repetitions]\nbuild = 0\n", 11, {"repetitions.build = 0 must be at least 1"});
   expect_error(kBase + "[repetitions]\ntrace = 0\n", 11, {"repetitions.trace = 0"});
-  expect_error(kBase + "[repetitions]\ntrace_warmup = -1\n", 11,
-               {"repetitions.trace_warmup = -1"});
+  expect_error(kBase + "[repetitions]\ntrace_warmup = -1\n", 11, {"repetitions.trace_warmup = -1"});
   expect_error(kBase + "[repetitions]\ninterleave = 1\n", 11,
                {"repetitions.interleave must be true or false"});
   const auto ok = parse_with("[repetitions]\nbuild_warmup = 0\ntrace_warmup = 0\n");
@@ -491,8 +483,7 @@ TEST(HarnessConfigErrors, ExperimentNameAndRequiredTables) {
                {"no [[builder]]", "at least one builder"});
   expect_error("[experiment]\nname = \"t\"\nscenes = [\"s\"]\n[[builder]]\nname = \"binned_sah\"\n", 1,
                {"no [[ray_set]]", "at least one ray set"});
-  expect_error(kBase + "[[ray_set]]\nname = \"a b\"\nkind = \"ao\"\n", 11,
-               {"ray_set.name", "a b"});
+  expect_error(kBase + "[[ray_set]]\nname = \"a b\"\nkind = \"ao\"\n", 11, {"ray_set.name", "a b"});
 }
 
 TEST(HarnessConfigErrors, UnknownBuilderParameterAndLayout) {

@@ -122,7 +122,8 @@ Agreement compare_with_brute_force(const EmbreeScene& scene, std::span<const Tri
       if (a.first_failure.empty()) a.first_failure = "ray " + std::to_string(i) + ": " + same.message();
       ++a.closest_mismatches;
     } else if (ref.found() && hits[i].prim == ref.prim &&
-               (std::fabs(hits[i].u - ref.u) > kUvToleranceFar || std::fabs(hits[i].v - ref.v) > kUvToleranceFar)) {
+               (std::fabs(hits[i].u - ref.u) > kUvToleranceFar ||
+                std::fabs(hits[i].v - ref.v) > kUvToleranceFar)) {
       ++a.uv_mismatches;
     }
     if ((occluded[i] != 0) != brute_force_any(tris, rays[i])) ++a.any_mismatches;
@@ -154,9 +155,10 @@ TEST(HarnessEmbreeTrace, DefaultModeMismatchesAreRare) {
     const EmbreeScene scene(device, s.triangles, EmbreeQuality::kMedium);
     const Agreement a = compare_with_brute_force(scene, s.triangles, rays);
     // Reported, not asserted to be zero: Moeller-Trumbore without the robust flag is not watertight.
-    std::cout << "[ embree   ] default mode, " << s.name << ": " << a.closest_mismatches << " closest-hit and "
-              << a.any_mismatches << " any-hit mismatches, " << a.uv_mismatches << " u/v, of " << rays.size()
-              << " rays" << (a.first_failure.empty() ? "" : "; first: " + a.first_failure) << "\n";
+    std::cout << "[ embree   ] default mode, " << s.name << ": " << a.closest_mismatches
+              << " closest-hit and " << a.any_mismatches << " any-hit mismatches, " << a.uv_mismatches
+              << " u/v, of " << rays.size() << " rays"
+              << (a.first_failure.empty() ? "" : "; first: " + a.first_failure) << "\n";
     RecordProperty(s.name + "_default_closest_mismatches", static_cast<int>(a.closest_mismatches));
     EXPECT_LE(double(a.closest_mismatches), kDefaultModeMismatchLimit * double(rays.size()));
     EXPECT_LE(double(a.any_mismatches), kDefaultModeMismatchLimit * double(rays.size()));
@@ -190,7 +192,8 @@ TEST(HarnessEmbreeTrace, PacketsAgreeWithSingleRaysExactly) {
           const Hit& a = single[i];
           const Hit& b = packed[i];
           if (a.prim != b.prim || a.t != b.t || a.u != b.u || a.v != b.v) {
-            if (differ++ < 5) ADD_FAILURE() << "ray " << i << ": single " << describe(a) << ", packet " << describe(b);
+            if (differ++ < 5)
+              ADD_FAILURE() << "ray " << i << ": single " << describe(a) << ", packet " << describe(b);
           }
         }
         EXPECT_EQ(differ, 0u);
@@ -283,10 +286,10 @@ TEST(HarnessEmbreeIsa, InferredIsaMatchesEmbreesVerboseReport) {
     ASSERT_NE(raw, nullptr);
     RTCScene scene = rtcNewScene(raw);
     RTCGeometry geometry = rtcNewGeometry(raw, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vertices = static_cast<float*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3));
-    auto* indices = static_cast<unsigned*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 1));
+    auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                                 RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3));
+    auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), 1));
     const float corner[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     std::copy(corner, corner + 9, vertices);
     indices[0] = 0, indices[1] = 1, indices[2] = 2;
@@ -306,7 +309,8 @@ TEST(HarnessEmbreeIsa, InferredIsaMatchesEmbreesVerboseReport) {
   const auto colons = log.find("::", name);
   ASSERT_TRUE(name != std::string::npos && colons != std::string::npos && colons > name) << log;
   const std::string namespace_name = log.substr(name, colons - name);
-  std::cout << "[ embree   ] embree_isa: " << isa << "; verbose=2 intersector1 namespace: " << namespace_name << "\n";
+  std::cout << "[ embree   ] embree_isa: " << isa << "; verbose=2 intersector1 namespace: " << namespace_name
+            << "\n";
   EXPECT_EQ(isa, namespace_name);
 }
 
@@ -383,7 +387,8 @@ TEST_P(HarnessEmbreeBvh, LeafSizesRespectedAndTreesValidUnderAnyThreadLimit) {
   const BuilderInfo& info = find_builder("embree_bvh");
   const auto tris = test::random_triangles(8000, 4);
   const BuildInput input = BuildInput::from_triangles(tris);
-  const std::pair<const char*, const char*> leaf_sizes[] = {{"1", "1"}, {"1", "4"}, {"4", "8"}, {"1", "32"}, {"32", "32"}};
+  const std::pair<const char*, const char*> leaf_sizes[] = {
+      {"1", "1"}, {"1", "4"}, {"4", "8"}, {"1", "32"}, {"32", "32"}};
   for (const auto& [min_leaf, max_leaf] : leaf_sizes) {
     SCOPED_TRACE(std::string("min_leaf ") + min_leaf + " max_leaf " + max_leaf);
     const ParamSet p = params({{"min_leaf", min_leaf}, {"max_leaf", max_leaf}});
@@ -395,13 +400,13 @@ TEST_P(HarnessEmbreeBvh, LeafSizesRespectedAndTreesValidUnderAnyThreadLimit) {
       ASSERT_TRUE(report.ok()) << report.summary();
       const BvhStats stats = compute_stats(bvh, tris.size(), sah_cost_of(p));
       EXPECT_LE(stats.max_leaf_size, p.get_uint("max_leaf"));
-      std::cout << "[ embree   ] quality " << kQualityNames[GetParam()] << " min_leaf " << min_leaf << " max_leaf " << max_leaf
-                << ", " << threads << " thread(s): leaves " << stats.leaves << ", mean leaf " << stats.mean_leaf_size
-                << ", sah " << stats.sah_cost << "\n";
+      std::cout << "[ embree   ] quality " << kQualityNames[GetParam()] << " min_leaf " << min_leaf
+                << " max_leaf " << max_leaf << ", " << threads << " thread(s): leaves " << stats.leaves
+                << ", mean leaf " << stats.mean_leaf_size << ", sah " << stats.sah_cost << "\n";
     }
     // Embree does not promise the same tree for any thread count (DESIGN.md asks it of ours); report.
-    std::cout << "[ embree   ]   1 and 2 threads give " << (built[0] == built[1] ? "the same tree" : "different trees")
-              << "\n";
+    std::cout << "[ embree   ]   1 and 2 threads give "
+              << (built[0] == built[1] ? "the same tree" : "different trees") << "\n";
   }
 }
 
@@ -432,7 +437,8 @@ TEST(HarnessEmbreeBvhSpatial, SplitsAddReferencesAndKeepTreesCorrect) {
   const auto rays = test::random_rays(needles, 2000, 5);
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const Hit ref = brute_force_closest(needles, rays[i]);
-    ASSERT_TRUE(test::same_closest_hit(closest_hit(split, needles, rays[i]), ref, needles, rays[i])) << "ray " << i;
+    ASSERT_TRUE(test::same_closest_hit(closest_hit(split, needles, rays[i]), ref, needles, rays[i]))
+        << "ray " << i;
   }
 }
 

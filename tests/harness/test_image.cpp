@@ -149,7 +149,8 @@ TEST(HarnessImage, DiffIsBMinusAAndZeroAgainstItself) {
   EXPECT_TRUE(std::filesystem::is_regular_file(dir.path() / "self.png"));
 
   const ImageDiffResult ab = run_image_diff_command({a, b, dir.path() / "ab.exr"}, log);
-  const FloatImage ia = read_float_image(a), ib = read_float_image(b), d = read_float_image(dir.path() / "ab.exr");
+  const FloatImage ia = read_float_image(a), ib = read_float_image(b),
+                   d = read_float_image(dir.path() / "ab.exr");
   double max_abs = 0.0;
   uint64_t differing = 0;
   for (std::size_t i = 0; i < d.pixels.size(); ++i) {
@@ -162,12 +163,13 @@ TEST(HarnessImage, DiffIsBMinusAAndZeroAgainstItself) {
   EXPECT_EQ(ab.differing_pixels, differing);
 
   // Depth: the same hits (both exact against the same triangles), misses (+inf) in the same pixels.
-  const ImageDiffResult depth = run_image_diff_command({dir.path() / "a_depth.exr", dir.path() / "b_depth.exr",
-                                                        dir.path() / "depth"}, log);
+  const ImageDiffResult depth = run_image_diff_command(
+      {dir.path() / "a_depth.exr", dir.path() / "b_depth.exr", dir.path() / "depth"}, log);
   EXPECT_EQ(depth.one_sided, 0u);
   EXPECT_LE(depth.max_abs, 1e-5);
   // The normal maps have three channels.
-  EXPECT_EQ(run_image_diff_command({dir.path() / "a_normal.exr", dir.path() / "a_normal.exr", dir.path() / "n"}, log)
+  EXPECT_EQ(run_image_diff_command(
+                {dir.path() / "a_normal.exr", dir.path() / "a_normal.exr", dir.path() / "n"}, log)
                 .compared,
             3u * kWidth * kHeight);
 }
@@ -241,7 +243,9 @@ TEST(HarnessImage, BadInputIsAnErrorNamingIt) {
   auto shadow = options(dir.path() / "x");
   shadow.ray_set = "shadow";
   EXPECT_NE(error_message([&] { run_image_command(shadow, log); }).find("'shadow'"), std::string::npos);
-  EXPECT_NE(error_message([&] { run_image_command(options(dir.path() / "x", "embree_medium"), log); }).find("embree_bvh"),
+  EXPECT_NE(error_message([&] {
+              run_image_command(options(dir.path() / "x", "embree_medium"), log);
+            }).find("embree_bvh"),
             std::string::npos);
   auto empty = options(dir.path() / "x");
   empty.width = 0;
@@ -256,19 +260,23 @@ TEST(HarnessImage, BadInputIsAnErrorNamingIt) {
   square.width = kHeight;
   run_image_command(square, log);
   const auto missing = dir.path() / "missing.exr";
-  EXPECT_NE(error_message([&] { run_image_diff_command({missing, dir.path() / "small_nodes.exr", dir.path() / "d"}, log); })
-                .find("missing.exr"),
+  EXPECT_NE(error_message([&] {
+              run_image_diff_command({missing, dir.path() / "small_nodes.exr", dir.path() / "d"}, log);
+            }).find("missing.exr"),
             std::string::npos);
   EXPECT_NE(error_message([&] {
-              run_image_diff_command({dir.path() / "small_nodes.exr", dir.path() / "square_nodes.exr", dir.path() / "d"}, log);
+              run_image_diff_command(
+                  {dir.path() / "small_nodes.exr", dir.path() / "square_nodes.exr", dir.path() / "d"}, log);
             }).find("not comparable"),
             std::string::npos);
   EXPECT_NE(error_message([&] {
-              run_image_diff_command({dir.path() / "small_nodes.exr", dir.path() / "small_normal.exr", dir.path() / "d"}, log);
+              run_image_diff_command(
+                  {dir.path() / "small_nodes.exr", dir.path() / "small_normal.exr", dir.path() / "d"}, log);
             }).find("3 channels"),
             std::string::npos);
   EXPECT_NE(error_message([&] {
-              run_image_diff_command({dir.path() / "small_nodes.exr", dir.path() / "small_nodes.exr", missing_folder}, log);
+              run_image_diff_command(
+                  {dir.path() / "small_nodes.exr", dir.path() / "small_nodes.exr", missing_folder}, log);
             }).find("does not exist"),
             std::string::npos);
 }

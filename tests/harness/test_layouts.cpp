@@ -47,7 +47,8 @@ std::vector<std::string> specs_for(const LayoutInfo& layout) {
   };
   if (!layout.has_isa) {
     add_variants("");
-    for (const char* order : {"nearest", "stored", "nearest_stored"}) out.push_back(layout.name + ":anyhit=" + order);
+    for (const char* order : {"nearest", "stored", "nearest_stored"})
+      out.push_back(layout.name + ":anyhit=" + order);
     return out;
   }
   const KernelIsa best = best_kernel_isa();
@@ -129,14 +130,17 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
               const bool expected_any =
                   any_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_any, spec.variant.any_hit);
               ASSERT_EQ(occluded[i] != 0, expected_any) << "ray " << i;
-              const Hit expected = closest_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_closest);
-              if (hits[i].prim != expected.prim && hits[i].found() && expected.found() && hits[i].t == expected.t) {
+              const Hit expected =
+                  closest_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_closest);
+              if (hits[i].prim != expected.prim && hits[i].found() && expected.found() &&
+                  hits[i].t == expected.t) {
                 // An exact tie, broken differently: bvh2_packed orders ties by packed position, and a
                 // SIMD block tests its four triangles against the same tmax where the scalar kernel
                 // lowers tmax after each hit (the watertight test compares t * det with tmax * det, so a
                 // second hit at exactly tmax may or may not pass). Both answers hit at that very t.
                 float t, u, v;
-                ASSERT_TRUE(Tri(rays[i]).intersect(scene.triangles[hits[i].prim], rays[i].tmin, rays[i].tmax, t, u, v));
+                ASSERT_TRUE(Tri(rays[i]).intersect(scene.triangles[hits[i].prim], rays[i].tmin, rays[i].tmax,
+                                                   t, u, v));
                 ASSERT_EQ(t, expected.t) << "ray " << i;
                 tie_broken_differently = true;  // and so may cull other nodes: the counts may differ too
                 continue;
@@ -171,7 +175,8 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
           // The default variant is exact: the brute-force answer (ties aside).
           if (spec.variant == KernelVariant{}) {
             for (std::size_t i = 0; i < rays.size(); ++i) {
-              ASSERT_TRUE(test::same_closest_hit(hits[i], reference[i], scene.triangles, rays[i])) << "ray " << i;
+              ASSERT_TRUE(test::same_closest_hit(hits[i], reference[i], scene.triangles, rays[i]))
+                  << "ray " << i;
               ASSERT_EQ(occluded[i], reference_any[i]) << "ray " << i;
             }
           }
@@ -194,7 +199,8 @@ INSTANTIATE_TEST_SUITE_P(AllLayouts, LayoutVsReference, ::testing::ValuesIn(layo
 // per-vertex jitter: boxes grow, shrink and move.
 std::vector<Triangle> deformed(std::vector<Triangle> tris, float time) {
   auto move = [&](Vec3 p) {
-    return Vec3{p.x + std::sin(p.y * 0.7f + time) * 1.5f, p.y * (1.0f + 0.3f * time), p.z + std::cos(p.x * 0.5f) * time};
+    return Vec3{p.x + std::sin(p.y * 0.7f + time) * 1.5f, p.y * (1.0f + 0.3f * time),
+                p.z + std::cos(p.x * 0.5f) * time};
   };
   for (auto& t : tris) t = {move(t.v0), move(t.v1), move(t.v2)};
   return tris;
@@ -213,7 +219,8 @@ TEST(Layouts, RefitLayoutsMatchBruteForceOnDeformedGeometry) {
       // normals: wide_bvh.h).
       for (KernelIsa isa : {KernelIsa::kScalar, best_kernel_isa()})
         for (const char* tri : {"watertight", "mt0", "mtn"})
-          specs.push_back("bvh" + std::to_string(arity) + ":tri=" + tri + ",isa=" + std::string(to_string(isa)));
+          specs.push_back("bvh" + std::to_string(arity) + ":tri=" + tri +
+                          ",isa=" + std::string(to_string(isa)));
     }
     for (const std::string& spec : specs) {
       SCOPED_TRACE(spec);
@@ -314,8 +321,8 @@ TEST(Layouts, RefitEqualsAFreshCompileOfTheRefittedTree) {
   };
   for (const TreeCase& tree_case : trees) {
     const BuilderInfo& info = find_builder(tree_case.builder);
-    const Bvh built =
-        info.build(BuildInput::from_triangles(original), resolve_params(info.name, info.params, tree_case.overrides));
+    const Bvh built = info.build(BuildInput::from_triangles(original),
+                                 resolve_params(info.name, info.params, tree_case.overrides));
     for (const std::string& spec : tree_case.specs) {
       SCOPED_TRACE(tree_case.builder + " " + spec);
       auto refitted = compile_layout(spec, built, original);
@@ -362,10 +369,13 @@ TEST(Layouts, RefitEqualsAFreshCompileOfTheRefittedTree) {
 TEST(Layouts, RefitMovesATreeThatIsOneLeaf) {
   const auto original = test::random_triangles(1, 9);
   const BuilderInfo& info = find_builder("binned_sah");
-  const Bvh bvh = info.build(BuildInput::from_triangles(original), resolve_params(info.name, info.params, {}));
+  const Bvh bvh =
+      info.build(BuildInput::from_triangles(original), resolve_params(info.name, info.params, {}));
   ASSERT_TRUE(bvh.root().is_leaf());
   std::vector<Triangle> moved = original;
-  for (Triangle& t : moved) t = {t.v0 + Vec3{40.0f, -25.0f, 7.0f}, t.v1 + Vec3{40.0f, -25.0f, 7.0f}, t.v2 + Vec3{40.0f, -25.0f, 7.0f}};
+  for (Triangle& t : moved)
+    t = {t.v0 + Vec3{40.0f, -25.0f, 7.0f}, t.v1 + Vec3{40.0f, -25.0f, 7.0f},
+         t.v2 + Vec3{40.0f, -25.0f, 7.0f}};
   for (const char* spec : {"bvh4", "bvh8", "bvh8:isa=scalar"}) {
     SCOPED_TRACE(spec);
     auto layout = compile_layout(spec, bvh, original);
@@ -385,8 +395,9 @@ TEST(Layouts, RefitMovesATreeThatIsOneLeaf) {
 
 TEST(Layouts, RefitRejectsADifferentTriangleCount) {
   const auto tris = test::random_triangles(100, 2);
-  const Bvh binary = find_builder("binned_sah").build(BuildInput::from_triangles(tris),
-                                                      resolve_params("binned_sah", find_builder("binned_sah").params, {}));
+  const Bvh binary = find_builder("binned_sah")
+                         .build(BuildInput::from_triangles(tris),
+                                resolve_params("binned_sah", find_builder("binned_sah").params, {}));
   for (const char* spec : {"bvh2", "bvh2_packed", "bvh8"})  // a binary tree in 8-wide nodes is legal
     EXPECT_THROW(compile_layout(spec, binary, tris)->refit(std::span(tris).first(50)), Error) << spec;
 }
@@ -425,7 +436,9 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
     return std::string("no error");
   };
   EXPECT_NE(error_of("bvh9").find("unknown layout 'bvh9'"), std::string::npos);
-  EXPECT_NE(error_of("bvh8:anyhit=first").find("anyhit = 'first' is not one of auto, nearest, stored, nearest_stored"), std::string::npos);
+  EXPECT_NE(error_of("bvh8:anyhit=first")
+                .find("anyhit = 'first' is not one of auto, nearest, stored, nearest_stored"),
+            std::string::npos);
   EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0, mtn"),
             std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
@@ -486,7 +499,8 @@ TEST(Layouts, WideAnyHitVisitsTheReferenceTraversalsNodesInEveryOrder) {
                                 resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
     for (AnyHitOrder order :
          {AnyHitOrder::kAuto, AnyHitOrder::kNearest, AnyHitOrder::kStored, AnyHitOrder::kNearestStored}) {
-      const std::string spec = "bvh" + std::to_string(arity) + ":anyhit=" + std::string(to_string(order)) + ",isa=scalar";
+      const std::string spec =
+          "bvh" + std::to_string(arity) + ":anyhit=" + std::string(to_string(order)) + ",isa=scalar";
       SCOPED_TRACE(spec);
       TraversalCounters reference;
       std::size_t occluded = 0;

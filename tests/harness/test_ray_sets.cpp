@@ -14,7 +14,8 @@ namespace {
 
 std::vector<RaySetConfig> all_kinds() {
   std::vector<RaySetConfig> c(5);
-  const RayKind kinds[] = {RayKind::kPrimary, RayKind::kShadow, RayKind::kDiffuse, RayKind::kAmbientOcclusion, RayKind::kRandom};
+  const RayKind kinds[] = {RayKind::kPrimary, RayKind::kShadow, RayKind::kDiffuse, RayKind::kAmbientOcclusion,
+                           RayKind::kRandom};
   for (int i = 0; i < 5; ++i) {
     c[i].kind = kinds[i];
     c[i].name = to_string(kinds[i]);
@@ -27,7 +28,8 @@ std::vector<RaySetConfig> all_kinds() {
 bool same_rays(const std::vector<Ray>& a, const std::vector<Ray>& b) {
   if (a.size() != b.size()) return false;
   for (std::size_t i = 0; i < a.size(); ++i)
-    if (!(a[i].org == b[i].org && a[i].dir == b[i].dir && a[i].tmin == b[i].tmin && a[i].tmax == b[i].tmax)) return false;
+    if (!(a[i].org == b[i].org && a[i].dir == b[i].dir && a[i].tmin == b[i].tmin && a[i].tmax == b[i].tmax))
+      return false;
   return true;
 }
 

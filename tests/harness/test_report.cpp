@@ -26,16 +26,27 @@ std::filesystem::path temp_csv(const std::string& name) {
 }
 
 CsvRow make_row(const std::string& builder, const std::string& params, const std::string& layout,
-                const std::string& ray_set, double build_ms, double mem_bytes, const std::string& sah, double mrays,
-                const std::string& frame = "0") {
-  return {{"run_id", "r1"},          {"git_commit", "abc123"},       {"cpu", "Test CPU 9000"},
-          {"isa", "avx2"},           {"build_isa", "avx512"},        {"compiler", "gcc"},
+                const std::string& ray_set, double build_ms, double mem_bytes, const std::string& sah,
+                double mrays, const std::string& frame = "0") {
+  return {{"run_id", "r1"},
+          {"git_commit", "abc123"},
+          {"cpu", "Test CPU 9000"},
+          {"isa", "avx2"},
+          {"build_isa", "avx512"},
+          {"compiler", "gcc"},
           {"threads", "2"},
-          {"scene", "proc:soup"},    {"scene_triangles", "100"},     {"frame", frame},
-          {"builder", builder},      {"builder_params", params},     {"layout", layout},
-          {"build_ms_median", std::to_string(build_ms)},             {"build_reps", "5"},
-          {"mem_bytes", std::to_string(mem_bytes)},                  {"sah_cost", sah},
-          {"ray_set", ray_set},      {"trace_mrays_median", std::to_string(mrays)},
+          {"scene", "proc:soup"},
+          {"scene_triangles", "100"},
+          {"frame", frame},
+          {"builder", builder},
+          {"builder_params", params},
+          {"layout", layout},
+          {"build_ms_median", std::to_string(build_ms)},
+          {"build_reps", "5"},
+          {"mem_bytes", std::to_string(mem_bytes)},
+          {"sah_cost", sah},
+          {"ray_set", ray_set},
+          {"trace_mrays_median", std::to_string(mrays)},
           {"trace_reps", "7"}};
 }
 
@@ -46,7 +57,8 @@ std::filesystem::path write_results(const std::string& name) {
   columns.push_back("build_isa");
   CsvWriter w(path, columns);
   for (const std::string rs : {"primary", "shadow"}) {
-    w.append(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 4.0 * (1 << 20), "", rs == "primary" ? 8.0 : 4.0));
+    w.append(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 4.0 * (1 << 20), "",
+                      rs == "primary" ? 8.0 : 4.0));
     w.append(make_row("binned_sah", "bins=8;max_leaf=8", "bvh2", rs, 5.0, 2.0 * (1 << 20), "40.5", 2.0));
     w.append(make_row("binned_sah", "bins=32;max_leaf=8", "bvh2", rs, 20.0, 3.0 * (1 << 20), "39.25", 16.0));
     w.append(make_row("sweep_sah", "max_leaf=8", "bvh2_packed", rs, 30.0, 6.0 * (1 << 20), "38.0", 1.0));
@@ -60,18 +72,27 @@ TEST(Report, MarkdownMarksTheBestOfEachColumnWithRatiosAndCaption) {
   const std::string md = out.str();
   EXPECT_NE(md.find("## proc:soup (100 triangles), 2 threads"), std::string::npos) << md;
   // Fastest build, smallest memory: binned bins=8; most rays/s: binned bins=32; lowest SAH: sweep.
-  EXPECT_NE(md.find("| binned_sah [bins=8;max_leaf=8] | bvh2 | **5.0** (0.50x) | **2.0** (0.50x) | 40.50 | 2.00 (0.25x) |"),
-            std::string::npos) << md;
-  EXPECT_NE(md.find("| binned_sah [bins=32;max_leaf=8] | bvh2 | 20.0 (2.00x) | 3.0 (0.75x) | 39.25 | **16.00** (2.00x) | "
-                    "**16.00** (4.00x) |"),
-            std::string::npos) << md;
-  EXPECT_NE(md.find("| sweep_sah [max_leaf=8] | bvh2_packed | 30.0 (3.00x) | 6.0 (1.50x) | **38.00** |"), std::string::npos)
+  EXPECT_NE(md.find("| binned_sah [bins=8;max_leaf=8] | bvh2 | **5.0** (0.50x) | **2.0** (0.50x) | 40.50 | "
+                    "2.00 (0.25x) |"),
+            std::string::npos)
       << md;
-  EXPECT_NE(md.find("| embree [quality=medium] | embree_1 | 10.0 (1.00x) | 4.0 (1.00x) | - | 8.00 (1.00x) | 4.00 (1.00x) |"),
-            std::string::npos) << md;
-  EXPECT_NE(md.find("Table: proc:soup (100 triangles), 2 threads; Test CPU 9000 (built for avx512), commit abc123; "
-                    "medians of 5 builds and 7 traces; kernels: avx2."),
-            std::string::npos) << md;
+  EXPECT_NE(md.find("| binned_sah [bins=32;max_leaf=8] | bvh2 | 20.0 (2.00x) | 3.0 (0.75x) | 39.25 | "
+                    "**16.00** (2.00x) | "
+                    "**16.00** (4.00x) |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| sweep_sah [max_leaf=8] | bvh2_packed | 30.0 (3.00x) | 6.0 (1.50x) | **38.00** |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| embree [quality=medium] | embree_1 | 10.0 (1.00x) | 4.0 (1.00x) | - | 8.00 (1.00x) | "
+                    "4.00 (1.00x) |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(
+      md.find("Table: proc:soup (100 triangles), 2 threads; Test CPU 9000 (built for avx512), commit abc123; "
+              "medians of 5 builds and 7 traces; kernels: avx2."),
+      std::string::npos)
+      << md;
 }
 
 TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {
@@ -127,12 +148,16 @@ TEST(Report, LatexIsABooktabsTableWithEscapedTextAndShortLabels) {
   EXPECT_NE(tex.find("\\bottomrule"), std::string::npos);
   EXPECT_NE(tex.find("\\label{tab:proc-soup-t2}"), std::string::npos) << tex;
   // Only the parameter that varies is in the row; the shared one is in the caption, escaped.
-  EXPECT_NE(tex.find("    binned\\_sah [bins=8] & bvh2 & \\textbf{5.0} (0.50$\\times$) & \\textbf{2.0} (0.50$\\times$) & 40.50"),
-            std::string::npos) << tex;
+  EXPECT_NE(tex.find("    binned\\_sah [bins=8] & bvh2 & \\textbf{5.0} (0.50$\\times$) & \\textbf{2.0} "
+                     "(0.50$\\times$) & 40.50"),
+            std::string::npos)
+      << tex;
   EXPECT_NE(tex.find("    sweep\\_sah & bvh2\\_packed & "), std::string::npos) << tex;
   EXPECT_NE(tex.find("binned\\_sah max\\_leaf=8"), std::string::npos) << tex;
-  EXPECT_NE(tex.find("\\caption{proc:soup (100 triangles), 2 threads; Test CPU 9000 (built for avx512), commit abc123"),
-            std::string::npos)
+  EXPECT_NE(
+      tex.find(
+          "\\caption{proc:soup (100 triangles), 2 threads; Test CPU 9000 (built for avx512), commit abc123"),
+      std::string::npos)
       << tex;
   EXPECT_EQ(tex.find("**"), std::string::npos) << tex;
   // Every row ends with \\ and has one & per column boundary (2 label columns + 5 numeric columns).
@@ -178,13 +203,29 @@ TEST(Report, FramesGetTablesOfTheirOwnAndMissingColumnsAreTolerated) {
   const auto path = temp_csv("frames.csv");
   {
     // A CSV from another writer: no triangle count, memory, SAH, embree_version or anchor.
-    std::vector<std::string> columns = {"run_id", "scene", "threads", "builder", "builder_params", "layout", "ray_set",
-                                        "build_ms_median", "trace_mrays_median", "frame"};
+    std::vector<std::string> columns = {"run_id",  "scene",           "threads",
+                                        "builder", "builder_params",  "layout",
+                                        "ray_set", "build_ms_median", "trace_mrays_median",
+                                        "frame"};
     CsvWriter w(path, columns);
-    w.append({{"run_id", "r"}, {"scene", "anim"}, {"threads", "1"}, {"builder", "refit"}, {"layout", "bvh2"},
-              {"ray_set", "primary"}, {"build_ms_median", "1.5"}, {"trace_mrays_median", "3"}, {"frame", "0"}});
-    w.append({{"run_id", "r"}, {"scene", "anim"}, {"threads", "1"}, {"builder", "refit"}, {"layout", "bvh2"},
-              {"ray_set", "primary"}, {"build_ms_median", "1.7"}, {"trace_mrays_median", "2"}, {"frame", "3"}});
+    w.append({{"run_id", "r"},
+              {"scene", "anim"},
+              {"threads", "1"},
+              {"builder", "refit"},
+              {"layout", "bvh2"},
+              {"ray_set", "primary"},
+              {"build_ms_median", "1.5"},
+              {"trace_mrays_median", "3"},
+              {"frame", "0"}});
+    w.append({{"run_id", "r"},
+              {"scene", "anim"},
+              {"threads", "1"},
+              {"builder", "refit"},
+              {"layout", "bvh2"},
+              {"ray_set", "primary"},
+              {"build_ms_median", "1.7"},
+              {"trace_mrays_median", "2"},
+              {"frame", "3"}});
   }
   std::ostringstream out;
   print_report({{path}, ""}, out);
@@ -198,7 +239,8 @@ TEST(Report, BadInputIsAnErrorNamingIt) {
   EXPECT_THROW(parse_report_format("html"), Error);
   EXPECT_EQ(parse_report_format("latex"), ReportFormat::kLatex);
   EXPECT_THROW(print_report({{write_results("run.csv")}, "no_such_run"}, std::cout), Error);
-  ReportOptions options{{write_results("out.csv")}, "", ReportFormat::kMarkdown, "/proc/no/such/dir/report.md"};
+  ReportOptions options{
+      {write_results("out.csv")}, "", ReportFormat::kMarkdown, "/proc/no/such/dir/report.md"};
   try {
     std::ostringstream out;
     run_report_command(options, out);

@@ -37,8 +37,8 @@ std::filesystem::path write_config(const std::string& name, const std::string& e
                       << "threads = [1, 2]\nscenes = [\"proc:sphere:tris=3000\", \"proc:soup:tris=2000\"]\n"
                       << "layouts = [\"bvh2\", \"bvh2_packed\"]\nreference = \"brute_force\"\n"
                       << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 2\ntrace_warmup = 0\n"
-                      << "[[builder]]\nname = \"binned_sah\"\nbins = [8, 16]\n" << extra_builders
-                      << "[[ray_set]]\nkind = \"primary\"\nwidth = 24\nheight = 24\n"
+                      << "[[builder]]\nname = \"binned_sah\"\nbins = [8, 16]\n"
+                      << extra_builders << "[[ray_set]]\nkind = \"primary\"\nwidth = 24\nheight = 24\n"
                       << "[[ray_set]]\nkind = \"shadow\"\nwidth = 24\nheight = 24\n";
   return path;
 }
@@ -52,7 +52,8 @@ TEST(HarnessRun, EveryCellWritesARowWithNoMismatchesAndResumeSkipsThem) {
   // 2 scenes x 2 builder runs x 2 layouts x 2 thread counts x 2 ray sets.
   ASSERT_EQ(rows.size(), 32u) << log.str();
   for (const auto& row : rows) {
-    EXPECT_EQ(row.at("mismatches"), "0") << row.at("scene") << " " << row.at("layout") << " " << row.at("ray_set");
+    EXPECT_EQ(row.at("mismatches"), "0")
+        << row.at("scene") << " " << row.at("layout") << " " << row.at("ray_set");
     EXPECT_EQ(row.at("reference"), "brute_force");
     EXPECT_GT(std::stod(row.at("trace_mrays_median")), 0.0);
     EXPECT_GT(std::stod(row.at("nodes_per_ray")), 0.0);
@@ -93,8 +94,8 @@ TEST(HarnessRun, InterleavedAndBackToBackRepetitionsGiveTheSameCellsAndCounts) {
     ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
     EXPECT_EQ(log.str().find("trace repetition") != std::string::npos, interleave == 1) << log.str();
     for (const auto& row : read_csv(temp_dir() / (name + ".csv"))) {
-      const std::string key = row.at("scene") + "|" + row.at("builder") + "|" + row.at("builder_params") + "|" +
-                              row.at("layout") + "|" + row.at("threads") + "|" + row.at("ray_set");
+      const std::string key = row.at("scene") + "|" + row.at("builder") + "|" + row.at("builder_params") +
+                              "|" + row.at("layout") + "|" + row.at("threads") + "|" + row.at("ray_set");
       EXPECT_EQ(row.at("trace_reps"), "2");
       EXPECT_GT(std::stod(row.at("trace_mrays_min")), 0.0) << key;
       by_mode[interleave][key] = {{"nodes_per_ray", row.at("nodes_per_ray")},
@@ -130,8 +131,8 @@ TEST(HarnessRun, ResumeAfterAnInterruptedRunCompletesOnlyTheMissingCells) {
   EXPECT_NE(report.str().find("## proc:sphere:tris=3000"), std::string::npos) << report.str();
   std::set<std::string> keys;
   for (const auto& r : rows)
-    keys.insert(cell_key(r.at("scene"), r.at("builder"), r.at("builder_params"), r.at("layout"), std::stoi(r.at("threads")),
-                         r.at("ray_set"), std::stoi(r.at("frame"))));
+    keys.insert(cell_key(r.at("scene"), r.at("builder"), r.at("builder_params"), r.at("layout"),
+                         std::stoi(r.at("threads")), r.at("ray_set"), std::stoi(r.at("frame"))));
   EXPECT_EQ(keys.size(), 32u) << "a cell was run twice";
 }
 
@@ -170,9 +171,10 @@ TEST(HarnessRun, MissingRequiredSceneFailsBeforeAnyCell) {
   const auto dir = temp_dir();
   const auto path = dir / "missing_scene.toml", csv = dir / "missing_scene.csv";
   std::filesystem::remove(csv);
-  std::ofstream(path) << "[experiment]\nname = \"m\"\noutput = \"" << csv.string() << "\"\n"
-                      << "scenes = [\"proc:soup:tris=500\", \"no_such_scene_anywhere\"]\n"
-                      << "[[builder]]\nname = \"binned_sah\"\n[[ray_set]]\nkind = \"primary\"\nwidth = 8\nheight = 8\n";
+  std::ofstream(path)
+      << "[experiment]\nname = \"m\"\noutput = \"" << csv.string() << "\"\n"
+      << "scenes = [\"proc:soup:tris=500\", \"no_such_scene_anywhere\"]\n"
+      << "[[builder]]\nname = \"binned_sah\"\n[[ray_set]]\nkind = \"primary\"\nwidth = 8\nheight = 8\n";
   std::ostringstream log;
   try {
     run_experiment({path, false, "", std::nullopt}, log);
@@ -269,9 +271,9 @@ TEST(HarnessTrace, OutputMatchesBruteForceLineByLine) {
   const auto rays_path = dir / "rays.txt", out_path = dir / "hits.csv";
   std::ofstream(rays_path) << "# origin direction [tmin tmax]\n"
                            << "0 0 5 0 0 -1\n"
-                           << "0 0 5, 0 0 1\n"          // away from the sphere
+                           << "0 0 5, 0 0 1\n"             // away from the sphere
                            << "0.3 0.2 5 -0 0 -1 0 inf\n"  // -0 component
-                           << "0 0 0 1 0 0 0 0.5\n"      // from the centre, stops short of the surface
+                           << "0 0 0 1 0 0 0 0.5\n"        // from the centre, stops short of the surface
                            << "\n";
   std::ostringstream log;
   run_trace_command({"proc:sphere:tris=2000", "binned_sah", "bvh2", rays_path, out_path}, log);
@@ -309,7 +311,8 @@ TEST(HarnessTrace, MalformedRayFilesNameTheLine) {
 
 TEST(HarnessRun, BadConfigIsAnErrorNamingTheFile) {
   const auto path = temp_dir() / "broken.toml";
-  std::ofstream(path) << "[experiment]\nname = \"x\"\nthreads = [1]\nscenes = [\"proc:soup\"]\n[[builder]]\nname = \"binned\"\n"
+  std::ofstream(path) << "[experiment]\nname = \"x\"\nthreads = [1]\nscenes = "
+                         "[\"proc:soup\"]\n[[builder]]\nname = \"binned\"\n"
                       << "[[ray_set]]\nkind = \"primary\"\n";
   try {
     std::ostringstream log;

@@ -184,7 +184,8 @@ TEST(HarnessStressConfig, DefaultsCoverEveryBuilderLayoutAndVariant) {
     EXPECT_NE(std::find(variants.begin(), variants.end(), l.name), variants.end()) << l.name;
     EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mt0,box=fast"), variants.end())
         << l.name;
-    EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mt0,box=fma"), variants.end()) << l.name;
+    EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mt0,box=fma"), variants.end())
+        << l.name;
     EXPECT_NE(std::find(variants.begin(), variants.end(), l.name + ":tri=mtn,box=fma"), variants.end())
         << l.name;
   }

@@ -91,7 +91,8 @@ TEST(SceneGltf, CameraAndPointLightAreReadWithTheirNodeTransforms) {
   // A camera node at (0, 0, 5) turned 90 degrees about y (looking down -x), and a light node at (1, 2, 3).
   replace_once(json, R"("scenes": [{"nodes": [0, 1]}])", R"("scenes": [{"nodes": [0, 1, 3, 4]}])");
   replace_once(json, R"({"mesh": 0, "scale": [2, 2, 2]}
-  ])", R"({"mesh": 0, "scale": [2, 2, 2]},
+  ])",
+               R"({"mesh": 0, "scale": [2, 2, 2]},
     {"camera": 0, "translation": [0, 0, 5], "rotation": [0, 0.7071067811865476, 0, 0.7071067811865476]},
     {"translation": [1, 2, 3], "extensions": {"KHR_lights_punctual": {"light": 0}}}
   ],

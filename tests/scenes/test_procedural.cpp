@@ -89,7 +89,8 @@ TEST(SceneProcedural, ParseCount) {
 
 TEST(SceneProcedural, BadSpecsNameTheProblem) {
   const std::pair<const char*, const char*> cases[] = {
-      {"proc:cube", "unknown procedural kind 'cube' (known: sphere, terrain, soup, needles, multiscale, wave)"},
+      {"proc:cube",
+       "unknown procedural kind 'cube' (known: sphere, terrain, soup, needles, multiscale, wave)"},
       {"proc:soup:size=3", "unknown parameter 'size' for 'soup' (known: tris, seed)"},
       {"proc:soup:tris=abc", "bad value 'abc' for 'tris'"},
       {"proc:soup:tris=0", "bad value '0' for 'tris'"},

@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -129,7 +128,8 @@ TEST(FmaRayBox, RayInAFacePlaneLeavesThroughTheFaceItsZeroPointsTo) {
   float t = -1.0f;
   ASSERT_TRUE(hits<FmaRayBox>(ray, kUnitBox, &t));
   const float rdir_x = 1.0f / 0.7f, rdir_y = 1.0f / -0.3f, rdir_z = 1.0f / 0.2f;
-  const float near_x = std::fma(0.0f, rdir_x, -(0.1f * rdir_x)), near_y = std::fma(1.0f, rdir_y, -(0.2f * rdir_y)),
+  const float near_x = std::fma(0.0f, rdir_x, -(0.1f * rdir_x)),
+              near_y = std::fma(1.0f, rdir_y, -(0.2f * rdir_y)),
               near_z = std::fma(0.0f, rdir_z, -(0.3f * rdir_z));
   EXPECT_EQ(t, std::max({0.0f, near_x, near_y, near_z}));
 }

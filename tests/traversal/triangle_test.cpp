@@ -171,7 +171,8 @@ TEST(TravTriangleWatertight, HugeAndTinyCoordinatesStayWatertightAndFinite) {
     const Vec3 a{0.0f, 0.0f, scale}, b{scale, 0.0f, scale}, c{scale, scale, scale}, d{0.0f, scale, scale};
     const std::vector<Triangle> quad{{a, b, c}, {a, c, d}};
     // The unit quad's rays, scaled (rays_through's plane test wants unit-sized triangles).
-    const std::vector<Triangle> unit_quad{{{0, 0, 1}, {1, 0, 1}, {1, 1, 1}}, {{0, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
+    const std::vector<Triangle> unit_quad{{{0, 0, 1}, {1, 0, 1}, {1, 1, 1}},
+                                          {{0, 0, 1}, {1, 1, 1}, {0, 1, 1}}};
     std::vector<Ray> rays;
     for (float s : {0.5f, 0.25f, 0.375f})
       for (const Ray& unit : rays_through({s, s, 1.0f}, unit_quad)) {
@@ -180,11 +181,14 @@ TEST(TravTriangleWatertight, HugeAndTinyCoordinatesStayWatertightAndFinite) {
       }
     EXPECT_EQ(leaks(quad, rays), 0);
     // Straight down the shared edge's midpoint from the plane z = 0: t is the quad's height.
-    const auto hit = run<WatertightTriangleTest>(make_ray({0.5f * scale, 0.5f * scale, 0.0f}, {0.0f, 0.0f, 1.0f}), quad[0]);
+    const auto hit = run<WatertightTriangleTest>(
+        make_ray({0.5f * scale, 0.5f * scale, 0.0f}, {0.0f, 0.0f, 1.0f}), quad[0]);
     ASSERT_TRUE(hit.hit);
     EXPECT_EQ(hit.t, scale);
     // A ray a whole triangle away still misses.
-    EXPECT_FALSE(run<WatertightTriangleTest>(make_ray({2.5f * scale, 0.5f * scale, 0.0f}, {0.0f, 0.0f, 1.0f}), quad[0]).hit);
+    EXPECT_FALSE(
+        run<WatertightTriangleTest>(make_ray({2.5f * scale, 0.5f * scale, 0.0f}, {0.0f, 0.0f, 1.0f}), quad[0])
+            .hit);
   }
 }
 

@@ -48,7 +48,8 @@ void check_subtree(const WideBvh<N>& wide, uint32_t ref, uint64_t& next, std::ve
     take(units, next, uint64_t{node.count[i]} * kBlockUnits);
     for (uint32_t b = 0; b < node.count[i]; ++b)
       for (uint32_t lane = 0; lane < kBlockWidth; ++lane)
-        if (wide.block(node.child[i], b).prim[lane] != kInvalidPrim) prims.push_back(wide.block(node.child[i], b).prim[lane]);
+        if (wide.block(node.child[i], b).prim[lane] != kInvalidPrim)
+          prims.push_back(wide.block(node.child[i], b).prim[lane]);
     blocks += node.count[i];
     next += uint64_t{node.count[i]} * kBlockUnits;
   }
@@ -72,7 +73,8 @@ void check_arena(uint32_t arity, std::size_t triangles, uint32_t max_leaf) {
   const auto scene = test::random_triangles(triangles, 7 + arity + max_leaf);
   const Bvh bvh = test::build_median_bvh(scene, arity, max_leaf);
   const WideBvh<N> wide = compile_wide<N>(bvh, scene);
-  SCOPED_TRACE("N=" + std::to_string(N) + " arity=" + std::to_string(arity) + " max_leaf=" + std::to_string(max_leaf));
+  SCOPED_TRACE("N=" + std::to_string(N) + " arity=" + std::to_string(arity) +
+               " max_leaf=" + std::to_string(max_leaf));
   std::vector<int> units(wide.arena.size(), 0);
   std::vector<uint32_t> prims;
   uint64_t next = sizeof(WideNode<N>) / kWideUnit;  // the root, at 0
@@ -441,7 +443,8 @@ TEST(HugePages, LargeArraysStartOnAHugePageAndSmallOnesOnALine) {
   EXPECT_EQ(reinterpret_cast<std::uintptr_t>(small.data()) % 64, 0u);
   EXPECT_EQ(reinterpret_cast<std::uintptr_t>(large.data()) % kHugePageBytes, 0u);
   // All of it can be written and read back, across a resize that moves it.
-  for (std::size_t i = 0; i < large.size(); ++i) large[i].bytes[i % kWideUnit] = static_cast<unsigned char>(i);
+  for (std::size_t i = 0; i < large.size(); ++i)
+    large[i].bytes[i % kWideUnit] = static_cast<unsigned char>(i);
   large.resize(large.size() * 2);
   for (std::size_t i = 0; i < large.size() / 2; ++i)
     ASSERT_EQ(large[i].bytes[i % kWideUnit], static_cast<unsigned char>(i)) << "unit " << i;

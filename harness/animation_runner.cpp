@@ -26,6 +26,7 @@
 #include "harness/reference.h"
 #include "harness/result_row.h"
 #include "harness/run_common.h"
+#include "harness/run_session.h"
 #include "harness/timing.h"
 #include "scenes/animation.h"
 #include "scenes/load.h"
@@ -109,20 +110,32 @@ class AnimationRunner {
         env_(current_environment()),
         builders_(expand_builders(cfg)),
         output_(options.output ? *options.output : cfg.output),
-        run_id_(cfg.name + "-" + now_stamp()) {}
+        continue_with_(resume_command(cfg.path, options.output ? &*options.output : nullptr)) {}
 
   int run() {
+    // As a static run: scenes checked and the lock taken before the CSV is touched.
+    const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
+    const OutputLock lock(output_);
     CsvWriter csv(output_, animation_columns());
     if (csv.dropped_partial_row())
       log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
-    if (options_.resume) finished_ = finished_cells(output_, cfg_, run_id_, log_);
+    std::vector<std::string> builder_runs;
+    for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text);
+    id_.fingerprint = fingerprint_of(cfg_, scenes, builder_runs, env_);
+    id_.run_id = make_run_id(cfg_.name);
+    if (options_.resume) {
+      ResumePoint point = find_resume_point(output_, id_.fingerprint, log_);
+      if (!point.run_id.empty()) id_.run_id = point.run_id;
+      finished_ = std::move(point.finished);
+    }
     embree_layouts_ = supported_embree_layouts(log_);
 
     // Scenes are loaded one at a time; the plan counts cells as each scene's frames become known.
-    log_ << fmt::format("run {}: animation experiment, {} frames per scene; writing {}\n", run_id_,
-                        cfg_.animation->frames, output_.string());
+    log_ << fmt::format("run {} (fingerprint {}): animation experiment, {} frames per scene; writing {}\n",
+                        id_.run_id, id_.fingerprint.hash, cfg_.animation->frames, output_.string());
+    const InterruptGuard interrupts;
     start_ = std::chrono::steady_clock::now();
-    for (const auto& name : scenes_to_run(cfg_, log_)) run_scene(name, csv);
+    for (const auto& name : scenes) run_scene(name, csv);
     log_ << fmt::format("done in {}; rows in {}\n", format_duration(elapsed_s()), output_.string());
     print_summary();
     return exit_code_;
@@ -249,12 +262,14 @@ class AnimationRunner {
   }
 
   CsvRow base_row(const FrameData& frame, const AnimatedBuilder& b, int threads) const {
-    CsvRow row = common_row(run_id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
+    CsvRow row = common_row(id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
     row["frame_time"] = fmt::format("{:.6g}", frame.time);
     return row;
   }
 
   void append(CsvWriter& csv, const CsvRow& row, const std::string& what) {
+    // A cell is one row here: stop before writing the next, never halfway through one.
+    InterruptGuard::check(done_, planned_, continue_with_);
     csv.append(row);
     rows_.push_back(row);
     ++done_;
@@ -324,6 +339,7 @@ class AnimationRunner {
       std::unique_ptr<CompiledLayout> fresh;  // a rebuild's
       CompiledLayout* compiled = nullptr;
       double layout_time = 0.0;  // median ms of the compile or of the layout refit
+      TimingSummary layout_t;    // a rebuild's compiles
       if (valid && refit_state) {
         compiled = &refit_layout(*refit_state, layout_name, scene.triangles);
         const TimingSummary t = time_builds(
@@ -334,7 +350,8 @@ class AnimationRunner {
         TimedCompile timed = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
         fresh = std::move(timed.layout);
         compiled = fresh.get();
-        layout_time = timed.median_ms;
+        layout_time = timed.time.median;
+        layout_t = timed.time;
       }
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
@@ -367,7 +384,9 @@ class AnimationRunner {
         row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
         put_tree_stats(row, stats, cost);
         put_timing(row, "trace_mrays", trace_t);
+        if (!refit_state) put_build_layout_ms(row, build_t, layout_t);
         put_per_ray_counts(row, counts);
+        put_hit_fraction(row, hits, occluded);
         put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
         append(csv, row,
                fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms + {} {:.3f} ms, SAH {:.2f}, {:.2f} Mrays/s, "
@@ -424,6 +443,9 @@ class AnimationRunner {
         row["mem_peak_bytes"] = std::to_string(peak);
         put_ray_set(row, rs);
         put_timing(row, "trace_mrays", trace_t);
+        if (b.variant != Variant::kEmbreeRefit)
+          row["build_layout_ms_median"] = fmt::format("{:.4f}", build_t.median);
+        put_hit_fraction(row, hits, occluded);
         put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
         if (b.variant == Variant::kEmbreeRefit)
           add_note(row, "Embree refit of frame 0's build (dynamic scene, geometry quality refit)");
@@ -510,7 +532,8 @@ class AnimationRunner {
   std::vector<AnimatedBuilder> builders_;
   std::vector<EmbreeLayout> embree_layouts_;
   std::filesystem::path output_;
-  std::string run_id_;
+  std::string continue_with_;  // the command that resumes this run, for the interrupt message
+  RunIdentity id_;
   std::set<std::string> finished_;
   std::vector<CsvRow> rows_;  // written by this run, for the summary
   std::size_t planned_ = 0, done_ = 0;

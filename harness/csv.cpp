@@ -88,7 +88,12 @@ const std::vector<std::string>& design_columns() {
                                                    "nodes_per_ray",
                                                    "prims_per_ray",
                                                    "reference",
-                                                   "mismatches"};
+                                                   "mismatches",
+                                                   "run_fingerprint",
+                                                   "build_ms_samples",
+                                                   "trace_mrays_samples",
+                                                   "build_layout_ms_median",
+                                                   "hit_fraction"};
   return columns;
 }
 

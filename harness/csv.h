@@ -11,7 +11,8 @@
 
 namespace sahbench {
 
-/// The DESIGN.md columns, in order; more may follow, these are never renamed.
+/// The DESIGN.md columns, in order (those of the cell pipeline last: run_fingerprint, build_ms_samples,
+/// trace_mrays_samples, build_layout_ms_median, hit_fraction); more may follow, these are never renamed.
 const std::vector<std::string>& design_columns();
 
 using CsvRow = std::map<std::string, std::string>;

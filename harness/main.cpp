@@ -1,5 +1,6 @@
 // The sahbench command line. Library code throws sahbench::Error; this is the one place that prints
-// errors and chooses exit codes: 0 success, 1 a failed check (invalid tree), 2 bad input.
+// errors and chooses exit codes: 0 success, 1 a failed check (invalid tree), 2 bad input, 130 a run
+// stopped by SIGINT or SIGTERM (its finished rows kept).
 
 #include <CLI/CLI.hpp>
 #include <cstdlib>
@@ -13,6 +14,7 @@
 #include "harness/image_command.h"
 #include "harness/list_command.h"
 #include "harness/report.h"
+#include "harness/run_session.h"
 #include "harness/runner.h"
 #include "harness/stress_runner.h"
 #include "harness/trace_command.h"
@@ -165,6 +167,9 @@ int main(int argc, char** argv) {
     if (*image_diff_cmd) run_image_diff_command(image_diff, std::cerr);
     if (*list_cmd) print_catalogue(std::cout);
     if (*list_scenes_cmd) print_scene_names(std::cout);
+  } catch (const Interrupted& e) {
+    std::cerr << "sahbench: " << e.what() << "\n";
+    return 130;
   } catch (const Error& e) {
     std::cerr << "sahbench: error: " << e.what() << "\n";
     return 2;

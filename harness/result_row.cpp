@@ -1,6 +1,7 @@
 #include "harness/result_row.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 
@@ -21,6 +22,25 @@ void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) 
   row[prefix + "_median"] = fmt::format("{:.4f}", t.median);
   row[prefix + "_min"] = fmt::format("{:.4f}", t.min);
   row[prefix + "_max"] = fmt::format("{:.4f}", t.max);
+  row[prefix + "_samples"] = fmt::format("{:.4f}", fmt::join(t.samples, ";"));
+}
+
+void put_build_layout_ms(CsvRow& row, const TimingSummary& build, const TimingSummary& layout) {
+  // Round r's build plus compile r, each after freeing the last: the like-for-like with one
+  // rtcCommitScene, whose build and packing are one call.
+  std::vector<double> sums;
+  for (std::size_t r = 0; r < std::min(build.samples.size(), layout.samples.size()); ++r)
+    sums.push_back(build.samples[r] + layout.samples[r]);
+  row["build_layout_ms_median"] = fmt::format("{:.4f}", summarize(std::move(sums)).median);
+}
+
+void put_hit_fraction(CsvRow& row, std::span<const Hit> hits, std::span<const uint8_t> occluded) {
+  const std::size_t rays = hits.size() + occluded.size();
+  std::size_t hit = 0;
+  for (const Hit& h : hits) hit += h.found();
+  for (const uint8_t o : occluded) hit += o != 0;
+  row["hit_fraction"] =
+      rays ? fmt::format("{:.4f}", static_cast<double>(hit) / static_cast<double>(rays)) : "";
 }
 
 std::string bytes_per_triangle(std::size_t bytes, std::size_t triangles) {

@@ -22,8 +22,16 @@ namespace sahbench {
 /// refs_per_prim (4 decimals), sah_cost (6 decimals), sah_c_trav, sah_c_isect and sah_block.
 void put_tree_stats(CsvRow& row, const BvhStats& stats, const SahCost& cost);
 
-/// PREFIX_median, PREFIX_min and PREFIX_max (4 decimals), e.g. prefix "build_ms" or "trace_mrays".
+/// PREFIX_median, PREFIX_min, PREFIX_max and PREFIX_samples (4 decimals; the samples in the order taken,
+/// separated by ';'), for prefix "build_ms" or "trace_mrays".
 void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t);
+
+/// build_layout_ms_median: the median over rounds of build plus layout compile (ms), paired by index.
+void put_build_layout_ms(CsvRow& row, const TimingSummary& build, const TimingSummary& layout);
+
+/// hit_fraction (4 decimals): the share of the rays in `hits` that found a hit, or of `occluded` that are
+/// occluded; a miss costs a ray a fixed time that weighs on its rays/s, so a ratio needs this beside it.
+void put_hit_fraction(CsvRow& row, std::span<const Hit> hits, std::span<const uint8_t> occluded);
 
 /// mem_bytes per scene triangle (2 decimals), the figure papers quote for a layout's footprint; empty
 /// for a scene without triangles.

@@ -68,30 +68,6 @@ std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream
   return out;
 }
 
-std::set<std::string> finished_cells(const std::filesystem::path& output, const ExperimentConfig& cfg,
-                                     std::string& run_id, std::ostream& log) {
-  std::set<std::string> finished;
-  std::size_t other_view = 0;
-  for (const auto& row : read_csv(output)) {
-    // A row measured through another view of its scene (another [[camera]], or none) is not this cell.
-    const CameraConfig* camera = cfg.camera_for(row.at("scene"));
-    const auto notes = row.find("notes");
-    const std::string note = notes == row.end() ? "" : notes->second;
-    const std::string view = note.starts_with("camera ") ? note.substr(0, note.find(';')) : "";
-    if (view != (camera ? camera_note(*camera) : "")) {
-      ++other_view;
-      continue;
-    }
-    finished.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"), row.at("layout"),
-                             std::stoi(row.at("threads")), row.at("ray_set"), std::stoi(row.at("frame"))));
-    if (row.at("config") == cfg.path.string()) run_id = row.at("run_id");
-  }
-  log << fmt::format("resume: {} finished cells in {}", finished.size(), output.string());
-  if (other_view) log << fmt::format(" ({} rows from another view of their scene not counted)", other_view);
-  log << "\n";
-  return finished;
-}
-
 ResolvedRun resolve_run(const BuilderRun& run, const std::vector<std::string>& layouts) {
   ResolvedRun b;
   if (run.is_embree()) {
@@ -137,11 +113,13 @@ std::string camera_note(const CameraConfig& camera) {
                      fmt::join(camera.target, ", "), fmt::join(camera.up, ", "), camera.fov);
 }
 
-CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
+CsvRow common_row(const RunIdentity& id, const Environment& env, const ExperimentConfig& cfg,
                   const Scene& scene, uint32_t frame, const std::string& builder,
                   const std::string& params_text, int threads) {
   CsvRow row;
-  row["run_id"] = run_id;
+  row["run_id"] = id.run_id;
+  row["run_fingerprint"] = id.fingerprint.hash;
+  row["fingerprint_parts"] = id.fingerprint.parts_text();
   row["git_commit"] = env.git_commit;
   row["cpu"] = env.cpu;
   row["compiler"] = env.compiler;
@@ -190,7 +168,7 @@ TimedCompile compile_timed(const LayoutSpec& spec, const Bvh& bvh, std::span<con
     out.layout.reset();
     compile_ms.push_back(time_ms([&] { out.layout = compile_layout(spec, bvh, triangles); }));
   }
-  out.median_ms = summarize(compile_ms).median;
+  out.time = summarize(std::move(compile_ms));
   return out;
 }
 

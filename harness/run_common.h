@@ -20,6 +20,7 @@
 #include "harness/environment.h"
 #include "harness/layout.h"
 #include "harness/ray_sets.h"
+#include "harness/run_session.h"
 #include "harness/timing.h"
 #include "scenes/scene.h"
 
@@ -37,7 +38,7 @@ inline constexpr EmbreeLayout kEmbreeLayouts[] = {{"embree_1", 1}, {"embree_8", 
 /// layout with a line on `log` that says why.
 std::vector<EmbreeLayout> supported_embree_layouts(std::ostream& log);
 
-/// The time now in UTC as YYYYMMDD-HHMMSS: the suffix of a run id.
+/// The time now in UTC as YYYYMMDD-HHMMSS: part of a run id (make_run_id).
 std::string now_stamp();
 
 /// Whole seconds as "42s", or "3m07s" from a minute on, for progress lines.
@@ -47,12 +48,6 @@ std::string format_duration(double seconds);
 /// path. Required scenes must exist before the first cell runs, not fail hours in: a missing one throws
 /// the loader's Error; a missing optional one is skipped with a line on `log`.
 std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream& log);
-
-/// --resume: the cell keys (cell_key) of the rows already in `output`. A resumed run continues the same
-/// run: where a row came from the same config, `run_id` becomes its run id, so a report shows them
-/// together. Says on `log` how many cells are finished.
-std::set<std::string> finished_cells(const std::filesystem::path& output, const ExperimentConfig& cfg,
-                                     std::string& run_id, std::ostream& log);
 
 /// One [[builder]] run resolved against the registry: one of our builders with its parameters, or
 /// Embree's own BVH at a build quality.
@@ -75,7 +70,8 @@ ResolvedRun resolve_run(const BuilderRun& run, const std::vector<std::string>& l
 std::vector<std::string> layouts_for(const ResolvedRun& b, const std::vector<std::string>& configured,
                                      std::span<const EmbreeLayout> embree);
 
-/// The columns every row of a cell starts with: the run (run_id, config, seed, build_reps, trace_reps),
+/// The columns every row of a cell starts with: the run (run_id, run_fingerprint, fingerprint_parts,
+/// config, seed, build_reps, trace_reps),
 /// the machine (git_commit, cpu, compiler, embree_version), the scene and `frame`, the builder run
 /// (`builder`, its `params_text`) and the thread count. A scene viewed through the config's [[camera]]
 /// gets it in `notes` (camera_note), so a row says which view its rays came from.
@@ -85,7 +81,7 @@ void add_note(CsvRow& row, const std::string& note);
 /// "camera eye (x, y, z) target (x, y, z) up (x, y, z) fov F": the view of a [[camera]], for `notes`.
 std::string camera_note(const CameraConfig& camera);
 
-CsvRow common_row(const std::string& run_id, const Environment& env, const ExperimentConfig& cfg,
+CsvRow common_row(const RunIdentity& id, const Environment& env, const ExperimentConfig& cfg,
                   const Scene& scene, uint32_t frame, const std::string& builder,
                   const std::string& params_text, int threads);
 
@@ -124,7 +120,7 @@ BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device,
 /// the median of their times (ms).
 struct TimedCompile {
   std::unique_ptr<CompiledLayout> layout;
-  double median_ms = 0.0;
+  TimingSummary time;  ///< ms of each compile
 };
 TimedCompile compile_timed(const LayoutSpec& spec, const Bvh& bvh, std::span<const Triangle> triangles,
                            const Repetitions& reps);

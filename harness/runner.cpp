@@ -27,7 +27,9 @@
 #include "harness/ray_sets.h"
 #include "harness/reference.h"
 #include "harness/result_row.h"
+#include "harness/round_order.h"
 #include "harness/run_common.h"
+#include "harness/run_session.h"
 #include "harness/timing.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
@@ -39,8 +41,8 @@ namespace {
 // Columns written after DESIGN.md's (never renamed; these may grow).
 const std::vector<std::string>& extra_columns() {
   static const std::vector<std::string> columns = {
-      "config",         "seed",  "scene_source", "scene_removed", "query",
-      "embree_version", "notes", "build_isa",    "bytes_per_tri", "sah_block"};
+      "config",    "seed",          "scene_source", "scene_removed",    "query", "embree_version", "notes",
+      "build_isa", "bytes_per_tri", "sah_block",    "fingerprint_parts"};
   return columns;
 }
 
@@ -66,6 +68,8 @@ class Progress {
                         format_duration(left));
   }
   void skip(std::size_t cells) { total_ -= std::min(total_, cells); }
+  std::size_t done() const { return done_; }
+  std::size_t total() const { return total_; }
   double elapsed_s() const {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
@@ -96,23 +100,39 @@ class ExperimentRunner {
         env_(current_environment()),
         builders_(resolve_builders(cfg)),
         output_(options.output ? *options.output : cfg.output),
-        run_id_(cfg.name + "-" + now_stamp()) {}
+        continue_with_(resume_command(cfg.path, options.output ? &*options.output : nullptr)) {}
 
   int run() {
-    // The writer first: it checks the header and removes a row cut off by a crash before anything reads.
+    // Every required scene is checked, and the lock taken, before the CSV is touched: the writer then
+    // checks the header and removes a row cut off by a crash before anything reads the file.
+    const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
+    const OutputLock lock(output_);
     CsvWriter csv(output_, all_columns());
     if (csv.dropped_partial_row())
       log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
+    std::vector<std::string> builder_runs;
+    for (const auto& b : builders_) builder_runs.push_back(b.run.name + " " + b.params_text);
+    id_.fingerprint = fingerprint_of(cfg_, scenes, builder_runs, env_);
+    id_.run_id = make_run_id(cfg_.name);
     std::set<std::string> finished;
-    if (options_.resume) finished = finished_cells(output_, cfg_, run_id_, log_);
+    if (options_.resume) {
+      ResumePoint point = find_resume_point(output_, id_.fingerprint, log_);
+      if (!point.run_id.empty()) id_.run_id = point.run_id;
+      finished = std::move(point.finished);
+    }
 
     supported_embree_layouts_ = supported_embree_layouts(log_);
-    const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
     // Plan: which cells of each scene are still to do.
     std::size_t total = 0;
     for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
-    log_ << fmt::format("run {}: {} cells to run over {} scenes; writing {}\n", run_id_, total, scenes.size(),
-                        output_.string());
+    if (total == 0 && !options_.only.empty() && finished.empty())
+      throw Error(
+          fmt::format("--only '{}' matches no cell of {} (cells are named "
+                      "scene|builder|builder_params|layout|threads|ray_set|frame)",
+                      options_.only, cfg_.path.string()));
+    log_ << fmt::format("run {} (fingerprint {}): {} cells to run over {} scenes; writing {}\n", id_.run_id,
+                        id_.fingerprint.hash, total, scenes.size(), output_.string());
+    const InterruptGuard interrupts;
     Progress progress(total, log_);
     for (const auto& scene : scenes) {
       const auto pending = pending_cells(scene, finished);
@@ -149,8 +169,14 @@ class ExperimentRunner {
     return out;
   }
 
+  // Stops between two timed steps once SIGINT or SIGTERM has come: the cells in progress are dropped.
+  void check_interrupt(const Progress& progress) const {
+    InterruptGuard::check(progress.done(), progress.total(), continue_with_);
+  }
+
   void run_scene(const std::string& scene_name, const std::set<std::string>& pending, CsvWriter& csv,
                  Progress& progress) {
+    check_interrupt(progress);
     Scene scene;
     const double load_ms = time_ms([&] { scene = load_scene(scene_name); });
     load_ms_ += load_ms;
@@ -183,30 +209,111 @@ class ExperimentRunner {
     for (int threads : cfg_.threads) {
       const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                                       static_cast<std::size_t>(threads));
-      std::vector<TraceCell> cells;
-      for (const auto& b : builders_) {
-        auto wanted = [&](const std::string& layout, const RaySet& rs) {
-          return pending.count(cell_key(scene_name, b.run.name, b.params_text, layout, threads, rs.name, 0)) >
-                 0;
-        };
-        bool any = false;
-        for (const auto& layout : layouts_for(b))
-          for (const auto& rs : generated.sets) any |= wanted(layout, rs);
-        if (!any) continue;
-        if (b.is_embree()) {
-          prepare_embree(scene, b, threads, generated.sets, wanted, cells);
-        } else {
-          prepare_ours(scene, b, threads, generated.sets, wanted, csv, progress, cells);
-        }
-        if (!cfg_.reps.interleave) {
-          time_cells(cells, scene_name, threads);
-          finish_cells(cells, generated.sets, references, csv, progress);
-          cells.clear();
-        }
+      Group group{scene, threads, generated.sets, pending};
+      std::vector<const ResolvedBuilder*> runs;
+      for (const auto& b : builders_)
+        if (group.any_wanted(b, layouts_for(b))) runs.push_back(&b);
+      // Interleaved: every builder run's builds in turns, then every cell's traces in turns. Otherwise one
+      // builder run at a time, so that one tree is in memory at a time.
+      if (cfg_.reps.interleave) {
+        measure(group, runs, references, csv, progress);
+      } else {
+        for (const ResolvedBuilder* b : runs) measure(group, {b}, references, csv, progress);
       }
-      time_cells(cells, scene_name, threads);
-      finish_cells(cells, generated.sets, references, csv, progress);
     }
+  }
+
+  // The cells of one scene and thread count.
+  struct Group {
+    const Scene& scene;
+    int threads;
+    const std::vector<RaySet>& sets;
+    const std::set<std::string>& pending;
+
+    bool wanted(const ResolvedBuilder& b, const std::string& layout, const RaySet& rs) const {
+      return pending.count(cell_key(scene.name, b.run.name, b.params_text, layout, threads, rs.name, 0)) > 0;
+    }
+    bool any_wanted(const ResolvedBuilder& b, const std::vector<std::string>& layouts) const {
+      for (const auto& layout : layouts)
+        for (const auto& rs : sets)
+          if (wanted(b, layout, rs)) return true;
+      return false;
+    }
+  };
+
+  // An Embree build and the device it lives in, kept together for its cells.
+  struct EmbreeBuild {
+    explicit EmbreeBuild(int threads) : device(threads) {}
+    EmbreeDevice device;
+    std::unique_ptr<EmbreeScene> scene;
+  };
+
+  // One builder run's builds: a tree of ours or an Embree scene, rebuilt once per round.
+  struct BuildJob {
+    const ResolvedBuilder* builder = nullptr;
+    std::shared_ptr<Bvh> tree;            // ours
+    std::shared_ptr<EmbreeBuild> embree;  // Embree's
+    std::vector<double> ms;
+    int64_t peak = 0;  // bytes allocated at the peak of the first timed build
+
+    // One build after freeing the last, so that no repetition pays for freeing the one before; `timed`:
+    // its milliseconds go into `ms` (rtcCommitScene's for Embree), the first one's peak into `peak`.
+    void build(const Scene& scene, bool timed) {
+      const ResolvedBuilder& b = *builder;
+      if (b.is_embree()) {
+        embree->scene.reset();
+        const int64_t before = embree->device.bytes();
+        embree->device.reset_peak();
+        embree->scene = std::make_unique<EmbreeScene>(embree->device, scene.triangles, b.quality);
+        if (!timed) return;
+        if (ms.empty()) peak = embree->device.peak_bytes() - before;
+        ms.push_back(embree->scene->commit_ms());
+        return;
+      }
+      *tree = Bvh{};
+      const int64_t before = heap_bytes();
+      reset_heap_peak();
+      const double t =
+          time_ms([&] { *tree = b.info->build(BuildInput::from_triangles(scene.triangles), b.params); });
+      if (!timed) return;
+      if (ms.empty()) peak = heap_peak_bytes() - before;
+      ms.push_back(t);
+    }
+  };
+
+  // Times the builds of `runs` (warm-ups, then the timed rounds, each in its own shuffle), then traces
+  // every wanted cell of them (trace_cells) and writes their rows.
+  void measure(const Group& group, const std::vector<const ResolvedBuilder*>& runs,
+               const std::vector<Reference>& references, CsvWriter& csv, Progress& progress) {
+    std::vector<BuildJob> jobs;
+    for (const ResolvedBuilder* b : runs) {
+      BuildJob job;
+      job.builder = b;
+      if (b->is_embree())
+        job.embree = std::make_shared<EmbreeBuild>(group.threads);
+      else
+        job.tree = std::make_shared<Bvh>();
+      jobs.push_back(std::move(job));
+    }
+    for (int w = 0; w < cfg_.reps.build_warmup; ++w)
+      for (auto& job : jobs) job.build(group.scene, false);
+    const uint64_t seed = order_seed(cfg_.seed, group.scene.name, group.threads, "build");
+    for (int r = 0; r < cfg_.reps.build; ++r) {
+      for (const std::size_t k : round_order(seed, jobs.size(), r)) {
+        check_interrupt(progress);
+        jobs[k].build(group.scene, true);
+      }
+    }
+    std::vector<TraceCell> cells;
+    for (auto& job : jobs) {
+      check_interrupt(progress);
+      if (job.builder->is_embree())
+        queue_embree(group, job, cells);
+      else
+        queue_ours(group, job, csv, progress, cells);
+    }
+    time_cells(cells, group, progress);
+    finish_cells(cells, group.sets, references, csv, progress);
   }
 
   // A cell built and compiled, waiting for its trace timing: its row so far, one pass of its kernel over
@@ -226,11 +333,13 @@ class ExperimentRunner {
   };
 
   // The ray set's columns of a cell's row, its log label, and the buffers its passes write.
-  static void set_up_cell(TraceCell& cell, const Scene& scene, const ResolvedBuilder& b,
-                          const std::string& layout, int threads, const RaySet& rs, std::size_t set,
-                          double build_ms, std::shared_ptr<const void> keep_alive) {
+  static void set_up_cell(TraceCell& cell, const Group& group, const ResolvedBuilder& b,
+                          const std::string& layout, std::size_t set, double build_ms,
+                          std::shared_ptr<const void> keep_alive) {
+    const RaySet& rs = group.sets[set];
     put_ray_set(cell.row, rs);
-    cell.label = fmt::format("{} {} {} t={} {}", scene.name, b.run.label(), layout, threads, rs.name);
+    cell.label =
+        fmt::format("{} {} {} t={} {}", group.scene.name, b.run.label(), layout, group.threads, rs.name);
     cell.build_ms = build_ms;
     cell.set = set;
     cell.rays = rs.rays.size();
@@ -239,11 +348,11 @@ class ExperimentRunner {
     cell.occluded = std::make_shared<std::vector<uint8_t>>(rs.occlusion ? rs.rays.size() : 0);
   }
 
-  // Trace repetitions. Interleaved: every cell's warm-ups, then repetition r of every cell in turn, each
-  // round starting one cell later so that no cell always follows the same one. Otherwise each cell's
-  // warm-ups and repetitions back to back.
-  void time_cells(std::vector<TraceCell>& cells, const std::string& scene_name, int threads) {
-    auto time_once = [](TraceCell& cell) {
+  // Trace repetitions. Interleaved: every cell's warm-ups, then round r of every cell, in the round's own
+  // shuffle (round_order). Otherwise each cell's warm-ups and repetitions back to back.
+  void time_cells(std::vector<TraceCell>& cells, const Group& group, const Progress& progress) {
+    auto time_once = [&](TraceCell& cell) {
+      check_interrupt(progress);
       cell.mrays.push_back(static_cast<double>(cell.rays) / (time_ms(cell.trace) * 1e3));
     };
     if (!cfg_.reps.interleave) {
@@ -255,15 +364,16 @@ class ExperimentRunner {
     }
     for (auto& cell : cells)
       for (int w = 0; w < cfg_.reps.trace_warmup; ++w) cell.trace();
-    const std::size_t n = cells.size();
-    for (int r = 0; r < cfg_.reps.trace && n > 0; ++r) {
-      log_ << fmt::format("{} t={}: trace repetition {} of {}, {} cells in turn\n", scene_name, threads,
-                          r + 1, cfg_.reps.trace, n);
-      for (std::size_t k = 0; k < n; ++k) time_once(cells[(k + static_cast<std::size_t>(r)) % n]);
+    const uint64_t seed = order_seed(cfg_.seed, group.scene.name, group.threads, "trace");
+    for (int r = 0; r < cfg_.reps.trace && !cells.empty(); ++r) {
+      log_ << fmt::format("{} t={}: trace repetition {} of {}, {} cells in shuffled turns\n",
+                          group.scene.name, group.threads, r + 1, cfg_.reps.trace, cells.size());
+      for (const std::size_t k : round_order(seed, cells.size(), r)) time_once(cells[k]);
     }
   }
 
-  // Completes each timed cell's row (timings, counts, mismatches from its last pass) and writes it.
+  // Completes each timed cell's row (timings, counts, hits and mismatches from its last pass) and
+  // writes it.
   void finish_cells(std::vector<TraceCell>& cells, const std::vector<RaySet>& sets,
                     const std::vector<Reference>& refs, CsvWriter& csv, Progress& progress) {
     progress.batch(cells.size());
@@ -274,6 +384,7 @@ class ExperimentRunner {
       const TimingSummary trace_t = summarize(cell.mrays);
       put_timing(row, "trace_mrays", trace_t);
       if (cell.count) put_per_ray_counts(row, cell.count());
+      put_hit_fraction(row, *cell.hits, *cell.occluded);
       put_mismatches(row, ref, rs, diagonal_, *cell.hits, *cell.occluded);
       csv_ms_ += time_ms([&] { csv.append(row); });
       progress.cell_done(fmt::format("{}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", cell.label,
@@ -281,73 +392,70 @@ class ExperimentRunner {
     }
   }
 
-  CsvRow base_row(const Scene& scene, const ResolvedBuilder& b, int threads) const {
-    return common_row(run_id_, env_, cfg_, scene, 0, b.run.name, b.params_text, threads);
+  CsvRow base_row(const Group& group, const ResolvedBuilder& b) const {
+    return common_row(id_, env_, cfg_, group.scene, 0, b.run.name, b.params_text, group.threads);
   }
 
-  template <class Wanted>
-  // Builds (timed), checks and compiles one of our builder runs, and queues a cell per wanted layout and
-  // ray set; an invalid tree's cells are written at once, untraced.
-  void prepare_ours(const Scene& scene, const ResolvedBuilder& b, int threads,
-                    const std::vector<RaySet>& sets, Wanted wanted, CsvWriter& csv, Progress& progress,
-                    std::vector<TraceCell>& cells) {
-    // Build: warm-up, then timed repetitions. The peak heap is taken over the first timed build.
-    auto tree = std::make_shared<Bvh>();
-    Bvh& bvh = *tree;
-    const auto [build_t, peak] = time_builds(
-        cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(scene.triangles), b.params); },
-        [&] { bvh = Bvh{}; });
-    const SahCost cost = sah_cost_of(b.params);
-    const BvhStats stats = compute_stats(bvh, scene.triangles.size(), cost);
+  // Checks the built tree of one of our builder runs, then compiles it and queues a cell per wanted
+  // layout and ray set. The validator runs before anything else walks the tree: an invalid tree's cells
+  // are written at once, untraced and without statistics.
+  void queue_ours(const Group& group, const BuildJob& job, CsvWriter& csv, Progress& progress,
+                  std::vector<TraceCell>& cells) {
+    const ResolvedBuilder& b = *job.builder;
+    const Scene& scene = group.scene;
+    const Bvh& bvh = *job.tree;
+    const TimingSummary build_t = summarize(job.ms);
     const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
     if (!report.ok()) {
       // Tracing a broken tree can read out of bounds: its cells get rows that say why, and no timings.
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.run.label(), scene.name, report.summary());
       for (const auto& layout_name : layouts_for(b))
-        for (const auto& rs : sets) {
-          if (!wanted(layout_name, rs)) continue;
-          CsvRow row = base_row(scene, b, threads);
+        for (const auto& rs : group.sets) {
+          if (!group.wanted(b, layout_name, rs)) continue;
+          CsvRow row = base_row(group, b);
           row["isa"] = env_.isa;
           row["layout"] = layout_name;
           put_timing(row, "build_ms", build_t);
-          row["nodes"] = std::to_string(stats.nodes);
+          row["nodes"] = std::to_string(bvh.nodes.size());
           row["arity"] = std::to_string(bvh.arity);
           put_ray_set(row, rs);
           add_note(row, "invalid tree, not traced: " + report.errors.front());
           csv_ms_ += time_ms([&] { csv.append(row); });
           progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name,
-                                         b.run.label(), layout_name, threads, rs.name));
+                                         b.run.label(), layout_name, group.threads, rs.name));
         }
       return;
     }
+    const SahCost cost = sah_cost_of(b.params);
+    const BvhStats stats = compute_stats(bvh, scene.triangles.size(), cost);
 
     for (const auto& layout_name : layouts_for(b)) {
       bool any = false;
-      for (const auto& rs : sets) any |= wanted(layout_name, rs);
+      for (const auto& rs : group.sets) any |= group.wanted(b, layout_name, rs);
       if (!any) continue;
       TimedCompile compiled = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
       // The layout borrows the tree (bvh2 as built): both stay alive with the cells.
       std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled.layout));
       auto keep = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::shared_ptr<const CompiledLayout>>>(
-          tree, shared_layout);
-      const double compile_median = compiled.median_ms;
-      for (std::size_t s = 0; s < sets.size(); ++s) {
-        const RaySet& rs = sets[s];
-        if (!wanted(layout_name, rs)) continue;
+          job.tree, shared_layout);
+      for (std::size_t s = 0; s < group.sets.size(); ++s) {
+        const RaySet& rs = group.sets[s];
+        if (!group.wanted(b, layout_name, rs)) continue;
         TraceCell cell;
         CsvRow& row = cell.row;
-        row = base_row(scene, b, threads);
+        row = base_row(group, b);
         row["isa"] = shared_layout->isa();
         row["layout"] = layout_name;
         put_timing(row, "build_ms", build_t);
-        row["layout_ms"] = fmt::format("{:.4f}", compile_median);
+        row["layout_ms"] = fmt::format("{:.4f}", compiled.time.median);
+        put_build_layout_ms(row, build_t, compiled.time);
         row["mem_bytes"] = std::to_string(shared_layout->bytes());
         row["bytes_per_tri"] = bytes_per_triangle(shared_layout->bytes(), scene.triangles.size());
-        row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
+        row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(job.peak) : "";
         put_tree_stats(row, stats, cost);
         row["arity"] = std::to_string(bvh.arity);
-        set_up_cell(cell, scene, b, layout_name, threads, rs, s, build_t.median, keep);
+        set_up_cell(cell, group, b, layout_name, s, build_t.median, keep);
         const CompiledLayout* layout_ptr = shared_layout.get();
         const RaySet* set_ptr = &rs;
         cell.trace = [layout_ptr, set_ptr, hits = cell.hits, occluded = cell.occluded] {
@@ -359,36 +467,27 @@ class ExperimentRunner {
     }
   }
 
-  // An Embree build and the device it lives in, kept together for its cells.
-  struct EmbreeBuild {
-    explicit EmbreeBuild(int threads) : device(threads) {}
-    EmbreeDevice device;
-    std::unique_ptr<EmbreeScene> scene;
-  };
-
-  // Builds (timed) an Embree scene and queues a cell per supported Embree layout and wanted ray set.
-  template <class Wanted>
-  void prepare_embree(const Scene& scene, const ResolvedBuilder& b, int threads,
-                      const std::vector<RaySet>& sets, Wanted wanted, std::vector<TraceCell>& cells) {
-    auto held = std::make_shared<EmbreeBuild>(threads);
-    EmbreeDevice& device = held->device;
-    std::unique_ptr<EmbreeScene>& built = held->scene;
-    const auto [build_t, peak] = time_embree_builds(cfg_.reps, device, scene.triangles, b.quality, built);
+  // Queues a cell per supported Embree layout and wanted ray set of an Embree build.
+  void queue_embree(const Group& group, const BuildJob& job, std::vector<TraceCell>& cells) {
+    const ResolvedBuilder& b = *job.builder;
+    const TimingSummary build_t = summarize(job.ms);
+    const EmbreeScene* embree = job.embree->scene.get();
     for (const auto& layout : supported_embree_layouts_) {
-      for (std::size_t s = 0; s < sets.size(); ++s) {
-        const RaySet& rs = sets[s];
-        if (!wanted(layout.name, rs)) continue;
+      for (std::size_t s = 0; s < group.sets.size(); ++s) {
+        const RaySet& rs = group.sets[s];
+        if (!group.wanted(b, layout.name, rs)) continue;
         TraceCell cell;
         CsvRow& row = cell.row;
-        row = base_row(scene, b, threads);
-        row["isa"] = "embree:" + embree_isa(device);
+        row = base_row(group, b);
+        row["isa"] = "embree:" + embree_isa(job.embree->device);
         row["layout"] = layout.name;
         put_timing(row, "build_ms", build_t);
-        row["mem_bytes"] = std::to_string(built->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(built->bytes(), scene.triangles.size());
-        row["mem_peak_bytes"] = std::to_string(peak);
-        set_up_cell(cell, scene, b, layout.name, threads, rs, s, build_t.median, held);
-        const EmbreeScene* embree = built.get();
+        // rtcCommitScene builds and packs in one call.
+        row["build_layout_ms_median"] = fmt::format("{:.4f}", build_t.median);
+        row["mem_bytes"] = std::to_string(embree->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(embree->bytes(), group.scene.triangles.size());
+        row["mem_peak_bytes"] = std::to_string(job.peak);
+        set_up_cell(cell, group, b, layout.name, s, build_t.median, job.embree);
         const RaySet* set_ptr = &rs;
         cell.trace = [embree, layout, set_ptr, hits = cell.hits, occluded = cell.occluded] {
           trace_embree(*embree, layout, *set_ptr, *hits, *occluded);
@@ -405,7 +504,8 @@ class ExperimentRunner {
   std::vector<ResolvedBuilder> builders_;
   std::vector<EmbreeLayout> supported_embree_layouts_;
   std::filesystem::path output_;
-  std::string run_id_;
+  std::string continue_with_;  // the command that resumes this run, for the interrupt message
+  RunIdentity id_;
   int exit_code_ = 0;
   // Where the run's time goes besides measuring: the harness's own overhead, and the reference checks.
   float diagonal_ = 1.0f;  // of the current scene's box, for the tie tolerance

@@ -24,6 +24,7 @@
 #include "harness/layout.h"
 #include "harness/result_row.h"
 #include "harness/run_common.h"
+#include "harness/run_session.h"
 #include "harness/stress_metrics.h"
 #include "harness/timing.h"
 #include "traversal/exact_reference.h"
@@ -115,11 +116,12 @@ class StressRunner {
         options_(options),
         log_(log),
         env_(current_environment()),
-        run_id_(cfg.name + "-" + now_stamp()) {}
+        run_id_(make_run_id(cfg.name)) {}
 
   StressSummary run() {
     const std::filesystem::path output = options_.output ? *options_.output : cfg_.output;
     if (output.has_parent_path()) std::filesystem::create_directories(output.parent_path());
+    const OutputLock lock(output);
     CsvWriter csv(output, all_columns());
     csv_ = &csv;
     log_ << fmt::format(

@@ -7,14 +7,19 @@
 
 namespace sahbench {
 
+/// The median, extremes and count of a cell's repetitions, and the samples themselves in the order they
+/// were taken (round r of every cell of a scene and thread count is its r-th sample), so that ratios can
+/// be paired by round.
 struct TimingSummary {
   double median = 0.0, min = 0.0, max = 0.0;
   std::size_t reps = 0;
+  std::vector<double> samples;
 };
 
 inline TimingSummary summarize(std::vector<double> samples) {
   TimingSummary s;
   s.reps = samples.size();
+  s.samples = samples;
   if (samples.empty()) return s;
   std::sort(samples.begin(), samples.end());
   const std::size_t n = samples.size();

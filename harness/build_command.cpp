@@ -23,7 +23,7 @@ namespace {
 
 // One builder of the run, resolved, with its samples for the current thread count.
 struct Candidate {
-  BuilderSpec spec;
+  BuilderRun run;
   const BuilderInfo* info = nullptr;  // ours; null for Embree
   ParamSet params;
   std::optional<EmbreeQuality> embree_quality;
@@ -31,7 +31,7 @@ struct Candidate {
   Bvh last_tree;
   int64_t embree_bytes = 0;
 
-  std::string label() const { return spec.name; }
+  std::string label() const { return info ? run.name : "embree_" + to_string(*embree_quality); }
   std::string params_text() const {
     return info ? params.to_string() : "quality=" + to_string(*embree_quality);
   }
@@ -39,16 +39,15 @@ struct Candidate {
 
 std::vector<Candidate> resolve(const BuildCommandOptions& options) {
   std::vector<Candidate> out;
-  for (const auto& text : options.builders) {
+  for (const BuilderRun& run : options.builders) {
     Candidate c;
-    c.spec = parse_builder_spec(text);
-    if (c.spec.is_embree()) {
-      if (!c.spec.params.empty()) throw Error("builder '" + text + "': Embree builders take no parameters");
-      c.embree_quality = parse_embree_quality(c.spec.name.substr(7));
+    c.run = run;
+    if (run.is_embree()) {
+      c.embree_quality = parse_embree_quality(run.params.front().second);
     } else {
-      c.info = &find_builder(c.spec.name);
+      c.info = &find_builder(run.name);
       ParamOverrides all = options.params;
-      all.insert(all.end(), c.spec.params.begin(), c.spec.params.end());
+      all.insert(all.end(), run.params.begin(), run.params.end());
       c.params = resolve_params(c.info->name, c.info->params, all);
     }
     out.push_back(std::move(c));
@@ -57,22 +56,6 @@ std::vector<Candidate> resolve(const BuildCommandOptions& options) {
 }
 
 }  // namespace
-
-BuilderSpec parse_builder_spec(std::string_view text) {
-  BuilderSpec spec;
-  const auto colon = text.find(':');
-  spec.name = std::string(text.substr(0, colon));
-  if (spec.name.empty()) throw Error("builder '" + std::string(text) + "' has no name");
-  if (colon == std::string_view::npos) return spec;
-  std::string_view rest = text.substr(colon + 1);
-  while (!rest.empty()) {
-    const auto comma = rest.find(',');
-    spec.params.push_back(parse_override(rest.substr(0, comma)));
-    if (comma == std::string_view::npos) break;
-    rest = rest.substr(comma + 1);
-  }
-  return spec;
-}
 
 int run_build_command(const BuildCommandOptions& options, std::ostream& out, std::ostream& log) {
   if (options.reps < 1) throw Error("--reps must be at least 1 (got " + std::to_string(options.reps) + ")");

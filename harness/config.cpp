@@ -570,6 +570,37 @@ const CameraConfig* ExperimentConfig::camera_for(std::string_view scene) const {
   return nullptr;
 }
 
+BuilderRun parse_builder_run(std::string_view text) {
+  BuilderRun run;
+  const auto colon = text.find(':');
+  run.name = std::string(text.substr(0, colon));
+  if (run.name.empty()) throw Error("builder '" + std::string(text) + "' has no name");
+  for (std::string_view rest = colon == std::string_view::npos ? "" : text.substr(colon + 1);
+       !rest.empty();) {
+    const auto comma = rest.find(',');
+    run.params.push_back(parse_override(rest.substr(0, comma)));
+    rest = comma == std::string_view::npos ? "" : rest.substr(comma + 1);
+  }
+  for (const char* quality : {"low", "medium", "high"})
+    if (run.name == std::string("embree_") + quality) {
+      if (!run.params.empty())
+        throw Error("builder '" + std::string(text) + "': " + run.name + " takes no parameters");
+      run.name = "embree";
+      run.params = {{"quality", quality}};
+    }
+  if (!run.is_embree()) return run;
+  std::string quality = "medium";
+  for (const auto& [key, value] : run.params) {
+    if (key != "quality")
+      throw Error("builder '" + std::string(text) + "': embree: unknown parameter '" + key +
+                  "' (known: quality)");
+    quality = value;
+  }
+  parse_embree_quality(quality);  // names the known qualities
+  run.params = {{"quality", quality}};
+  return run;
+}
+
 std::string BuilderRun::label() const {
   if (params.empty()) return name;
   std::string out = name + "[";

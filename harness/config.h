@@ -114,6 +114,13 @@ struct BuilderRun {
   bool operator==(const BuilderRun&) const = default;
 };
 
+/// A builder run as the command line writes it: "NAME" or "NAME:key=value,key=value", for one of our
+/// builders or Embree's own BVH ("embree:quality=high"; "embree_low", "embree_medium" and "embree_high"
+/// are short for the three qualities). Embree's run always has exactly its quality (medium by default),
+/// as a config's; malformed text or an unknown Embree parameter or quality is an Error naming it. Our
+/// builders' names and parameters are checked where they are resolved against the registry.
+BuilderRun parse_builder_run(std::string_view text);
+
 enum class RayKind { kPrimary, kShadow, kDiffuse, kAmbientOcclusion, kRandom };
 
 // to_string(RayKind) lives in harness/ray_sets.h (one definition); the config spells the kinds the same.

@@ -14,7 +14,6 @@
 #include "core/build_input.h"
 #include "core/error.h"
 #include "core/validate.h"
-#include "harness/build_command.h"
 #include "harness/color_maps.h"
 #include "harness/config.h"
 #include "harness/image_io.h"
@@ -123,7 +122,7 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
       options.height > kMaxImageSide)
     throw Error(fmt::format("image size {}x{}: each side must be in 1..{}", options.width, options.height,
                             kMaxImageSide));
-  const BuilderSpec spec = parse_builder_spec(options.builder);
+  const BuilderRun spec = parse_builder_run(options.builder);
   if (spec.is_embree())
     throw Error("--builder '" + options.builder +
                 "': Embree's own BVH cannot be traversed with counters here; "

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "harness/build_command.h"
 #include "harness/compare.h"
+#include "harness/config.h"
 #include "harness/embree_bvh_builder.h"
 #include "harness/image_command.h"
 #include "harness/list_command.h"
@@ -28,15 +29,15 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   BuildCommandOptions build;
-  std::vector<std::string> params;
+  std::vector<std::string> params, build_builders;
   auto* build_cmd =
       app.add_subcommand("build", "Load a scene, build, validate, and print build time and tree statistics");
   build_cmd->add_option("--scene", build.scene, "scene file, shared-scene name, or proc:KIND[:key=value,...]")
       ->required();
   build_cmd
-      ->add_option("--builder", build.builders,
-                   "builder NAME or NAME:key=value,...; repeatable; embree_low|embree_medium|embree_high "
-                   "for Embree's rtcCommitScene")
+      ->add_option("--builder", build_builders,
+                   "builder NAME or NAME:key=value,...; repeatable; embree:quality=low|medium|high "
+                   "(or embree_low|embree_medium|embree_high) for Embree's rtcCommitScene")
       ->required();
   build_cmd->add_option("--param", params, "key=value for every one of our builders; repeatable");
   build_cmd->add_option("--threads", build.threads, "thread counts, e.g. 1,2")->delimiter(',');
@@ -136,6 +137,7 @@ int main(int argc, char** argv) {
   try {
     if (*build_cmd) {
       for (const auto& p : params) build.params.push_back(parse_override(p));
+      for (const auto& b : build_builders) build.builders.push_back(parse_builder_run(b));
       return run_build_command(build, std::cout, std::cerr);
     }
     if (*run_cmd) {

@@ -10,7 +10,7 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
-#include "harness/build_command.h"
+#include "harness/config.h"
 #include "harness/layout.h"
 #include "harness/toml_file.h"
 
@@ -131,12 +131,14 @@ void read_settings(const Reader& r, const toml::table& root, StressConfig& c) {
 
   c.builders = all_builder_specs();
   if (const auto* v = t->get("builders")) {
-    c.builders = r.strings(*v, "stress.builders", false);
+    const std::vector<std::string> texts = r.strings(*v, "stress.builders", false);
     const auto& list = *v->as_array();
-    for (std::size_t i = 0; i < c.builders.size(); ++i) {
+    c.builders.clear();
+    for (std::size_t i = 0; i < texts.size(); ++i) {
       try {
-        const BuilderSpec spec = parse_builder_spec(c.builders[i]);
+        const BuilderRun spec = parse_builder_run(texts[i]);
         if (spec.is_embree()) throw Error("Embree's own BVH is run through stress.embree, not as a builder");
+        c.builders.push_back(spec);
         const BuilderInfo& info = find_builder(spec.name);
         const ParamSet params = resolve_params(info.name, info.params, spec.params);
         if (info.check) info.check(params);
@@ -223,12 +225,12 @@ void read_cases(const Reader& r, const toml::table& root, StressConfig& c) {
 
 }  // namespace
 
-std::vector<std::string> all_builder_specs() {
+std::vector<BuilderRun> all_builder_specs() {
   std::set<uint32_t> layout_arities;
   for (const auto& layout : layouts()) layout_arities.insert(layout.arity);
-  std::vector<std::string> out;
+  std::vector<BuilderRun> out;
   for (const auto& b : builders()) {
-    out.push_back(b.name);
+    out.push_back({b.name, {}});
     // A builder with an `arity` parameter also runs at every other arity some layout traverses, so
     // that every layout gets a tree.
     const bool has_arity =
@@ -236,7 +238,7 @@ std::vector<std::string> all_builder_specs() {
     if (!has_arity || !b.arity) continue;
     const uint32_t default_arity = b.arity(resolve_params(b.name, b.params, {}));
     for (const uint32_t arity : layout_arities)
-      if (arity != default_arity && arity != 2) out.push_back(b.name + ":arity=" + std::to_string(arity));
+      if (arity != default_arity && arity != 2) out.push_back({b.name, {{"arity", std::to_string(arity)}}});
   }
   return out;
 }

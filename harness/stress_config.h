@@ -32,6 +32,7 @@
 #include <string_view>
 #include <vector>
 
+#include "harness/config.h"
 #include "harness/stress_cases.h"
 
 namespace sahbench {
@@ -45,8 +46,8 @@ struct StressConfig {
   int trace_reps = 5;
   int trace_warmup = 1;
   double build_time_limit_s = 30.0;
-  std::vector<std::string> builders;  ///< builder specs "name[:key=value,...]" (build_command.h's form)
-  std::vector<std::string> layouts;   ///< layout specs in canonical form (LayoutSpec::text)
+  std::vector<BuilderRun> builders;  ///< parse_builder_run's, each checked against the registry
+  std::vector<std::string> layouts;  ///< layout specs in canonical form (LayoutSpec::text)
   std::vector<bool> embree_robust{false, true};
   std::vector<StressCaseSpec> cases;
 
@@ -55,7 +56,7 @@ struct StressConfig {
 
 /// Every registered builder with its defaults; builders with an `arity` parameter also at every other
 /// wide arity a registered layout traverses (e.g. wide_collapse:arity=4 beside its default 8).
-std::vector<std::string> all_builder_specs();
+std::vector<BuilderRun> all_builder_specs();
 /// Every registered layout with every triangle test and every box test, the defaults first.
 std::vector<std::string> all_layout_variants();
 

@@ -16,7 +16,7 @@
 #include "core/error.h"
 #include "core/validate.h"
 #include "harness/bounded_run.h"
-#include "harness/build_command.h"
+#include "harness/config.h"
 #include "harness/csv.h"
 #include "harness/embree_scene.h"
 #include "harness/embree_trace.h"
@@ -126,8 +126,7 @@ class StressRunner {
     csv_ = &csv;
     log_ << fmt::format(
         "stress run {}: {} cases, builders {}, {} layout variants, Embree modes {}; writing {}\n", run_id_,
-        cfg_.cases.size(), fmt::join(cfg_.builders, " "), cfg_.layouts.size(), cfg_.embree_robust.size(),
-        output.string());
+        cfg_.cases.size(), builder_labels(), cfg_.layouts.size(), cfg_.embree_robust.size(), output.string());
     const auto start = std::chrono::steady_clock::now();
     for (const StressCaseSpec& spec : cfg_.cases) {
       if (!options_.only.empty() && spec.name.find(options_.only) == std::string::npos) continue;
@@ -190,7 +189,7 @@ class StressRunner {
     const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                                     static_cast<std::size_t>(cfg_.threads));
     std::set<uint32_t> arities_with_variants;
-    for (const std::string& builder : cfg_.builders) run_builder(ctx, builder, arities_with_variants);
+    for (const BuilderRun& builder : cfg_.builders) run_builder(ctx, builder, arities_with_variants);
     for (const bool robust : cfg_.embree_robust) run_embree(ctx, robust);
   }
 
@@ -277,17 +276,22 @@ class StressRunner {
     return out;
   }
 
-  void run_builder(const CaseContext& ctx, const std::string& builder_text,
+  std::string builder_labels() const {
+    std::string out;
+    for (const BuilderRun& b : cfg_.builders) out += (out.empty() ? "" : " ") + b.label();
+    return out;
+  }
+
+  void run_builder(const CaseContext& ctx, const BuilderRun& spec,
                    std::set<uint32_t>& arities_with_variants) {
     const StressCase& c = *ctx.c;
-    const BuilderSpec spec = parse_builder_spec(builder_text);
     const BuilderInfo* info = &find_builder(spec.name);
     const ParamSet params = resolve_params(info->name, info->params, spec.params);
     CsvRow row = base_row(ctx);
     row["builder"] = info->name;
     row["builder_params"] = params.to_string();
     row["isa"] = env_.isa;
-    const std::string label = fmt::format("case {}: builder {}", c.spec.name, builder_text);
+    const std::string label = fmt::format("case {}: builder {}", c.spec.name, spec.label());
 
     // The build owns copies of what it uses, so that an abandoned build cannot outlive its inputs.
     auto triangles = ctx.triangles;

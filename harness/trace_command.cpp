@@ -9,7 +9,7 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
-#include "harness/build_command.h"
+#include "harness/config.h"
 #include "harness/layout.h"
 #include "scenes/load.h"
 
@@ -65,7 +65,7 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
 void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
   const std::vector<Ray> rays = read_rays(options.rays);
   const Scene scene = load_scene(options.scene);
-  const BuilderSpec spec = parse_builder_spec(options.builder);
+  const BuilderRun spec = parse_builder_run(options.builder);
   const BuilderInfo& info = find_builder(spec.name);
   const ParamSet params = resolve_params(info.name, info.params, spec.params);
   const Bvh bvh = info.build(BuildInput::from_triangles(scene.triangles), params);

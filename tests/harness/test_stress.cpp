@@ -175,9 +175,9 @@ TEST(HarnessStressConfig, ChecksKindsParametersAndNames) {
 
 TEST(HarnessStressConfig, DefaultsCoverEveryBuilderLayoutAndVariant) {
   register_embree_builders();
-  const std::vector<std::string> specs = all_builder_specs();
+  const std::vector<BuilderRun> specs = all_builder_specs();
   for (const BuilderInfo& b : builders())
-    EXPECT_NE(std::find(specs.begin(), specs.end(), b.name), specs.end()) << b.name;
+    EXPECT_NE(std::find(specs.begin(), specs.end(), BuilderRun{b.name, {}}), specs.end()) << b.name;
   const std::vector<std::string> variants = all_layout_variants();
   EXPECT_EQ(variants.size(), layouts().size() * 12);  // 4 triangle tests x 3 box tests
   for (const LayoutInfo& l : layouts()) {

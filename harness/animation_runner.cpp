@@ -443,8 +443,7 @@ class AnimationRunner {
         row["mem_peak_bytes"] = std::to_string(peak);
         put_ray_set(row, rs);
         put_timing(row, "trace_mrays", trace_t);
-        if (b.variant != Variant::kEmbreeRefit)
-          row["build_layout_ms_median"] = fmt::format("{:.4f}", build_t.median);
+        if (b.variant != Variant::kEmbreeRefit) put_build_layout_ms(row, build_t, {});
         put_hit_fraction(row, hits, occluded);
         put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
         if (b.variant == Variant::kEmbreeRefit)

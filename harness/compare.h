@@ -2,8 +2,11 @@
 // `sahbench compare BASELINE.csv NEW.csv`: regression checks for CI. Deterministic metrics (SAH cost,
 // node counts, nodes and primitives per ray, structure bytes, mismatches) must match the baseline
 // exactly or within a declared tolerance; timings are compared only as ratios to Embree medium from
-// the same run, with a noise margin taken from the measured spread. Prints a Markdown summary, can
-// write JSON for dashboards, and returns non-zero on a regression.
+// the same run, each from samples paired by round, and a change of such a ratio is flagged only when its
+// 95% interval (harness/ratio_stats.h) lies wholly on one side of no change and the change is larger
+// than a margin. Bad data (a missing column, a field that is not a number, a cell twice, two runs under
+// one run id) is an Error naming file, column and line. Prints a Markdown summary, can write JSON for
+// dashboards, and returns non-zero on a regression.
 
 #include <filesystem>
 #include <iosfwd>
@@ -18,7 +21,9 @@ struct CompareOptions {
   std::filesystem::path current;
   bool deterministic_only = false;            ///< ignore timings (CI on a shared machine)
   std::optional<std::filesystem::path> json;  ///< write github-action-benchmark style JSON here
-  double min_timing_margin = 0.10;            ///< noise floor for timing ratios (machines vary 10-25%)
+  /// The smallest change of a timing ratio worth flagging (0.02: 2%); noise is told apart by the change's
+  /// interval, not by this margin.
+  double min_timing_margin = 0.02;
 };
 
 /// One deterministic metric: its column, whether larger is worse, and the relative tolerance within
@@ -34,9 +39,17 @@ struct CompareResult {
   int regressions = 0;
   int improvements = 0;
   int compared_cells = 0;
-  int missing_cells = 0;  ///< in the baseline but not in the new run
+  int missing_cells = 0;             ///< in the baseline but not in the new run
+  int timings_without_interval = 0;  ///< timing ratios of one round in a run, which cannot be told from noise
 };
 
+/// The required columns: the cell key (scene, builder, builder_params, layout, threads, ray_set, frame),
+/// run_id, run_fingerprint and each deterministic metric, and, unless deterministic_only, the samples
+/// (build_ms_samples, trace_mrays_samples).
+std::vector<std::string> required_columns(bool deterministic_only);
+
+/// Compares the latest run of options.current with the latest run of options.baseline; prints the
+/// summary to `out`. Bad data in either file is an Error naming file, column and line.
 CompareResult compare_results(const CompareOptions& options, std::ostream& out);
 
 }  // namespace sahbench

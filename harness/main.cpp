@@ -94,7 +94,10 @@ int main(int argc, char** argv) {
   compare_cmd->add_option("current", compare.current, "new CSV")->required();
   compare_cmd->add_flag("--deterministic-only", compare.deterministic_only,
                         "compare SAH, counts, bytes, mismatches; ignore timings");
-  compare_cmd->add_option("--margin", compare.min_timing_margin, "smallest noise margin for timing ratios")
+  compare_cmd
+      ->add_option(
+          "--margin", compare.min_timing_margin,
+          "smallest change of a timing ratio worth flagging (its 95% interval must also exclude no change)")
       ->capture_default_str();
   compare_cmd->add_option(
       "--json", compare_json,

@@ -1,9 +1,12 @@
 #pragma once
 // `sahbench report RESULTS.csv`: a table per scene, thread count (and animation frame), rows of builder
-// and layout, columns of build time, memory, SAH cost and rays/second per ray set, each also as a ratio
-// to Embree medium (rtcIntersect1 / rtcOccluded1) from the same run, with the best value of each column
-// marked and a caption naming the machine, commit, thread count and repetitions. Markdown (the default)
-// or LaTeX (booktabs) for papers.
+// and layout, columns of build time, build + layout time, memory, SAH cost and rays/second per ray set,
+// with ratios to Embree medium (rtcIntersect1 / rtcOccluded1) from the same run: for the timings from
+// samples paired by round, with a 95% interval and a mark where it excludes 1 (harness/ratio_stats.h).
+// The best value of each column is marked, a caption names the machine, commit, thread count,
+// repetitions and the share of rays that hit, and a note names the cells that another run of the same
+// fingerprint has and this one lacks. A CSV that is not sahbench's, or a run whose rows carry two
+// fingerprints, is an Error. Markdown (the default) or LaTeX (booktabs) for papers.
 
 #include <filesystem>
 #include <iosfwd>

@@ -31,21 +31,35 @@ std::string format_value(double value, int column_decimals) {
   return fmt::format("{:.{}f}", value, decimals_for(value, column_decimals));
 }
 
-std::string markdown_cell(const ReportCell& cell, int decimals) {
+// " (1.08 [1.03, 1.12] UP)": the timing ratio and, where its interval excludes 1, the mark of the side.
+std::string interval_text(const RatioInterval& ratio, bool larger_is_better, std::string_view ahead,
+                          std::string_view behind) {
+  const Verdict v = verdict(ratio, larger_is_better);
+  const std::string_view mark = v == Verdict::kAhead ? ahead : v == Verdict::kBehind ? behind : "";
+  return fmt::format(" ({}{}{})", format_ratio(ratio), mark.empty() ? "" : " ", mark);
+}
+
+std::string markdown_cell(const ReportCell& cell, const ReportColumn& column) {
   if (!cell.value) return "-";
-  std::string s = format_value(*cell.value, decimals);
+  std::string s = format_value(*cell.value, column.decimals);
   if (cell.best) s = "**" + s + "**";
   if (!cell.note.empty()) s += " [" + cell.note + "]";
-  if (cell.ratio) s += fmt::format(" ({:.2f}x)", *cell.ratio);
+  if (cell.interval)
+    s += interval_text(*cell.interval, column.larger_is_better, "\u25B2", "\u25BC");  // ▲ ▼
+  else if (cell.ratio)
+    s += fmt::format(" ({:.2f}x)", *cell.ratio);
   return s;
 }
 
-std::string latex_cell(const ReportCell& cell, int decimals) {
+std::string latex_cell(const ReportCell& cell, const ReportColumn& column) {
   if (!cell.value) return "--";
-  std::string s = format_value(*cell.value, decimals);
+  std::string s = format_value(*cell.value, column.decimals);
   if (cell.best) s = "\\textbf{" + s + "}";
   if (!cell.note.empty()) s += " [" + latex_escape(cell.note) + "]";
-  if (cell.ratio) s += fmt::format(" ({:.2f}$\\times$)", *cell.ratio);
+  if (cell.interval)
+    s += interval_text(*cell.interval, column.larger_is_better, "\\textuparrow", "\\textdownarrow");
+  else if (cell.ratio)
+    s += fmt::format(" ({:.2f}$\\times$)", *cell.ratio);
   return s;
 }
 
@@ -81,12 +95,12 @@ void render_markdown(const ReportTable& table, std::ostream& out) {
   for (const ReportRow& row : table.rows) {
     fmt::print(out, "| {} | {} |", row.builder, row.layout);
     for (std::size_t c = 0; c < table.columns.size(); ++c)
-      fmt::print(out, " {} |",
-                 c < row.cells.size() ? markdown_cell(row.cells[c], table.columns[c].decimals) : "-");
+      fmt::print(out, " {} |", c < row.cells.size() ? markdown_cell(row.cells[c], table.columns[c]) : "-");
     fmt::print(out, "\n");
   }
   // pandoc reads a "Table:" paragraph next to a pipe table as its caption.
   if (!table.caption.empty()) fmt::print(out, "\nTable: {}\n", table.caption);
+  for (const auto& note : table.notes) fmt::print(out, "\nNote: {}\n", note);
   fmt::print(out, "\n");
 }
 
@@ -101,11 +115,13 @@ void render_latex(const ReportTable& table, std::ostream& out) {
   for (const ReportRow& row : table.rows) {
     fmt::print(out, "    {} & {}", latex_escape(row.builder_short), latex_escape(row.layout));
     for (std::size_t c = 0; c < table.columns.size(); ++c)
-      fmt::print(out, " & {}",
-                 c < row.cells.size() ? latex_cell(row.cells[c], table.columns[c].decimals) : "--");
+      fmt::print(out, " & {}", c < row.cells.size() ? latex_cell(row.cells[c], table.columns[c]) : "--");
     fmt::print(out, " \\\\\n");
   }
-  fmt::print(out, "    \\bottomrule\n  \\end{{tabular}}\n\\end{{table}}\n\n");
+  fmt::print(out, "    \\bottomrule\n  \\end{{tabular}}\n");
+  for (const auto& note : table.notes)
+    fmt::print(out, "  \\par\\smallskip{{\\footnotesize Note: {}}}\n", latex_escape(note));
+  fmt::print(out, "\\end{{table}}\n\n");
 }
 
 std::string latex_escape(std::string_view text) {

@@ -1,13 +1,16 @@
 #pragma once
 // One table of `sahbench report`, independent of its output format: numeric cells with their ratio to
-// the anchor (Embree medium) and a mark on the best value of each column, rendered as Markdown (GitHub
-// and pandoc pipe tables) or as a LaTeX table in the booktabs style.
+// the anchor (Embree medium; for timings with a 95% interval and a mark where it lies wholly on one side
+// of 1) and a mark on the best value of each column, rendered as Markdown (GitHub and pandoc pipe
+// tables) or as a LaTeX table in the booktabs style.
 
 #include <iosfwd>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "harness/ratio_stats.h"
 
 namespace sahbench {
 
@@ -25,6 +28,10 @@ struct ReportCell {
   /// Printed after the value in brackets, e.g. "c_trav=2": the value is on another scale than the
   /// column's others, so mark_best leaves it out.
   std::string note = {};
+  /// A timing's ratio to the anchor with its interval (ratio_stats.h), printed instead of `ratio` as
+  /// "(1.08 [1.03, 1.12] ▲)": ▲ ahead of the anchor, ▼ behind (verdict with the column's
+  /// larger_is_better), no mark within noise.
+  std::optional<RatioInterval> interval = {};
 };
 
 struct ReportRow {
@@ -40,6 +47,7 @@ struct ReportTable {
   std::string label;    ///< LaTeX \label key, letters, digits, ':' and '-' only
   std::vector<ReportColumn> columns;
   std::vector<ReportRow> rows;
+  std::vector<std::string> notes = {};  ///< plain text, printed after the table ("Note: ...")
 };
 
 /// Marks in each column every cell whose value, rounded as printed, is the best of the column: the
@@ -48,11 +56,14 @@ struct ReportTable {
 /// compared values marks nothing.
 void mark_best(ReportTable& table);
 
-/// "## title", the pipe table (best values in **bold**, ratios as "(0.85x)") and "Table: caption".
+/// "## title", the pipe table (best values in **bold**, ratios as "(0.85x)", timing ratios as
+/// "(0.85 [0.80, 0.90] ▼)"), "Table: caption" and a "Note:" paragraph per note.
 void render_markdown(const ReportTable& table, std::ostream& out);
 
 /// A `table` float with \caption, \label and a booktabs tabular (\toprule, \midrule, \bottomrule); best
-/// values in \textbf, ratios as "(0.85$\times$)". Needs \usepackage{booktabs}.
+/// values in \textbf, ratios as "(0.85$\times$)", timing ratios as "(0.85 [0.80, 0.90] \textdownarrow)",
+/// notes in small type under the tabular. Needs \usepackage{booktabs} (the arrows are textcomp's, in
+/// the LaTeX kernel since 2020).
 void render_latex(const ReportTable& table, std::ostream& out);
 
 /// `text` with LaTeX's special characters escaped: \ & % $ # _ { } ~ ^ (and < > | outside math mode).

@@ -28,10 +28,14 @@ void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t) 
 void put_build_layout_ms(CsvRow& row, const TimingSummary& build, const TimingSummary& layout) {
   // Round r's build plus compile r, each after freeing the last: the like-for-like with one
   // rtcCommitScene, whose build and packing are one call.
-  std::vector<double> sums;
-  for (std::size_t r = 0; r < std::min(build.samples.size(), layout.samples.size()); ++r)
-    sums.push_back(build.samples[r] + layout.samples[r]);
-  row["build_layout_ms_median"] = fmt::format("{:.4f}", summarize(std::move(sums)).median);
+  std::vector<double> sums = build.samples;
+  if (!layout.samples.empty()) {
+    sums.resize(std::min(build.samples.size(), layout.samples.size()));
+    for (std::size_t r = 0; r < sums.size(); ++r) sums[r] += layout.samples[r];
+  }
+  const TimingSummary t = summarize(std::move(sums));
+  row["build_layout_ms_median"] = fmt::format("{:.4f}", t.median);
+  row["build_layout_ms_samples"] = fmt::format("{:.4f}", fmt::join(t.samples, ";"));
 }
 
 void put_hit_fraction(CsvRow& row, std::span<const Hit> hits, std::span<const uint8_t> occluded) {

@@ -26,7 +26,8 @@ void put_tree_stats(CsvRow& row, const BvhStats& stats, const SahCost& cost);
 /// separated by ';'), for prefix "build_ms" or "trace_mrays".
 void put_timing(CsvRow& row, const std::string& prefix, const TimingSummary& t);
 
-/// build_layout_ms_median: the median over rounds of build plus layout compile (ms), paired by index.
+/// build_layout_ms_median and build_layout_ms_samples: build plus layout compile (ms) per round, paired by
+/// index, and their median. For Embree, whose rtcCommitScene does both, pass an empty `layout`.
 void put_build_layout_ms(CsvRow& row, const TimingSummary& build, const TimingSummary& layout);
 
 /// hit_fraction (4 decimals): the share of the rays in `hits` that found a hit, or of `occluded` that are

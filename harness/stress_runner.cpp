@@ -277,9 +277,9 @@ class StressRunner {
   }
 
   std::string builder_labels() const {
-    std::string out;
-    for (const BuilderRun& b : cfg_.builders) out += (out.empty() ? "" : " ") + b.label();
-    return out;
+    std::vector<std::string> labels;
+    for (const BuilderRun& b : cfg_.builders) labels.push_back(b.label());
+    return fmt::format("{}", fmt::join(labels, " "));
   }
 
   void run_builder(const CaseContext& ctx, const BuilderRun& spec,

@@ -1,6 +1,7 @@
 // `sahbench report` on a hand-written CSV whose best values and ratios are known: Markdown keeps its
-// layout, LaTeX is a booktabs table with escaped text, the best value of each column is marked, and the
-// caption names the machine, commit, threads and repetitions.
+// layout, LaTeX is a booktabs table with escaped text, the best value of each column is marked, the
+// caption names the machine, commit, threads and repetitions, timing ratios come with their 95% interval
+// and a mark only where it excludes 1, and a CSV that is not sahbench's, or mixes two runs, is refused.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 
 #include "core/error.h"
 #include "harness/csv.h"
+#include "harness/ratio_stats.h"
 #include "harness/report.h"
 #include "harness/report_table.h"
 
@@ -25,10 +27,51 @@ std::filesystem::path temp_csv(const std::string& name) {
   return path;
 }
 
+// The Error `f` throws; a test fails when it throws none.
+template <class F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no Error thrown";
+  return "";
+}
+
+std::vector<std::string> columns_with_samples() {
+  std::vector<std::string> columns = design_columns();
+  for (const char* c : {"build_isa", "run_fingerprint", "build_ms_samples", "trace_mrays_samples",
+                        "build_layout_ms_median", "build_layout_ms_samples", "hit_fraction"})
+    if (std::find(columns.begin(), columns.end(), c) == columns.end()) columns.push_back(c);
+  return columns;
+}
+
+std::string join(const std::vector<double>& samples) {
+  std::string out;
+  for (const double v : samples) {
+    if (!out.empty()) out += ';';
+    out += std::to_string(v);
+  }
+  return out;
+}
+
+// Three rounds of the same value: exact ratios, with intervals of zero width. Our build + layout is the
+// build plus 1 ms, Embree's the build (rtcCommitScene does both).
 CsvRow make_row(const std::string& builder, const std::string& params, const std::string& layout,
                 const std::string& ray_set, double build_ms, double mem_bytes, const std::string& sah,
                 double mrays, const std::string& frame = "0") {
+  auto three = [](double v) {
+    const std::string s = std::to_string(v);
+    return s + ";" + s + ";" + s;
+  };
   return {{"run_id", "r1"},
+          {"run_fingerprint", "0123456789abcdef"},
+          {"build_ms_samples", three(build_ms)},
+          {"trace_mrays_samples", three(mrays)},
+          {"build_layout_ms_median", std::to_string(builder == "embree" ? build_ms : build_ms + 1.0)},
+          {"build_layout_ms_samples", three(builder == "embree" ? build_ms : build_ms + 1.0)},
+          {"hit_fraction", ray_set == "primary" ? "0.8123" : "0.4567"},
           {"git_commit", "abc123"},
           {"cpu", "Test CPU 9000"},
           {"isa", "avx2"},
@@ -53,9 +96,7 @@ CsvRow make_row(const std::string& builder, const std::string& params, const std
 // Embree medium (the anchor), two binned runs (one faster, one smaller), a sweep run with the lowest SAH.
 std::filesystem::path write_results(const std::string& name) {
   const auto path = temp_csv(name);
-  std::vector<std::string> columns = design_columns();
-  columns.push_back("build_isa");
-  CsvWriter w(path, columns);
+  CsvWriter w(path, columns_with_samples());
   for (const std::string rs : {"primary", "shadow"}) {
     w.append(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 4.0 * (1 << 20), "",
                       rs == "primary" ? 8.0 : 4.0));
@@ -71,23 +112,39 @@ TEST(Report, MarkdownMarksTheBestOfEachColumnWithRatiosAndCaption) {
   print_report({{write_results("md.csv")}, ""}, out);
   const std::string md = out.str();
   EXPECT_NE(md.find("## proc:soup (100 triangles), 2 threads"), std::string::npos) << md;
-  // Fastest build, smallest memory: binned bins=8; most rays/s: binned bins=32; lowest SAH: sweep.
-  EXPECT_NE(md.find("| binned_sah [bins=8;max_leaf=8] | bvh2 | **5.0** (0.50x) | **2.0** (0.50x) | 40.50 | "
-                    "2.00 (0.25x) |"),
+  EXPECT_NE(md.find("| builder | layout | build ms | build+layout ms | memory MiB | SAH | primary Mrays/s | "
+                    "shadow Mrays/s |"),
             std::string::npos)
       << md;
-  EXPECT_NE(md.find("| binned_sah [bins=32;max_leaf=8] | bvh2 | 20.0 (2.00x) | 3.0 (0.75x) | 39.25 | "
-                    "**16.00** (2.00x) | "
-                    "**16.00** (4.00x) |"),
+  // Fastest build, smallest memory: binned bins=8; most rays/s: binned bins=32; lowest SAH: sweep. Build
+  // + layout is against Embree's build; behind Embree (more time, fewer rays/s) is marked, and so is
+  // ahead, since each interval (of zero width here) excludes 1.
+  EXPECT_NE(
+      md.find(
+          "| binned_sah [bins=8;max_leaf=8] | bvh2 | **5.0** | **6.0** (0.60 [0.60, 0.60] \u25B2) | "
+          "**2.0** (0.50x) | 40.50 | 2.00 (0.25 [0.25, 0.25] \u25BC) | 2.00 (0.50 [0.50, 0.50] \u25BC) |"),
+      std::string::npos)
+      << md;
+  EXPECT_NE(
+      md.find("| binned_sah [bins=32;max_leaf=8] | bvh2 | 20.0 | 21.0 (2.10 [2.10, 2.10] \u25BC) | "
+              "3.0 (0.75x) | 39.25 | **16.00** (2.00 [2.00, 2.00] \u25B2) | **16.00** (4.00 [4.00, 4.00] "
+              "\u25B2) |"),
+      std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| sweep_sah [max_leaf=8] | bvh2_packed | 30.0 | 31.0 (3.10 [3.10, 3.10] \u25BC) | 6.0 "
+                    "(1.50x) | **38.00** |"),
             std::string::npos)
       << md;
-  EXPECT_NE(md.find("| sweep_sah [max_leaf=8] | bvh2_packed | 30.0 (3.00x) | 6.0 (1.50x) | **38.00** |"),
+  // Embree against itself: within noise, no mark.
+  EXPECT_NE(md.find("| embree [quality=medium] | embree_1 | 10.0 | 10.0 (1.00 [1.00, 1.00]) | 4.0 (1.00x) | "
+                    "- | 8.00 (1.00 [1.00, 1.00]) | 4.00 (1.00 [1.00, 1.00]) |"),
             std::string::npos)
       << md;
-  EXPECT_NE(md.find("| embree [quality=medium] | embree_1 | 10.0 (1.00x) | 4.0 (1.00x) | - | 8.00 (1.00x) | "
-                    "4.00 (1.00x) |"),
-            std::string::npos)
+  EXPECT_NE(
+      md.find("Share of rays that hit (closest) or are occluded (any hit): primary 0.8123, shadow 0.4567."),
+      std::string::npos)
       << md;
+  EXPECT_NE(md.find("\u25B2 ahead of Embree"), std::string::npos) << md;
   EXPECT_NE(
       md.find("Table: proc:soup (100 triangles), 2 threads; Test CPU 9000 (built for avx512), commit abc123; "
               "medians of 5 builds and 7 traces; kernels: avx2."),
@@ -99,8 +156,9 @@ TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {
   // Two rows costed with c_trav = 1 and one with c_trav = 2, whose larger constants make its cost
   // incomparable (here it is even the lowest): it gets its constants as a note and no bold.
   const auto path = temp_csv("sah_models.csv");
-  std::vector<std::string> columns = design_columns();
-  for (const char* c : {"build_isa", "sah_c_trav", "sah_c_isect", "sah_block"}) columns.push_back(c);
+  std::vector<std::string> columns = columns_with_samples();
+  for (const char* c : {"sah_c_trav", "sah_c_isect", "sah_block"})
+    if (std::find(columns.begin(), columns.end(), c) == columns.end()) columns.push_back(c);
   {
     CsvWriter w(path, columns);
     auto with_model = [](CsvRow row, const std::string& c_trav) {
@@ -120,8 +178,12 @@ TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {
   std::ostringstream out;
   print_report({{path}, ""}, out);
   const std::string md = out.str();
-  EXPECT_NE(md.find("| bvh8 | 6.0 (0.60x) | **1.0** (1.00x) | **39.25** |"), std::string::npos) << md;
-  EXPECT_NE(md.find("| bvh8 | 7.0 (0.70x) | **1.0** (1.00x) | 30.00 [c_trav=2] |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| bvh8 | 6.0 | 7.0 (0.70 [0.70, 0.70] \u25B2) | **1.0** (1.00x) | **39.25** |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| bvh8 | 7.0 | 8.0 (0.80 [0.80, 0.80] \u25B2) | **1.0** (1.00x) | 30.00 [c_trav=2] |"),
+            std::string::npos)
+      << md;
   EXPECT_NE(
       md.find(
           "SAH costs are in each builder's own constants; those in brackets differ from the table's usual "
@@ -142,14 +204,15 @@ TEST(Report, LatexIsABooktabsTableWithEscapedTextAndShortLabels) {
   print_report({{write_results("tex.csv")}, "", ReportFormat::kLatex}, out);
   const std::string tex = out.str();
   EXPECT_NE(tex.find("\\begin{table}"), std::string::npos) << tex;
-  EXPECT_NE(tex.find("\\begin{tabular}{llrrrrr}"), std::string::npos) << tex;
+  EXPECT_NE(tex.find("\\begin{tabular}{llrrrrrr}"), std::string::npos) << tex;
   EXPECT_NE(tex.find("\\toprule"), std::string::npos);
   EXPECT_NE(tex.find("\\midrule"), std::string::npos);
   EXPECT_NE(tex.find("\\bottomrule"), std::string::npos);
   EXPECT_NE(tex.find("\\label{tab:proc-soup-t2}"), std::string::npos) << tex;
   // Only the parameter that varies is in the row; the shared one is in the caption, escaped.
-  EXPECT_NE(tex.find("    binned\\_sah [bins=8] & bvh2 & \\textbf{5.0} (0.50$\\times$) & \\textbf{2.0} "
-                     "(0.50$\\times$) & 40.50"),
+  EXPECT_NE(tex.find("    binned\\_sah [bins=8] & bvh2 & \\textbf{5.0} & \\textbf{6.0} (0.60 [0.60, 0.60] "
+                     "\\textuparrow) & "
+                     "\\textbf{2.0} (0.50$\\times$) & 40.50 & 2.00 (0.25 [0.25, 0.25] \\textdownarrow)"),
             std::string::npos)
       << tex;
   EXPECT_NE(tex.find("    sweep\\_sah & bvh2\\_packed & "), std::string::npos) << tex;
@@ -160,11 +223,12 @@ TEST(Report, LatexIsABooktabsTableWithEscapedTextAndShortLabels) {
       std::string::npos)
       << tex;
   EXPECT_EQ(tex.find("**"), std::string::npos) << tex;
-  // Every row ends with \\ and has one & per column boundary (2 label columns + 5 numeric columns).
+  EXPECT_EQ(tex.find("\u25B2"), std::string::npos) << tex;  // LaTeX gets \textuparrow, not the glyph
+  // Every row ends with \\ and has one & per column boundary (2 label columns + 6 numeric columns).
   std::istringstream lines(tex);
   for (std::string line; std::getline(lines, line);)
     if (line.find("bvh2") != std::string::npos && line.find("\\\\") != std::string::npos) {
-      EXPECT_EQ(std::count(line.begin(), line.end(), '&'), 6) << line;
+      EXPECT_EQ(std::count(line.begin(), line.end(), '&'), 7) << line;
     }
 }
 
@@ -232,7 +296,7 @@ TEST(Report, FramesGetTablesOfTheirOwnAndMissingColumnsAreTolerated) {
   const std::string md = out.str();
   EXPECT_NE(md.find("## anim (? triangles), 1 thread\n"), std::string::npos) << md;
   EXPECT_NE(md.find("## anim (? triangles), 1 thread, frame 3"), std::string::npos) << md;
-  EXPECT_NE(md.find("| refit | bvh2 | 1.7 | - | - | 2.00 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| refit | bvh2 | 1.7 | - | - | - | 2.00 |"), std::string::npos) << md;
 }
 
 TEST(Report, BadInputIsAnErrorNamingIt) {
@@ -257,6 +321,180 @@ TEST(Report, BadInputIsAnErrorNamingIt) {
   std::stringstream text;
   text << in.rdbuf();
   EXPECT_NE(text.str().find("## proc:soup"), std::string::npos);
+}
+
+TEST(Report, ACsvThatIsNotSahbenchsIsRefused) {
+  const auto other = temp_csv("other.csv");
+  std::ofstream(other) << "name,value\nx,1\n";
+  const std::string e = error_of([&] { print_report({{other}, ""}, std::cout); });
+  EXPECT_NE(e.find(other.string() + ":1: not a sahbench result CSV: the header has no column 'run_id'"),
+            std::string::npos)
+      << e;
+  // The first missing column of run_id, scene, builder, layout, ray_set is named.
+  const auto partial = temp_csv("partial.csv");
+  std::ofstream(partial) << "run_id,scene,builder,ray_set\nr,s,b,primary\n";
+  const std::string f = error_of([&] {
+    print_report({{write_results("good.csv"), partial}, ""}, std::cout);
+  });
+  EXPECT_NE(f.find(partial.string() + ":1: not a sahbench result CSV: the header has no column 'layout'"),
+            std::string::npos)
+      << f;
+}
+
+TEST(Report, TwoFingerprintsInOneRunAreAnErrorNamingBoth) {
+  const auto path = temp_csv("two_fingerprints.csv");
+  {
+    CsvWriter w(path, columns_with_samples());
+    w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0));
+    CsvRow other = make_row("binned_sah", "bins=8", "bvh2", "primary", 5.0, 1 << 20, "40.5", 9.0);
+    other["run_fingerprint"] = "fedcba9876543210";
+    w.append(other);
+  }
+  const std::string e = error_of([&] { print_report({{path}, ""}, std::cout); });
+  EXPECT_NE(e.find("run 'r1' has rows of two fingerprints: " + path.string() +
+                   ":2 has run_fingerprint "
+                   "'0123456789abcdef', " +
+                   path.string() + ":3 has 'fedcba9876543210'"),
+            std::string::npos)
+      << e;
+}
+
+TEST(Report, RatiosComeFromPairedSamplesWithAnIntervalAndAMarkOnlyOutsideTheNoise) {
+  // Embree's samples drift from round to round (a busy machine); ours drift with them.
+  const std::vector<double> embree = {8.0, 6.0, 9.0, 7.5, 8.5};
+  const std::vector<double> fast = {12.1, 9.0, 13.4, 11.3, 12.8};  // about 1.5, tight
+  const std::vector<double> same = {9.0, 5.5, 8.0, 8.2, 7.9};      // about 1.0, loose
+  const std::vector<double> slow = {6.3, 4.8, 7.1, 6.1, 6.7};      // about 0.8, tight
+  const auto path = temp_csv("intervals.csv");
+  {
+    CsvWriter w(path, columns_with_samples());
+    auto with = [](CsvRow row, const std::vector<double>& trace) {
+      row["trace_mrays_samples"] = join(trace);
+      std::vector<double> sorted = trace;
+      std::sort(sorted.begin(), sorted.end());
+      row["trace_mrays_median"] = std::to_string(sorted[2]);
+      return row;
+    };
+    w.append(with(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 0), embree));
+    w.append(with(make_row("fast", "", "bvh2", "primary", 5.0, 1 << 20, "40", 0), fast));
+    w.append(with(make_row("same", "", "bvh2", "primary", 5.0, 1 << 20, "40", 0), same));
+    w.append(with(make_row("slow", "", "bvh2", "primary", 5.0, 1 << 20, "40", 0), slow));
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  const std::string f = format_ratio(paired_ratio(fast, embree)),
+                    s = format_ratio(paired_ratio(same, embree)),
+                    w = format_ratio(paired_ratio(slow, embree));
+  EXPECT_EQ(f.substr(0, 4), "1.50") << f;
+  EXPECT_EQ(s.substr(0, 4), "0.99") << s;
+  EXPECT_EQ(w.substr(0, 4), "0.80") << w;
+  EXPECT_NE(
+      md.find("| fast | bvh2 | **5.0** | **6.0** (0.60 [0.60, 0.60] \u25B2) | **1.0** (1.00x) | **40.00** "
+              "| **12.10** (" +
+              f + " \u25B2) |"),
+      std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| same | bvh2 | **5.0** | **6.0** (0.60 [0.60, 0.60] \u25B2) | **1.0** (1.00x) | "
+                    "**40.00** | 8.00 (" +
+                    s + ") |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("(" + w + " \u25BC) |"), std::string::npos) << md;
+  std::ostringstream tex;
+  print_report({{path}, "", ReportFormat::kLatex}, tex);
+  EXPECT_NE(tex.str().find("\\textbf{12.10} (" + f + " \\textuparrow)"), std::string::npos) << tex.str();
+  EXPECT_NE(tex.str().find("8.00 (" + s + ") \\\\"), std::string::npos) << tex.str();
+  EXPECT_NE(tex.str().find("(" + w + " \\textdownarrow)"), std::string::npos) << tex.str();
+}
+
+TEST(Report, RowsWithoutSamplesFallBackToTheRatioOfMediansWithoutAnInterval) {
+  const auto path = temp_csv("no_samples.csv");
+  {
+    std::vector<std::string> columns = design_columns();
+    std::erase_if(columns, [](const std::string& c) { return c.ends_with("_samples"); });
+    CsvWriter w(path, columns);
+    for (CsvRow row : {make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0),
+                       make_row("binned_sah", "bins=8", "bvh2", "primary", 5.0, 1 << 20, "40.5", 2.0)}) {
+      std::erase_if(row, [&](const auto& kv) {
+        return std::find(columns.begin(), columns.end(), kv.first) == columns.end();
+      });
+      w.append(row);
+    }
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("| binned_sah [bins=8] | bvh2 | **5.0** |"), std::string::npos) << md;
+  EXPECT_NE(md.find("2.00 (0.25 [medians]) |"), std::string::npos) << md;
+  EXPECT_EQ(md.find("\u25BC)"), std::string::npos) << "no interval, no mark\n" << md;
+}
+
+TEST(Report, BadSamplesAreAnErrorNamingFileLineAndColumn) {
+  const auto path = temp_csv("bad_samples.csv");
+  {
+    CsvWriter w(path, columns_with_samples());
+    w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0));
+    CsvRow bad = make_row("binned_sah", "bins=8", "bvh2", "primary", 5.0, 1 << 20, "40.5", 2.0);
+    bad["trace_mrays_samples"] = "2.0;abc;2.0";
+    w.append(bad);
+  }
+  const std::string e = error_of([&] { print_report({{path}, ""}, std::cout); });
+  EXPECT_NE(e.find(path.string() + ":3: column 'trace_mrays_samples': sample 'abc' is not a number"),
+            std::string::npos)
+      << e;
+}
+
+TEST(Report, FewerCellsThanAnotherRunOfTheSameFingerprintAreNoted) {
+  const auto path = temp_csv("fewer.csv");
+  {
+    CsvWriter w(path, columns_with_samples());
+    auto in_run = [](CsvRow row, const std::string& run, const std::string& fingerprint,
+                     const std::string& scene = "proc:soup") {
+      row["run_id"] = run;
+      row["run_fingerprint"] = fingerprint;
+      row["scene"] = scene;
+      return row;
+    };
+    // r0: the same config and build, every cell, and a second scene; r1: another fingerprint, more cells;
+    // r2 (reported): without the sweep's shadow cell and the second scene.
+    for (const std::string rs : {"primary", "shadow"}) {
+      w.append(in_run(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 1 << 20, "", 8.0), "r0",
+                      "aaaaaaaaaaaaaaaa"));
+      w.append(in_run(make_row("sweep_sah", "max_leaf=8", "bvh2", rs, 5.0, 1 << 20, "40", 8.0), "r0",
+                      "aaaaaaaaaaaaaaaa"));
+      w.append(in_run(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 1 << 20, "", 8.0), "r0",
+                      "aaaaaaaaaaaaaaaa", "proc:other"));
+    }
+    for (const std::string rs : {"primary", "shadow", "ao"})
+      w.append(in_run(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 1 << 20, "", 8.0), "r1",
+                      "bbbbbbbbbbbbbbbb"));
+    for (const std::string rs : {"primary", "shadow"})
+      w.append(in_run(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 1 << 20, "", 8.0), "r2",
+                      "aaaaaaaaaaaaaaaa"));
+    w.append(in_run(make_row("sweep_sah", "max_leaf=8", "bvh2", "primary", 5.0, 1 << 20, "40", 8.0), "r2",
+                    "aaaaaaaaaaaaaaaa"));
+  }
+  for (const auto format : {ReportFormat::kMarkdown, ReportFormat::kLatex}) {
+    std::ostringstream out;
+    print_report({{path}, "", format}, out);
+    const std::string text = out.str();
+    EXPECT_NE(
+        text.find("Note: this run has 3 cells here, run r0 of the same fingerprint had 4; missing: sweep"),
+        std::string::npos)
+        << text;
+    EXPECT_EQ(text.find("run r1"), std::string::npos) << "another fingerprint\n" << text;
+    EXPECT_NE(text.find("Note: Run r2 has no cells of proc:other at 2 threads (2 cells in run r0)"),
+              std::string::npos)
+        << text;
+  }
+  std::ostringstream md;
+  print_report({{path}, ""}, md);
+  EXPECT_NE(md.str().find("missing: sweep_sah [max_leaf=8] bvh2 shadow."), std::string::npos) << md.str();
+  // The full run has nothing missing.
+  std::ostringstream full;
+  print_report({{path}, "r0"}, full);
+  EXPECT_EQ(full.str().find("Note:"), std::string::npos) << full.str();
 }
 
 }  // namespace

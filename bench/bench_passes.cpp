@@ -8,8 +8,8 @@
 #include "bench/bench_data.h"
 #include "builders/binned_sah.h"
 #include "builders/collapse.h"
-#include "builders/refit.h"
 #include "builders/sweep_sah.h"
+#include "core/refit.h"
 #include "traversal/wide_bvh.h"
 
 namespace sahbench::bench {

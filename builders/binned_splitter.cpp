@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "builders/simd.h"
+#include "core/simd.h"
 
 namespace sahbench {
 namespace {

@@ -1,7 +1,7 @@
 #pragma once
 // The binned SAH split search and partition (Wald 2007, see binned_sah.h) over PrimRefs: the splitter of
 // the binned_sah builder, and the object-split half of the SBVH builder, whose references carry clipped
-// boxes. Binning, the SAH sweep and partitioning are SIMD over the three axes (builders/simd.h).
+// boxes. Binning, the SAH sweep and partitioning are SIMD over the three axes (core/simd.h).
 
 #include <cstdint>
 #include <memory>

@@ -17,7 +17,7 @@
 namespace sahbench {
 namespace {
 
-// Parallel tasks per thread in collapse_sah's bottom-up pass, as in builders/refit.cpp.
+// Parallel tasks per thread in collapse_sah's bottom-up pass, as in core/refit.cpp.
 constexpr int kTasksPerThread = 16;
 
 void check_arity(const Bvh& bvh, uint32_t arity, const char* pass) {

@@ -16,9 +16,9 @@
 #include <vector>
 
 #include "builders/binned_splitter.h"
-#include "builders/simd.h"
 #include "core/clip_polygon.h"
 #include "core/error.h"
+#include "core/simd.h"
 
 namespace sahbench {
 namespace {

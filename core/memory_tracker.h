@@ -1,6 +1,6 @@
 #pragma once
 // Heap bytes in use and their peak, for the `mem_peak_bytes` column. Counting happens only in the
-// sahbench executable, which replaces the global operator new/delete (harness/memory_tracker_new.cpp);
+// sahbench executable, which replaces the global operator new/delete (cli/memory_tracker_new.cpp);
 // in other programs (tests) the tracker reports tracking_enabled() == false and zeros. Memory mapped by
 // HugePageAllocator (core/huge_pages.h) is counted too, through note_mapped and note_unmapped.
 

@@ -281,7 +281,7 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles, Blo
 
 namespace {
 
-// Parallel tasks per thread at the top of the tree, as in builders/refit.cpp: enough that a lopsided
+// Parallel tasks per thread at the top of the tree, as in core/refit.cpp: enough that a lopsided
 // tree still balances, few enough that spawning stays small next to the refit.
 constexpr int kRefitTasksPerThread = 16;
 

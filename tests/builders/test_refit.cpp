@@ -1,4 +1,4 @@
-// Refit (builders/refit.h): after the triangles move, every box contains its children and its
+// Refit (core/refit.h): after the triangles move, every box contains its children and its
 // triangles, boxes are tight (exactly the union of what they hold), traversal of the refitted tree
 // finds the brute-force hits on the moved geometry, for arities 2, 4 and 8 (collapsed and built wide),
 // and the result does not depend on the thread count.
@@ -9,9 +9,9 @@
 #include <algorithm>
 
 #include "builders/collapse.h"
-#include "builders/refit.h"
 #include "builders/registry.h"
 #include "core/build_input.h"
+#include "core/refit.h"
 #include "core/validate.h"
 #include "scenes/wave.h"
 #include "tests/support/hit_check.h"

@@ -14,12 +14,12 @@
 #include <string_view>
 
 #include "core/error.h"
-#include "harness/animation_runner.h"
-#include "harness/config.h"
-#include "harness/csv.h"
-#include "harness/embree_scene.h"
-#include "harness/embree_trace.h"
-#include "harness/runner.h"
+#include "harness/config/config.h"
+#include "harness/embree/embree_scene.h"
+#include "harness/embree/embree_trace.h"
+#include "harness/run/animation_runner.h"
+#include "harness/run/csv.h"
+#include "harness/run/runner.h"
 #include "scenes/wave.h"
 #include "tests/support/config_error.h"
 #include "tests/support/hit_check.h"

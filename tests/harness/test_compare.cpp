@@ -17,10 +17,10 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "harness/compare.h"
-#include "harness/csv.h"
-#include "harness/ratio_stats.h"
-#include "harness/runner.h"
+#include "harness/report/compare.h"
+#include "harness/report/ratio_stats.h"
+#include "harness/run/csv.h"
+#include "harness/run/runner.h"
 
 namespace sahbench {
 namespace {

@@ -12,8 +12,8 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
-#include "harness/config.h"
-#include "harness/embree_bvh_builder.h"
+#include "harness/config/config.h"
+#include "harness/embree/embree_bvh_builder.h"
 #include "scenes/load.h"
 #include "tests/support/config_error.h"
 
@@ -143,8 +143,8 @@ TEST(HarnessConfigParse, ReferencePolicies) {
 
 // The example at the top of config.h is the schema's documentation: it must stay a valid config.
 TEST(HarnessConfigParse, HeaderExampleIsValid) {
-  std::ifstream in(std::filesystem::path(SAHBENCH_SOURCE_DIR) / "harness" / "config.h");
-  ASSERT_TRUE(in) << "cannot read harness/config.h";
+  std::ifstream in(std::filesystem::path(SAHBENCH_SOURCE_DIR) / "harness" / "config" / "config.h");
+  ASSERT_TRUE(in) << "cannot read harness/config/config.h";
   std::string line, toml;
   bool inside = false;
   while (std::getline(in, line)) {

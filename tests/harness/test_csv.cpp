@@ -4,7 +4,7 @@
 #include <fstream>
 
 #include "core/error.h"
-#include "harness/csv.h"
+#include "harness/run/csv.h"
 
 namespace sahbench {
 namespace {

@@ -13,15 +13,15 @@
 
 #include "builders/params.h"
 #include "builders/registry.h"
+#include "cli/image_command.h"
 #include "core/build_input.h"
-#include "harness/config.h"
-#include "harness/image_command.h"
-#include "harness/image_io.h"
-#include "harness/layout.h"
-#include "harness/ray_sets.h"
+#include "harness/config/config.h"
+#include "harness/report/image_io.h"
+#include "harness/run/ray_sets.h"
 #include "scenes/load.h"
 #include "tests/scenes/temp_dir.h"
 #include "traversal/brute_force.h"
+#include "traversal/layout.h"
 
 namespace sahbench {
 namespace {

@@ -10,15 +10,15 @@
 #include <string>
 #include <vector>
 
-#include "builders/refit.h"
 #include "builders/registry.h"
 #include "core/error.h"
-#include "harness/layout.h"
+#include "core/refit.h"
 #include "tests/builders/builder_cases.h"
 #include "tests/support/hit_check.h"
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
 #include "traversal/bvh2_traversal.h"
+#include "traversal/layout.h"
 #include "traversal/triangle_tests.h"
 #include "traversal/variant_dispatch.h"
 #include "traversal/wide_bvh.h"

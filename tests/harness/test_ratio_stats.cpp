@@ -11,9 +11,9 @@
 #include <random>
 
 #include "core/error.h"
-#include "harness/csv.h"
-#include "harness/ratio_stats.h"
-#include "harness/result_cells.h"
+#include "harness/report/ratio_stats.h"
+#include "harness/report/result_cells.h"
+#include "harness/run/csv.h"
 
 namespace sahbench {
 namespace {

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "core/error.h"
-#include "harness/ray_sets.h"
+#include "harness/run/ray_sets.h"
 #include "scenes/load.h"
 #include "traversal/brute_force.h"
 

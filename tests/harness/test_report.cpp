@@ -11,10 +11,10 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "harness/csv.h"
-#include "harness/ratio_stats.h"
-#include "harness/report.h"
-#include "harness/report_table.h"
+#include "harness/report/ratio_stats.h"
+#include "harness/report/report.h"
+#include "harness/report/report_table.h"
+#include "harness/run/csv.h"
 
 namespace sahbench {
 namespace {

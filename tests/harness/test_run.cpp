@@ -10,12 +10,12 @@
 #include <sstream>
 
 #include "builders/registry.h"
+#include "cli/trace_command.h"
 #include "core/error.h"
-#include "harness/csv.h"
-#include "harness/environment.h"
-#include "harness/report.h"
-#include "harness/runner.h"
-#include "harness/trace_command.h"
+#include "harness/report/report.h"
+#include "harness/run/csv.h"
+#include "harness/run/environment.h"
+#include "harness/run/runner.h"
 #include "scenes/load.h"
 #include "traversal/brute_force.h"
 

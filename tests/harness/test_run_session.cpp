@@ -15,11 +15,11 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
-#include "harness/csv.h"
-#include "harness/round_order.h"
-#include "harness/run_session.h"
-#include "harness/runner.h"
-#include "harness/timing.h"
+#include "harness/run/csv.h"
+#include "harness/run/round_order.h"
+#include "harness/run/run_session.h"
+#include "harness/run/runner.h"
+#include "harness/run/timing.h"
 
 namespace sahbench {
 namespace {

@@ -17,16 +17,16 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
-#include "harness/bounded_run.h"
-#include "harness/csv.h"
-#include "harness/embree_bvh_builder.h"
-#include "harness/layout.h"
-#include "harness/report.h"
-#include "harness/stress_cases.h"
-#include "harness/stress_config.h"
-#include "harness/stress_metrics.h"
-#include "harness/stress_runner.h"
+#include "harness/config/stress_config.h"
+#include "harness/embree/embree_bvh_builder.h"
+#include "harness/report/report.h"
+#include "harness/run/bounded_run.h"
+#include "harness/run/csv.h"
+#include "harness/run/stress_metrics.h"
+#include "harness/run/stress_runner.h"
+#include "scenes/stress_cases.h"
 #include "traversal/exact_reference.h"
+#include "traversal/layout.h"
 
 namespace sahbench {
 namespace {

@@ -9,7 +9,7 @@
 #include <string_view>
 
 #include "core/error.h"
-#include "harness/config.h"
+#include "harness/config/config.h"
 
 namespace sahbench::test {
 

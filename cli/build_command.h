@@ -1,0 +1,27 @@
+#pragma once
+// `sahbench build`: load a scene, build it with one or more builders (ours and Embree's) at one or more
+// thread counts, validate every tree, and print build times with their spread and tree statistics.
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "builders/params.h"
+#include "harness/config/config.h"
+
+namespace sahbench {
+
+struct BuildCommandOptions {
+  std::string scene;                 ///< file, shared-scene name or procedural spec
+  std::vector<BuilderRun> builders;  ///< parse_builder_run's; Embree's own BVH is "embree" with its quality
+  ParamOverrides params;             ///< applied to every one of our builders
+  std::vector<int> threads{1};
+  int reps = 5;
+  int warmup = 1;
+};
+
+/// Runs the command; returns the process exit code (0, or 1 when a tree fails validation). Bad input
+/// throws sahbench::Error.
+int run_build_command(const BuildCommandOptions& options, std::ostream& out, std::ostream& log);
+
+}  // namespace sahbench

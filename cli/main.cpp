@@ -1,0 +1,186 @@
+// The sahbench command line. Library code throws sahbench::Error; this is the one place that prints
+// errors and chooses exit codes: 0 success, 1 a failed check (invalid tree), 2 bad input, 130 a run
+// stopped by SIGINT or SIGTERM (its finished rows kept).
+
+#include <CLI/CLI.hpp>
+#include <cstdlib>
+#include <iostream>
+
+#include "builders/params.h"
+#include "cli/build_command.h"
+#include "cli/image_command.h"
+#include "cli/list_command.h"
+#include "cli/trace_command.h"
+#include "core/error.h"
+#include "harness/config/config.h"
+#include "harness/embree/embree_bvh_builder.h"
+#include "harness/report/compare.h"
+#include "harness/report/report.h"
+#include "harness/run/run_session.h"
+#include "harness/run/runner.h"
+#include "harness/run/stress_runner.h"
+
+int main(int argc, char** argv) {
+  using namespace sahbench;
+  // Builders backed by Embree live in the harness (builders/ must not know Embree); register them
+  // before anything looks a builder up.
+  register_embree_builders();
+  CLI::App app{"sahbench: benchmark and research harness for SAH BVH builders"};
+  app.require_subcommand(1);
+
+  BuildCommandOptions build;
+  std::vector<std::string> params, build_builders;
+  auto* build_cmd =
+      app.add_subcommand("build", "Load a scene, build, validate, and print build time and tree statistics");
+  build_cmd->add_option("--scene", build.scene, "scene file, shared-scene name, or proc:KIND[:key=value,...]")
+      ->required();
+  build_cmd
+      ->add_option("--builder", build_builders,
+                   "builder NAME or NAME:key=value,...; repeatable; embree:quality=low|medium|high "
+                   "(or embree_low|embree_medium|embree_high) for Embree's rtcCommitScene")
+      ->required();
+  build_cmd->add_option("--param", params, "key=value for every one of our builders; repeatable");
+  build_cmd->add_option("--threads", build.threads, "thread counts, e.g. 1,2")->delimiter(',');
+  build_cmd->add_option("--reps", build.reps, "timed repetitions (median reported)")->capture_default_str();
+  build_cmd->add_option("--warmup", build.warmup, "untimed builds first")->capture_default_str();
+
+  RunOptions run;
+  std::string run_output;
+  auto* run_cmd = app.add_subcommand(
+      "run", "Run an experiment config: cells of scene x builder x layout x threads x ray set");
+  run_cmd->add_option("config", run.config, "experiment config (TOML)")->required();
+  run_cmd->add_flag("--resume", run.resume, "skip cells whose rows are already in the output CSV");
+  run_cmd->add_option(
+      "--only", run.only,
+      "run only cells whose key scene|builder|params|layout|threads|ray_set|frame contains this text");
+  run_cmd->add_option("--output", run_output, "CSV path instead of the config's");
+
+  StressOptions stress;
+  stress.config = "configs/stress.toml";
+  std::string stress_output;
+  auto* stress_cmd =
+      app.add_subcommand("stress",
+                         "Numerical stress suite: extreme generated cases, every builder, layout "
+                         "variant and Embree mode against an exact reference");
+  stress_cmd->add_option("config", stress.config, "stress config (TOML)")->capture_default_str();
+  stress_cmd->add_option("--output", stress_output, "CSV path instead of the config's");
+  stress_cmd->add_option("--only", stress.only, "run only cases whose name contains this text");
+
+  ReportOptions report;
+  std::string report_format = "markdown";
+  auto* report_cmd =
+      app.add_subcommand("report", "Markdown or LaTeX tables from result CSVs, with ratios to Embree medium");
+  report_cmd->add_option("csv", report.inputs, "result CSV files")->required();
+  report_cmd->add_option("--run", report.run_id, "run_id to report (default: the latest)");
+  report_cmd->add_option("--format", report_format, "markdown | latex (booktabs)")->capture_default_str();
+  report_cmd->add_option("--output", report.output, "write the report to this file instead of stdout");
+
+  TraceCommandOptions trace;
+  auto* trace_cmd =
+      app.add_subcommand("trace", "Trace rays from a file on one builder's tree; one output line per ray");
+  trace_cmd->add_option("--scene", trace.scene, "scene file, shared-scene name or procedural spec")
+      ->required();
+  trace_cmd->add_option("--builder", trace.builder, "NAME or NAME:key=value,...")->capture_default_str();
+  trace_cmd->add_option("--layout", trace.layout, "layout")->capture_default_str();
+  trace_cmd->add_option("--rays", trace.rays, "ray file: 'ox oy oz dx dy dz [tmin tmax]' per line")
+      ->required();
+  trace_cmd->add_option("--out", trace.out, "output CSV: ray,hit,prim,t,u,v")->required();
+
+  CompareOptions compare;
+  std::string compare_json;
+  auto* compare_cmd = app.add_subcommand(
+      "compare", "Regression check of a result CSV against a baseline (exit 1 on a regression)");
+  compare_cmd->add_option("baseline", compare.baseline, "baseline CSV")->required();
+  compare_cmd->add_option("current", compare.current, "new CSV")->required();
+  compare_cmd->add_flag("--deterministic-only", compare.deterministic_only,
+                        "compare SAH, counts, bytes, mismatches; ignore timings");
+  compare_cmd
+      ->add_option(
+          "--margin", compare.min_timing_margin,
+          "smallest change of a timing ratio worth flagging (its 95% interval must also exclude no change)")
+      ->capture_default_str();
+  compare_cmd->add_option(
+      "--json", compare_json,
+      "write smaller-is-better metrics here and bigger-is-better ones to NAME-bigger.json");
+
+  ImageCommandOptions image;
+  auto* image_cmd = app.add_subcommand(
+      "image", "Per-pixel maps of primary rays: nodes visited, primitives tested, depth, normal (PNG + EXR)");
+  image_cmd->add_option("--scene", image.scene, "scene file, shared-scene name or procedural spec")
+      ->required();
+  image_cmd->add_option("--builder", image.builder, "NAME or NAME:key=value,...")->capture_default_str();
+  image_cmd->add_option("--layout", image.layout, "layout spec")->capture_default_str();
+  image_cmd->add_option("--width", image.width, "pixels")->capture_default_str();
+  image_cmd->add_option("--height", image.height, "pixels")->capture_default_str();
+  image_cmd->add_option("--ray-set", image.ray_set, "ray set (primary)")->capture_default_str();
+  image_cmd->add_option("--out", image.out, "prefix: PREFIX_nodes.png, PREFIX_nodes.exr, ...")->required();
+  auto* eye_opt = image_cmd->add_option(
+      "--eye", image.eye,
+      "camera position x,y,z, with --target (default: the scene's camera, else automatic)");
+  image_cmd->add_option("--target", image.target, "point x,y,z at the image centre, with --eye");
+  image_cmd->add_option("--up", image.up, "image up direction x,y,z, with --eye")
+      ->capture_default_str()
+      ->needs(eye_opt);
+  image_cmd->add_option("--fov", image.fov, "vertical field of view in degrees, with --eye")
+      ->capture_default_str()
+      ->needs(eye_opt);
+
+  ImageDiffOptions image_diff;
+  auto* image_diff_cmd = app.add_subcommand(
+      "image-diff", "B - A of two images (EXR signed, PNG diverging), max and mean |B - A|");
+  image_diff_cmd->add_option("a", image_diff.a, "image A (EXR)")->required();
+  image_diff_cmd->add_option("b", image_diff.b, "image B (EXR)")->required();
+  image_diff_cmd->add_option("--out", image_diff.out, "prefix: OUT.exr and OUT.png")->required();
+
+  auto* list_cmd = app.add_subcommand(
+      "list", "Builders and their parameters, procedural scene kinds, shared scenes found");
+  auto* list_scenes_cmd = app.add_subcommand("list-scenes", "Names of the shared scenes found, one per line");
+
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (*build_cmd) {
+      for (const auto& p : params) build.params.push_back(parse_override(p));
+      for (const auto& b : build_builders) build.builders.push_back(parse_builder_run(b));
+      return run_build_command(build, std::cout, std::cerr);
+    }
+    if (*run_cmd) {
+      if (!run_output.empty()) run.output = run_output;
+      return run_experiment(run, std::cerr);
+    }
+    if (*stress_cmd) {
+      if (!stress_output.empty()) stress.output = stress_output;
+      const StressSummary summary = run_stress(stress, std::cerr);
+      // A build abandoned at its time bound still runs on a detached thread: end without waiting for it
+      // (and without running static destructors under it).
+      if (summary.abandoned_builds > 0) {
+        std::cout.flush();
+        std::cerr.flush();
+        std::quick_exit(summary.exit_code());
+      }
+      return summary.exit_code();
+    }
+    if (*report_cmd) {
+      report.format = parse_report_format(report_format);
+      run_report_command(report, std::cout);
+    }
+    if (*compare_cmd) {
+      if (!compare_json.empty()) compare.json = compare_json;
+      return compare_results(compare, std::cout).regressions > 0 ? 1 : 0;
+    }
+    if (*trace_cmd) run_trace_command(trace, std::cerr);
+    if (*image_cmd) run_image_command(image, std::cerr);
+    if (*image_diff_cmd) run_image_diff_command(image_diff, std::cerr);
+    if (*list_cmd) print_catalogue(std::cout);
+    if (*list_scenes_cmd) print_scene_names(std::cout);
+  } catch (const Interrupted& e) {
+    std::cerr << "sahbench: " << e.what() << "\n";
+    return 130;
+  } catch (const Error& e) {
+    std::cerr << "sahbench: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "sahbench: internal error: " << e.what() << "\n";
+    return 3;
+  }
+  return 0;
+}

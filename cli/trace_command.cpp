@@ -1,0 +1,95 @@
+#include "cli/trace_command.h"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <fstream>
+#include <limits>
+#include <ostream>
+
+#include "builders/registry.h"
+#include "core/error.h"
+#include "harness/config/config.h"
+#include "scenes/load.h"
+#include "traversal/layout.h"
+
+namespace sahbench {
+namespace {
+
+float parse_float(std::string_view token, const std::string& where) {
+  if (token == "inf" || token == "+inf") return std::numeric_limits<float>::infinity();
+  if (token == "-inf") return -std::numeric_limits<float>::infinity();
+  float value = 0.0f;
+  const auto result = std::from_chars(token.data(), token.data() + token.size(), value);
+  if (result.ec != std::errc{} || result.ptr != token.data() + token.size())
+    throw Error(where + ": '" + std::string(token) + "' is not a number");
+  return value;
+}
+
+}  // namespace
+
+std::vector<Ray> read_rays(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path.string() + ": cannot open ray file");
+  std::vector<Ray> rays;
+  std::string line;
+  for (std::size_t number = 1; std::getline(in, line); ++number) {
+    const std::string where = path.string() + ":" + std::to_string(number);
+    std::vector<std::string_view> tokens;
+    std::string_view rest = line;
+    while (!rest.empty()) {
+      const auto start = rest.find_first_not_of(" \t,\r");
+      if (start == std::string_view::npos) break;
+      rest = rest.substr(start);
+      const auto end = rest.find_first_of(" \t,\r");
+      tokens.push_back(rest.substr(0, end));
+      rest = end == std::string_view::npos ? std::string_view{} : rest.substr(end);
+    }
+    if (tokens.empty() || tokens.front().front() == '#') continue;
+    if (tokens.size() != 6 && tokens.size() != 8)
+      throw Error(where + ": expected 6 or 8 numbers (ox oy oz dx dy dz [tmin tmax]), found " +
+                  std::to_string(tokens.size()));
+    float v[8] = {0, 0, 0, 0, 0, 0, 0, std::numeric_limits<float>::infinity()};
+    for (std::size_t i = 0; i < tokens.size(); ++i) v[i] = parse_float(tokens[i], where);
+    Ray ray;
+    ray.org = {v[0], v[1], v[2]};
+    ray.dir = {v[3], v[4], v[5]};
+    ray.tmin = v[6];
+    ray.tmax = v[7];
+    if (ray.dir == Vec3{0, 0, 0}) throw Error(where + ": the direction is zero");
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
+  const std::vector<Ray> rays = read_rays(options.rays);
+  const Scene scene = load_scene(options.scene);
+  const BuilderRun spec = parse_builder_run(options.builder);
+  const BuilderInfo& info = find_builder(spec.name);
+  const ParamSet params = resolve_params(info.name, info.params, spec.params);
+  const Bvh bvh = info.build(BuildInput::from_triangles(scene.triangles), params);
+  const auto layout = compile_layout(options.layout, bvh, scene.triangles);
+  std::vector<Hit> hits(rays.size());
+  layout->trace_closest(rays, hits);
+
+  std::ofstream out(options.out);
+  if (!out) throw Error(options.out.string() + ": cannot open for writing");
+  out << "ray,hit,prim,t,u,v\n";
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < hits.size(); ++i) {
+    const Hit& h = hits[i];
+    if (h.found()) {
+      ++found;
+      out << fmt::format("{},1,{},{:.9g},{:.9g},{:.9g}\n", i, h.prim, h.t, h.u, h.v);
+    } else {
+      out << i << ",0,,,,\n";
+    }
+  }
+  if (!out) throw Error(options.out.string() + ": write failed");
+  log << fmt::format("{} rays, {} hits, {} on {} ({} triangles) -> {}\n", rays.size(), found,
+                     info.name + " " + params.to_string(), scene.name, scene.triangles.size(),
+                     options.out.string());
+}
+
+}  // namespace sahbench

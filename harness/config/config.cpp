@@ -1,0 +1,646 @@
+#include "harness/config/config.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "builders/registry.h"
+#include "core/error.h"
+#include "harness/config/toml_file.h"
+#include "harness/embree/embree_scene.h"
+#include "scenes/camera.h"
+#include "traversal/layout.h"
+
+namespace sahbench {
+namespace {
+
+constexpr int kMaxInt = std::numeric_limits<int>::max();
+constexpr int64_t kMaxUint32 = std::numeric_limits<uint32_t>::max();
+constexpr int64_t kMaxInt64 = std::numeric_limits<int64_t>::max();
+
+// The file being read, for the "<file>:<line>:" prefix of every message.
+struct Source {
+  std::string file;
+
+  [[noreturn]] void fail(uint32_t line, const std::string& what) const {
+    throw Error(file + ":" + std::to_string(line) + ": " + what);
+  }
+  [[noreturn]] void fail(const toml::node& at, const std::string& what) const { fail(line_of(at), what); }
+  // Line 1 where toml++ recorded no position (e.g. a table only implied by a dotted key).
+  static uint32_t line_of(const toml::node& node) { return std::max<uint32_t>(node.source().begin.line, 1); }
+};
+
+std::string type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "a list";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a float";
+    case toml::node_type::boolean:
+      return "a boolean";
+    case toml::node_type::date:
+      return "a date";
+    case toml::node_type::time:
+      return "a time";
+    case toml::node_type::date_time:
+      return "a date-time";
+    default:
+      return "nothing";
+  }
+}
+
+std::string join(const std::vector<std::string>& items, std::string_view separator = ", ") {
+  std::string out;
+  for (const auto& item : items) out += (out.empty() ? "" : std::string(separator)) + item;
+  return out;
+}
+
+// A table's entries in file order: toml++ keeps keys sorted by name, but sweeps vary the last key written
+// fastest and errors should name the first offending key in the file.
+std::vector<std::pair<std::string, const toml::node*>> in_file_order(const toml::table& table) {
+  std::vector<std::pair<const toml::key*, const toml::node*>> entries;
+  for (const auto& [key, node] : table) entries.emplace_back(&key, &node);
+  std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) {
+    const auto& pa = a.first->source().begin;
+    const auto& pb = b.first->source().begin;
+    return pa.line != pb.line ? pa.line < pb.line : pa.column < pb.column;
+  });
+  std::vector<std::pair<std::string, const toml::node*>> out;
+  for (const auto& [key, node] : entries) out.emplace_back(std::string(key->str()), node);
+  return out;
+}
+
+// Fails on the first key of `table` (in file order) that is not in `known`.
+void check_keys(const Source& src, const toml::table& table, std::string_view table_name,
+                const std::vector<std::string>& known) {
+  for (const auto& [key, node] : in_file_order(table)) {
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    const auto* list = node->as_array();
+    const std::string what = node->is_table()                     ? "table [" + key + "]"
+                             : list && list->is_array_of_tables() ? "table [[" + key + "]]"
+                                                                  : "key '" + key + "'";
+    src.fail(*node, "unknown " + what + " in " + std::string(table_name) + " (known: " + join(known) + ")");
+  }
+}
+
+const toml::table& as_table(const Source& src, const toml::node& node, const std::string& what) {
+  if (const auto* table = node.as_table()) return *table;
+  src.fail(node, what + " must be a table, not " + type_name(node));
+}
+
+int64_t read_int(const Source& src, const toml::node& node, const std::string& key, int64_t min,
+                 int64_t max) {
+  const auto* value = node.as_integer();
+  if (!value) src.fail(node, key + " must be an integer, not " + type_name(node));
+  const int64_t v = value->get();
+  // Limits at the type's range are no real limit: say only the bound that matters then.
+  const bool unbounded = max >= kMaxInt;
+  if (v < min && unbounded)
+    src.fail(node, key + " = " + std::to_string(v) + " must be at least " + std::to_string(min));
+  if (v < min || v > max)
+    src.fail(node, key + " = " + std::to_string(v) + " is outside [" + std::to_string(min) + ", " +
+                       std::to_string(max) + "]");
+  return v;
+}
+
+std::string read_string(const Source& src, const toml::node& node, const std::string& key) {
+  const auto* value = node.as_string();
+  if (!value) src.fail(node, key + " must be a string, not " + type_name(node));
+  if (value->get().empty()) src.fail(node, key + " must not be empty");
+  return value->get();
+}
+
+// One of `choices`, spelled exactly.
+std::string read_choice(const Source& src, const toml::node& node, const std::string& key,
+                        const std::vector<std::string>& choices) {
+  std::string value = read_string(src, node, key);
+  if (std::find(choices.begin(), choices.end(), value) == choices.end())
+    src.fail(node, key + " = \"" + value + "\" is not one of " + join(choices, " | "));
+  return value;
+}
+
+// The config's spelling of each enumerator; a ray kind's is also the default name of its ray sets.
+template <class Enum>
+using Spellings = std::vector<std::pair<std::string, Enum>>;
+const Spellings<RayKind> kRayKinds = {{"primary", RayKind::kPrimary},
+                                      {"shadow", RayKind::kShadow},
+                                      {"diffuse", RayKind::kDiffuse},
+                                      {"ao", RayKind::kAmbientOcclusion},
+                                      {"random", RayKind::kRandom}};
+const Spellings<ReferencePolicy> kReferencePolicies = {{"auto", ReferencePolicy::kAuto},
+                                                       {"embree", ReferencePolicy::kEmbree},
+                                                       {"brute_force", ReferencePolicy::kBruteForce},
+                                                       {"none", ReferencePolicy::kNone}};
+
+template <class Enum>
+Enum read_enum(const Source& src, const toml::node& node, const std::string& key,
+               const Spellings<Enum>& spellings) {
+  std::vector<std::string> choices;
+  for (const auto& [text, value] : spellings) choices.push_back(text);
+  const std::string text = read_choice(src, node, key, choices);
+  for (const auto& [t, value] : spellings)
+    if (t == text) return value;
+  throw Error("unreachable: " + text);  // read_choice accepted only spellings
+}
+
+template <class Enum>
+std::string spelling(const Spellings<Enum>& spellings, Enum value) {
+  for (const auto& [text, v] : spellings)
+    if (v == value) return text;
+  throw Error("invalid enumerator " + std::to_string(static_cast<int>(value)));
+}
+
+// Names that end up in file names and CSV cells: letters, digits, '-' and '_'.
+std::string read_name(const Source& src, const toml::node& node, const std::string& key) {
+  std::string value = read_string(src, node, key);
+  for (char c : value)
+    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_'))
+      src.fail(node, key + " = \"" + value + "\" may contain only letters, digits, '-' and '_'");
+  return value;
+}
+
+const toml::array& read_list(const Source& src, const toml::node& node, const std::string& key,
+                             const std::string& of) {
+  const auto* list = node.as_array();
+  if (!list) src.fail(node, key + " must be a list of " + of + ", not " + type_name(node));
+  if (list->empty()) src.fail(node, key + " must not be an empty list");
+  return *list;
+}
+
+// A non-empty list of distinct non-empty strings.
+std::vector<std::string> read_string_list(const Source& src, const toml::node& node, const std::string& key) {
+  std::vector<std::string> out;
+  for (const auto& item : read_list(src, node, key, "strings")) {
+    if (!item.is_string()) src.fail(item, key + " must be a list of strings, not contain " + type_name(item));
+    std::string value = read_string(src, item, key + " item");
+    if (std::find(out.begin(), out.end(), value) != out.end())
+      src.fail(item, key + " lists \"" + value + "\" twice");
+    out.push_back(std::move(value));
+  }
+  return out;
+}
+
+// An integer or a non-empty list of distinct integers, each at least 1.
+std::vector<int> read_threads(const Source& src, const toml::node& node) {
+  const std::string key = "experiment.threads";
+  const std::string must = key + " must be an integer or a list of integers";
+  if (node.is_integer()) return {static_cast<int>(read_int(src, node, key, 1, kMaxInt))};
+  if (!node.is_array()) src.fail(node, must + ", not " + type_name(node));
+  std::vector<int> out;
+  for (const auto& item : read_list(src, node, key, "integers")) {
+    if (!item.is_integer()) src.fail(item, must + ", not contain " + type_name(item));
+    const int t = static_cast<int>(read_int(src, item, key, 1, kMaxInt));
+    if (std::find(out.begin(), out.end(), t) != out.end())
+      src.fail(item, key + " lists " + std::to_string(t) + " twice");
+    out.push_back(t);
+  }
+  return out;
+}
+
+// The value of one builder parameter as a ParamOverrides string.
+std::string param_text(const Source& src, const toml::node& node, const std::string& key) {
+  if (const auto* v = node.as_string()) return v->get();
+  if (const auto* v = node.as_integer()) return std::to_string(v->get());
+  if (const auto* v = node.as_boolean()) return v->get() ? "1" : "0";
+  if (const auto* v = node.as_floating_point()) {
+    // Shortest text that reads back to the same double (so 0.1 stays "0.1").
+    char buf[32];
+    const auto result = std::to_chars(buf, buf + sizeof buf, v->get());
+    return std::string(buf, result.ptr);
+  }
+  src.fail(node, "builder parameter '" + key +
+                     "' must be an integer, float, string or boolean, or a list of them, not " +
+                     type_name(node));
+}
+
+void read_experiment(const Source& src, const toml::table& root, ExperimentConfig& config) {
+  const auto* node = root.get("experiment");
+  if (!node) src.fail(1, "missing [experiment] table (it needs at least `name` and `scenes`)");
+  const auto& table = as_table(src, *node, "[experiment]");
+  check_keys(src, table, "[experiment]",
+             {"name", "output", "seed", "threads", "scenes", "optional_scenes", "layouts", "reference",
+              "brute_force_max_triangles"});
+
+  const auto* name = table.get("name");
+  if (!name) src.fail(table, "[experiment] has no name (name = \"...\")");
+  config.name = read_name(src, *name, "experiment.name");
+  config.output = "results/" + config.name + ".csv";
+  if (const auto* n = table.get("output")) config.output = read_string(src, *n, "experiment.output");
+  if (const auto* n = table.get("seed")) config.seed = read_int(src, *n, "experiment.seed", 0, kMaxInt64);
+  if (const auto* n = table.get("threads")) config.threads = read_threads(src, *n);
+  if (const auto* n = table.get("scenes")) config.scenes = read_string_list(src, *n, "experiment.scenes");
+  if (const auto* n = table.get("optional_scenes"))
+    config.optional_scenes = read_string_list(src, *n, "experiment.optional_scenes");
+  for (const auto& scene : config.optional_scenes)
+    if (std::find(config.scenes.begin(), config.scenes.end(), scene) != config.scenes.end())
+      src.fail(*table.get("optional_scenes"),
+               "scene \"" + scene + "\" is in both scenes and optional_scenes");
+  if (config.scenes.empty() && config.optional_scenes.empty())
+    src.fail(table, "[experiment] names no scene: give scenes or optional_scenes");
+
+  if (const auto* n = table.get("layouts")) {
+    config.layouts.clear();
+    for (const auto& item : read_list(src, *n, "experiment.layouts", "strings")) {
+      if (!item.is_string())
+        src.fail(item, "experiment.layouts must be a list of strings, not contain " + type_name(item));
+      std::string layout;
+      try {
+        layout = parse_layout_spec(read_string(src, item, "experiment.layouts item")).text();
+      } catch (const Error& e) {
+        src.fail(item, std::string("experiment.layouts: ") + e.what());
+      }
+      if (std::find(config.layouts.begin(), config.layouts.end(), layout) != config.layouts.end())
+        src.fail(item, "experiment.layouts lists \"" + layout + "\" twice");
+      config.layouts.push_back(layout);
+    }
+  }
+
+  if (const auto* n = table.get("reference"))
+    config.reference = read_enum(src, *n, "experiment.reference", kReferencePolicies);
+  if (const auto* n = table.get("brute_force_max_triangles")) {
+    if (config.reference != ReferencePolicy::kAuto)
+      src.fail(*n, "experiment.brute_force_max_triangles applies only with reference = \"auto\"");
+    config.brute_force_max_triangles =
+        read_int(src, *n, "experiment.brute_force_max_triangles", 0, kMaxInt64);
+  }
+}
+
+void read_repetitions(const Source& src, const toml::node& node, Repetitions& reps) {
+  const auto& table = as_table(src, node, "[repetitions]");
+  check_keys(src, table, "[repetitions]", {"build", "build_warmup", "trace", "trace_warmup", "interleave"});
+  const auto read = [&](const char* key, int64_t min, int& out) {
+    if (const auto* n = table.get(key))
+      out = static_cast<int>(read_int(src, *n, std::string("repetitions.") + key, min, kMaxInt));
+  };
+  read("build", 1, reps.build);
+  read("build_warmup", 0, reps.build_warmup);
+  read("trace", 1, reps.trace);
+  read("trace_warmup", 0, reps.trace_warmup);
+  if (const auto* n = table.get("interleave")) {
+    const auto* value = n->as_boolean();
+    if (value == nullptr) src.fail(*n, "repetitions.interleave must be true or false");
+    reps.interleave = value->get();
+  }
+}
+
+// [animation]: the frames of an animation experiment, as a count or as explicit times.
+void read_animation(const Source& src, const toml::node& node, ExperimentConfig& config) {
+  const auto& table = as_table(src, node, "[animation]");
+  check_keys(src, table, "[animation]", {"frames", "times"});
+  AnimationConfig animation;
+  const auto* frames = table.get("frames");
+  const auto* times = table.get("times");
+  if (frames && times) src.fail(*times, "animation.times and animation.frames exclude each other: give one");
+  if (frames)
+    animation.frames = static_cast<uint32_t>(read_int(src, *frames, "animation.frames", 1, kMaxFrames));
+  if (times) {
+    const std::string must = "animation.times must be a list of numbers (seconds)";
+    const toml::node* previous = nullptr;
+    for (const auto& item : read_list(src, *times, "animation.times", "numbers")) {
+      if (!item.is_number()) src.fail(item, must + ", not contain " + type_name(item));
+      const double t = item.is_integer() ? double(item.as_integer()->get()) : item.as_floating_point()->get();
+      if (!std::isfinite(t))
+        src.fail(item, "animation.times: " + param_text(src, item, "times") + " is not finite");
+      if (previous && t <= animation.times.back())
+        src.fail(item, "animation.times must increase: " + param_text(src, item, "times") + " follows " +
+                           param_text(src, *previous, "times"));
+      animation.times.push_back(t);
+      previous = &item;
+    }
+    if (animation.times.size() > kMaxFrames)
+      src.fail(*times, "animation.times lists more than " + std::to_string(kMaxFrames) + " times");
+    animation.frames = static_cast<uint32_t>(animation.times.size());
+  }
+  config.animation = std::move(animation);
+}
+
+// The tables of an array of tables ([[key]]); `key = {...}` or anything else is an error.
+std::vector<const toml::table*> read_table_array(const Source& src, const toml::node& node,
+                                                 const std::string& key) {
+  const auto* list = node.as_array();
+  if (!list || !list->is_array_of_tables())
+    src.fail(node, key + " must be written as [[" + key + "]] tables, not " + type_name(node));
+  std::vector<const toml::table*> out;
+  for (const auto& item : *list) out.push_back(item.as_table());
+  return out;
+}
+
+// One builder parameter with all of its values (one unless swept), each with its line.
+struct SweepKey {
+  std::string key;
+  std::vector<std::pair<std::string, const toml::node*>> values;
+};
+
+// Expands one [[builder]] table into its runs, checking every value against the builder's declaration.
+std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table, bool animation) {
+  const auto* name_node = table.get("name");
+  if (!name_node) src.fail(table, "[[builder]] has no name (name = \"...\")");
+  const std::string name = read_string(src, *name_node, "builder.name");
+  const bool embree = name == "embree";
+  const BuilderInfo* info = nullptr;
+  if (!embree) {
+    try {
+      info = &find_builder(name);
+    } catch (const Error& e) {
+      src.fail(*name_node, e.what());
+    }
+  }
+
+  // Collect the parameters in file order, checking each value on its own so an error names its line.
+  std::vector<SweepKey> keys;
+  for (const auto& [key, node] : in_file_order(table)) {
+    if (key == "name") continue;
+    if (embree && key != "quality")
+      src.fail(*node, "embree: unknown parameter '" + key + "' (known: quality)");
+    SweepKey sweep{key, {}};
+    if (const auto* list = node->as_array()) {
+      if (list->empty()) src.fail(*node, "builder parameter '" + key + "' must not be an empty list");
+      for (const auto& item : *list) {
+        if (item.is_array() || item.is_table())
+          src.fail(item, "builder parameter '" + key + "' lists " + type_name(item) + "; lists may not nest");
+        sweep.values.emplace_back(param_text(src, item, key), &item);
+      }
+    } else {
+      sweep.values.emplace_back(param_text(src, *node, key), node);
+    }
+    for (const auto& [text, at] : sweep.values) {
+      try {
+        if (embree && text == "refit" && !animation)
+          throw Error(
+              "Embree quality 'refit' applies only to animation experiments (an [animation] table); "
+              "a static experiment takes low, medium, high");
+        if (embree)
+          parse_embree_quality(text);
+        else
+          resolve_params(info->name, info->params, {{key, text}});
+      } catch (const Error& e) {
+        src.fail(*at, e.what());
+      }
+    }
+    keys.push_back(std::move(sweep));
+  }
+  // Embree's default build quality, so that every embree run names its quality.
+  if (embree && keys.empty()) keys.push_back({"quality", {{"medium", &table}}});
+
+  // Count before expanding: a typo can make the product astronomically large.
+  uint64_t count = 1;
+  std::vector<std::string> factors;
+  for (const auto& k : keys) {
+    count = std::min<uint64_t>(count * k.values.size(), kMaxSweepRuns + 1);
+    factors.push_back(k.key + ": " + std::to_string(k.values.size()));
+  }
+  if (count > kMaxSweepRuns)
+    src.fail(table, "builder '" + name + "' sweeps more than " + std::to_string(kMaxSweepRuns) + " runs (" +
+                        join(factors, " x ") + " values)");
+
+  // Cartesian product, last key fastest: `digit` counts in mixed radix.
+  std::vector<BuilderRun> runs;
+  std::vector<size_t> digit(keys.size(), 0);
+  for (uint64_t i = 0; i < count; ++i) {
+    BuilderRun run{name, {}};
+    for (size_t k = 0; k < keys.size(); ++k)
+      run.params.emplace_back(keys[k].key, keys[k].values[digit[k]].first);
+    runs.push_back(std::move(run));
+    for (size_t k = keys.size(); k-- > 0;) {
+      if (++digit[k] < keys[k].values.size()) break;
+      digit[k] = 0;
+    }
+  }
+  return runs;
+}
+
+void read_builders(const Source& src, const toml::table& root, ExperimentConfig& config) {
+  const bool animation = config.animation.has_value();
+  const auto* node = root.get("builder");
+  if (!node) src.fail(1, "no [[builder]] table: at least one builder is needed");
+  // Runs that would measure the same thing twice, keyed by builder and resolved values, with their line.
+  std::map<std::string, std::pair<std::string, uint32_t>> seen;
+  for (const toml::table* table : read_table_array(src, *node, "builder")) {
+    for (auto& run : read_builder(src, *table, animation)) {
+      std::string resolved = run.name + ":";
+      if (run.is_embree()) {
+        resolved += run.params.front().second;
+      } else {
+        const BuilderInfo& info = find_builder(run.name);
+        try {
+          const ParamSet params = resolve_params(info.name, info.params, run.params);
+          if (info.check) info.check(params);
+          resolved += params.to_string();
+        } catch (const Error& e) {
+          src.fail(*table, "builder run '" + run.label() + "': " + e.what());
+        }
+      }
+      const auto [it, inserted] = seen.emplace(resolved, std::pair{run.label(), Source::line_of(*table)});
+      if (!inserted)
+        src.fail(*table, "builder run '" + run.label() + "' has the same parameter values as '" +
+                             it->second.first + "' (line " + std::to_string(it->second.second) + ")");
+      config.builders.push_back(std::move(run));
+    }
+  }
+}
+
+RaySetConfig read_ray_set(const Source& src, const toml::table& table) {
+  RaySetConfig set;
+  const auto* kind_node = table.get("kind");
+  if (!kind_node) src.fail(table, "[[ray_set]] has no kind (kind = \"primary\", ...)");
+  set.kind = read_enum(src, *kind_node, "ray_set.kind", kRayKinds);
+  const std::string kind = spelling(kRayKinds, set.kind);
+  set.name = kind;
+
+  // The keys this kind reads; any other is an error rather than a setting silently ignored.
+  std::vector<std::string> known = {"name", "kind"};
+  if (set.kind != RayKind::kRandom) known.insert(known.end(), {"width", "height"});
+  if (set.kind != RayKind::kPrimary) known.push_back("count");
+  if (set.kind == RayKind::kShadow) known.insert(known.end(), {"lights", "light_source"});
+  if (set.kind == RayKind::kAmbientOcclusion) known.push_back("ao_radius");
+  check_keys(src, table, "[[ray_set]] of kind " + kind, known);
+
+  if (const auto* n = table.get("name")) set.name = read_name(src, *n, "ray_set.name");
+  if (const auto* n = table.get("width")) set.width = read_int(src, *n, "ray_set.width", 1, kMaxImageSide);
+  if (const auto* n = table.get("height")) set.height = read_int(src, *n, "ray_set.height", 1, kMaxImageSide);
+  if (set.kind == RayKind::kRandom) set.count = kDefaultRandomRays;
+  if (const auto* n = table.get("count"))
+    set.count = read_int(src, *n, "ray_set.count", set.kind == RayKind::kRandom ? 1 : 0, kMaxUint32);
+  if (const auto* n = table.get("light_source"))
+    set.light_source = read_choice(src, *n, "ray_set.light_source", {"auto", "scene"});
+  if (const auto* n = table.get("lights")) {
+    if (set.light_source != "auto") src.fail(*n, "ray_set.lights applies only with light_source = \"auto\"");
+    set.lights = read_int(src, *n, "ray_set.lights", 1, kMaxUint32);
+  }
+  if (const auto* n = table.get("ao_radius")) {
+    if (!n->is_number()) src.fail(*n, "ray_set.ao_radius must be a number, not " + type_name(*n));
+    const double radius = n->is_integer() ? double(n->as_integer()->get()) : n->as_floating_point()->get();
+    if (!(radius > 0 && std::isfinite(static_cast<float>(radius))))
+      src.fail(*n,
+               "ray_set.ao_radius = " + param_text(src, *n, "ao_radius") + " must be positive and finite");
+    set.ao_radius = static_cast<float>(radius);
+  }
+  return set;
+}
+
+void read_ray_sets(const Source& src, const toml::table& root, ExperimentConfig& config) {
+  const auto* node = root.get("ray_set");
+  if (!node) src.fail(1, "no [[ray_set]] table: at least one ray set is needed");
+  for (const toml::table* table : read_table_array(src, *node, "ray_set")) {
+    RaySetConfig set = read_ray_set(src, *table);
+    for (const auto& other : config.ray_sets)
+      if (other.name == set.name) {
+        const toml::node* at = table->get("name") ? table->get("name") : table;
+        src.fail(*at, "ray set name '" + set.name +
+                          "' is used twice (give each [[ray_set]] its own name = \"...\")");
+      }
+    config.ray_sets.push_back(std::move(set));
+  }
+}
+
+// A list of three numbers, each finite as a float.
+std::array<float, 3> read_vec3(const Source& src, const toml::node& node, const std::string& key) {
+  const std::string must = key + " must be a list of three numbers, e.g. [0.0, 1.5, -2.0]";
+  const auto* list = node.as_array();
+  if (!list) src.fail(node, must + ", not " + type_name(node));
+  if (list->size() != 3) src.fail(node, must + ", not " + std::to_string(list->size()));
+  std::array<float, 3> out{};
+  for (std::size_t i = 0; i < 3; ++i) {
+    const toml::node& item = *list->get(i);
+    if (!item.is_number()) src.fail(item, must + ", not contain " + type_name(item));
+    const double v = item.is_integer() ? double(item.as_integer()->get()) : item.as_floating_point()->get();
+    if (!(std::fabs(v) <= std::numeric_limits<float>::max()))
+      src.fail(item, key + ": " + param_text(src, item, key) + " is not finite as a float");
+    out[i] = static_cast<float>(v);
+  }
+  return out;
+}
+
+// [[camera]]: each names a scene of the experiment (checked after [experiment] is read), once.
+void read_cameras(const Source& src, const toml::table& root, ExperimentConfig& config) {
+  const auto* node = root.get("camera");
+  if (!node) return;
+  for (const toml::table* table : read_table_array(src, *node, "camera")) {
+    check_keys(src, *table, "[[camera]]", {"scene", "eye", "target", "up", "fov"});
+    CameraConfig camera;
+    const auto* scene = table->get("scene");
+    if (!scene) src.fail(*table, "[[camera]] has no scene (scene = \"...\", as in experiment.scenes)");
+    camera.scene = read_string(src, *scene, "camera.scene");
+    const auto& required = config.scenes;
+    const auto& optional = config.optional_scenes;
+    if (std::find(required.begin(), required.end(), camera.scene) == required.end() &&
+        std::find(optional.begin(), optional.end(), camera.scene) == optional.end())
+      src.fail(*scene, "camera.scene = \"" + camera.scene +
+                           "\" is not a scene of this experiment (experiment.scenes or optional_scenes)");
+    if (config.camera_for(camera.scene))
+      src.fail(*scene, "scene \"" + camera.scene + "\" has two [[camera]] tables; give one view per scene");
+    for (const char* key : {"eye", "target"})
+      if (!table->get(key))
+        src.fail(*table, std::string("[[camera]] has no ") + key + " (" + key + " = [x, y, z])");
+    camera.eye = read_vec3(src, *table->get("eye"), "camera.eye");
+    camera.target = read_vec3(src, *table->get("target"), "camera.target");
+    if (const auto* n = table->get("up")) camera.up = read_vec3(src, *n, "camera.up");
+    if (const auto* n = table->get("fov")) {
+      if (!n->is_number()) src.fail(*n, "camera.fov must be a number (degrees), not " + type_name(*n));
+      const double fov = n->is_integer() ? double(n->as_integer()->get()) : n->as_floating_point()->get();
+      if (!(fov > 0.0 && fov < 180.0))
+        src.fail(*n, "camera.fov = " + param_text(src, *n, "fov") + " degrees must be in (0, 180)");
+      camera.fov = static_cast<float>(fov);
+    }
+    // The view as a whole (target at the eye, up zero or along the view): the line of the table.
+    try {
+      to_camera(camera);
+    } catch (const Error& e) {
+      src.fail(*table, std::string("[[camera]] for \"") + camera.scene + "\": " + e.what());
+    }
+    config.cameras.push_back(std::move(camera));
+  }
+}
+
+}  // namespace
+
+const CameraConfig* ExperimentConfig::camera_for(std::string_view scene) const {
+  for (const auto& camera : cameras)
+    if (camera.scene == scene) return &camera;
+  return nullptr;
+}
+
+BuilderRun parse_builder_run(std::string_view text) {
+  BuilderRun run;
+  const auto colon = text.find(':');
+  run.name = std::string(text.substr(0, colon));
+  if (run.name.empty()) throw Error("builder '" + std::string(text) + "' has no name");
+  for (std::string_view rest = colon == std::string_view::npos ? "" : text.substr(colon + 1);
+       !rest.empty();) {
+    const auto comma = rest.find(',');
+    run.params.push_back(parse_override(rest.substr(0, comma)));
+    rest = comma == std::string_view::npos ? "" : rest.substr(comma + 1);
+  }
+  for (const char* quality : {"low", "medium", "high"})
+    if (run.name == std::string("embree_") + quality) {
+      if (!run.params.empty())
+        throw Error("builder '" + std::string(text) + "': " + run.name + " takes no parameters");
+      run.name = "embree";
+      run.params = {{"quality", quality}};
+    }
+  if (!run.is_embree()) return run;
+  std::string quality = "medium";
+  for (const auto& [key, value] : run.params) {
+    if (key != "quality")
+      throw Error("builder '" + std::string(text) + "': embree: unknown parameter '" + key +
+                  "' (known: quality)");
+    quality = value;
+  }
+  parse_embree_quality(quality);  // names the known qualities
+  run.params = {{"quality", quality}};
+  return run;
+}
+
+std::string BuilderRun::label() const {
+  if (params.empty()) return name;
+  std::string out = name + "[";
+  for (size_t i = 0; i < params.size(); ++i) out += (i ? "," : "") + params[i].first + "=" + params[i].second;
+  return out + "]";
+}
+
+Camera to_camera(const CameraConfig& camera) {
+  auto vec = [](const std::array<float, 3>& a) { return Vec3{a[0], a[1], a[2]}; };
+  return look_at_camera(vec(camera.eye), vec(camera.target), vec(camera.up), camera.fov);
+}
+
+std::string to_string(RayKind kind) {
+  return spelling(kRayKinds, kind);
+}
+
+std::string to_string(ReferencePolicy policy) {
+  return spelling(kReferencePolicies, policy);
+}
+
+ExperimentConfig load_experiment_config(const std::filesystem::path& path) {
+  return parse_experiment_config(read_config_text(path, "experiment config"), path.string());
+}
+
+ExperimentConfig parse_experiment_config(std::string_view toml_text, const std::string& source_name) {
+  const Source src{source_name};
+  const toml::table root = parse_toml(toml_text, source_name);
+  check_keys(src, root, "the top level",
+             {"experiment", "repetitions", "builder", "ray_set", "camera", "animation"});
+
+  ExperimentConfig config;
+  config.path = source_name;
+  read_experiment(src, root, config);
+  if (const auto* node = root.get("repetitions")) read_repetitions(src, *node, config.reps);
+  // Before the builders: Embree's "refit" quality is valid only in an animation experiment.
+  if (const auto* node = root.get("animation")) read_animation(src, *node, config);
+  read_builders(src, root, config);
+  read_ray_sets(src, root, config);
+  read_cameras(src, root, config);
+  return config;
+}
+
+}  // namespace sahbench

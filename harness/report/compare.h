@@ -1,0 +1,55 @@
+#pragma once
+// `sahbench compare BASELINE.csv NEW.csv`: regression checks for CI. Deterministic metrics (SAH cost,
+// node counts, nodes and primitives per ray, structure bytes, mismatches) must match the baseline
+// exactly or within a declared tolerance; timings are compared only as ratios to Embree medium from
+// the same run, each from samples paired by round, and a change of such a ratio is flagged only when its
+// 95% interval (harness/report/ratio_stats.h) lies wholly on one side of no change and the change is larger
+// than a margin. Bad data (a missing column, a field that is not a number, a cell twice, two runs under
+// one run id) is an Error naming file, column and line. Prints a Markdown summary, can write JSON for
+// dashboards, and returns non-zero on a regression.
+
+#include <filesystem>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sahbench {
+
+struct CompareOptions {
+  std::filesystem::path baseline;
+  std::filesystem::path current;
+  bool deterministic_only = false;            ///< ignore timings (CI on a shared machine)
+  std::optional<std::filesystem::path> json;  ///< write github-action-benchmark style JSON here
+  /// The smallest change of a timing ratio worth flagging (0.02: 2%); noise is told apart by the change's
+  /// interval, not by this margin.
+  double min_timing_margin = 0.02;
+};
+
+/// One deterministic metric: its column, whether larger is worse, and the relative tolerance within
+/// which a change is noise (0: must be equal).
+struct MetricRule {
+  const char* column;
+  bool larger_is_worse;
+  double tolerance;
+};
+const std::vector<MetricRule>& deterministic_metrics();
+
+struct CompareResult {
+  int regressions = 0;
+  int improvements = 0;
+  int compared_cells = 0;
+  int missing_cells = 0;             ///< in the baseline but not in the new run
+  int timings_without_interval = 0;  ///< timing ratios of one round in a run, which cannot be told from noise
+};
+
+/// The required columns: the cell key (scene, builder, builder_params, layout, threads, ray_set, frame),
+/// run_id, run_fingerprint and each deterministic metric, and, unless deterministic_only, the samples
+/// (build_ms_samples, trace_mrays_samples).
+std::vector<std::string> required_columns(bool deterministic_only);
+
+/// Compares the latest run of options.current with the latest run of options.baseline; prints the
+/// summary to `out`. Bad data in either file is an Error naming file, column and line.
+CompareResult compare_results(const CompareOptions& options, std::ostream& out);
+
+}  // namespace sahbench

@@ -1,0 +1,498 @@
+#include "harness/report/report.h"
+
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <optional>
+#include <ostream>
+#include <set>
+#include <sstream>
+
+#include "core/error.h"
+#include "harness/report/ratio_stats.h"
+#include "harness/report/report_table.h"
+#include "harness/report/result_cells.h"
+#include "harness/report/stress_report.h"
+#include "harness/run/csv.h"
+
+namespace sahbench {
+namespace {
+
+// A field that older or other CSVs may lack (frame, embree_version, ...): empty when absent.
+std::string field(const CsvRow& row, const std::string& column, const std::string& fallback = "") {
+  const auto it = row.find(column);
+  return it == row.end() || it->second.empty() ? fallback : it->second;
+}
+
+// The columns without which a CSV is not one of sahbench's results.
+const std::vector<std::string>& identity_columns() {
+  static const std::vector<std::string> columns = {"run_id", "scene", "builder", "layout", "ray_set"};
+  return columns;
+}
+
+// A row of the run reported, with where it is and its timing samples, parsed once (result_cells.h).
+struct RowTimings {
+  std::string where;  // "PATH:LINE"
+  std::vector<double> build_ms, trace_mrays;
+  std::vector<double> build_layout_ms;  // build + layout compile per round; Embree's are its builds
+};
+using Timings = std::map<const CsvRow*, RowTimings>;
+
+std::string row_label(const CsvRow& row) {
+  const std::string params = field(row, "builder_params");
+  return field(row, "builder") + (params.empty() ? "" : " [" + params + "]");
+}
+
+// "k=v;k=v" as written in builder_params, in order.
+std::vector<std::pair<std::string, std::string>> split_params(const std::string& params) {
+  std::vector<std::pair<std::string, std::string>> out;
+  std::size_t start = 0;
+  while (start < params.size()) {
+    const std::size_t end = std::min(params.find(';', start), params.size());
+    const std::string item = params.substr(start, end - start);
+    const std::size_t eq = item.find('=');
+    if (!item.empty())
+      out.emplace_back(item.substr(0, eq), eq == std::string::npos ? "" : item.substr(eq + 1));
+    start = end + 1;
+  }
+  return out;
+}
+
+/// Short labels for a paper: per builder, only the parameters whose values differ between that
+/// builder's rows of the table; the shared ones are returned (per builder) for the caption.
+std::map<std::string, std::string> short_labels(const std::vector<const CsvRow*>& rows,
+                                                std::vector<std::string>& shared) {
+  std::map<std::string, std::map<std::string, std::vector<std::string>>>
+      values;  // builder -> key -> values seen
+  std::map<std::string, std::vector<std::string>> key_order;
+  for (const CsvRow* r : rows) {
+    const std::string builder = field(*r, "builder");
+    for (const auto& [k, v] : split_params(field(*r, "builder_params"))) {
+      auto& seen = values[builder][k];
+      if (std::find(seen.begin(), seen.end(), v) == seen.end()) seen.push_back(v);
+      auto& order = key_order[builder];
+      if (std::find(order.begin(), order.end(), k) == order.end()) order.push_back(k);
+    }
+  }
+  std::map<std::string, std::string> labels;  // full label -> short label
+  for (const CsvRow* r : rows) {
+    const std::string builder = field(*r, "builder");
+    std::string varying;
+    for (const auto& [k, v] : split_params(field(*r, "builder_params")))
+      if (values[builder][k].size() > 1) varying += (varying.empty() ? "" : ";") + k + "=" + v;
+    labels[row_label(*r)] = builder + (varying.empty() ? "" : " [" + varying + "]");
+  }
+  for (const auto& [builder, order] : key_order) {
+    std::string common;
+    for (const auto& k : order)
+      if (values[builder][k].size() == 1)
+        common += (common.empty() ? "" : ", ") + k + "=" + values[builder][k][0];
+    if (!common.empty()) shared.push_back(builder + " " + common);
+  }
+  return labels;
+}
+
+// Letters and digits of `text`, anything else as '-': a key LaTeX accepts in \label and \ref.
+std::string label_key(const std::string& text) {
+  std::string out;
+  for (const char c : text) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '-';
+  return out;
+}
+
+struct GroupKey {
+  std::string scene, threads, frame;
+  bool operator==(const GroupKey&) const = default;
+  /// "proc:sphere at 2 threads", ", frame 3" after it where not 0.
+  std::string text() const {
+    return scene + " at " + threads + " threads" + (frame == "0" ? "" : ", frame " + frame);
+  }
+};
+
+// A timing's ratio to the anchor: from the samples paired by round where both rows have them (ours in
+// `samples`, the anchor's in `anchor_samples`, the same column unless given), else the ratio of medians
+// (no interval).
+std::optional<RatioInterval> timing_ratio(const Timings& timings, const CsvRow& ours, const CsvRow* anchor,
+                                          std::optional<double> ours_median, const std::string& anchor_median,
+                                          std::vector<double> RowTimings::*samples,
+                                          std::vector<double> RowTimings::*anchor_samples = nullptr) {
+  if (!anchor || !ours_median) return std::nullopt;
+  const auto anchor_value = csv_number(*anchor, anchor_median);
+  if (!anchor_value || !(*anchor_value > 0) || !(*ours_median > 0)) return std::nullopt;
+  const RowTimings &t = timings.at(&ours), &a = timings.at(anchor);
+  const std::vector<double>& theirs = a.*(anchor_samples ? anchor_samples : samples);
+  if ((t.*samples).empty() || theirs.empty()) return ratio_of_medians(*ours_median, *anchor_value);
+  try {
+    return paired_ratio(t.*samples, theirs);
+  } catch (const Error& e) {
+    throw Error(t.where + " against its anchor " + a.where + ": " + e.what());
+  }
+}
+
+ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& group, const Timings& timings,
+                       ReportFormat format) {
+  std::vector<std::string> ray_sets;
+  for (const CsvRow* r : group)
+    if (std::find(ray_sets.begin(), ray_sets.end(), field(*r, "ray_set")) == ray_sets.end())
+      ray_sets.push_back(field(*r, "ray_set"));
+  // The anchor: Embree medium, one ray at a time, per ray set.
+  std::map<std::string, const CsvRow*> anchor;
+  for (const CsvRow* r : group)
+    if (is_anchor(*r)) anchor[field(*r, "ray_set")] = r;
+  const CsvRow* any_anchor = anchor.empty() ? nullptr : anchor.begin()->second;
+
+  ReportTable table;
+  const CsvRow& first = *group.front();
+  const std::string threads_text = key.threads + (key.threads == "1" ? " thread" : " threads");
+  const std::string frame_text = key.frame == "0" ? "" : ", frame " + key.frame;
+  table.title = fmt::format("{} ({} triangles), {}{}", key.scene, field(first, "scene_triangles", "?"),
+                            threads_text, frame_text);
+  table.label =
+      "tab:" + label_key(key.scene) + "-t" + key.threads + (key.frame == "0" ? "" : "-f" + key.frame);
+  table.columns = {{"build ms", "Build (ms)", 1, false},
+                   {"build+layout ms", "Build + layout (ms)", 1, false},
+                   {"memory MiB", "Memory (MiB)", 1, false},
+                   {"SAH", "SAH cost", 2, false}};
+  for (const auto& rs : ray_sets)
+    table.columns.push_back({rs + " Mrays/s", latex_escape(rs) + " (Mrays/s)", 2, true});
+
+  std::vector<std::string> shared;
+  const auto short_label = short_labels(group, shared);
+  // The compile target of the run; each row's kernel ISA is in the CSV's isa column (the kernel-ISA note
+  // below lists them).
+  std::string isa = field(first, "build_isa");
+  if (isa.empty()) isa = field(first, "isa");
+  std::set<std::string> kernel_isas;
+  for (const auto* row : group)
+    if (const std::string k = field(*row, "isa"); !k.empty()) kernel_isas.insert(k);
+  std::string kernels;
+  for (const auto& k : kernel_isas) kernels += (kernels.empty() ? "" : ", ") + k;
+  table.caption = fmt::format(
+      "{}; {}{}, commit {}; medians of {} builds and {} traces; kernels: {}. In parentheses: ratio to Embree "
+      "(quality=medium, rtcIntersect1/rtcOccluded1) in the same run; for build + layout and rays/s the "
+      "geometric mean of the ratios of rounds paired with Embree's, with its 95% interval, and an up (down) "
+      "arrow where the interval lies wholly on the better (worse) side of 1. Best of each column in bold: "
+      "least build time, memory and SAH cost, most rays/s.",
+      table.title, field(first, "cpu", "unknown CPU"), isa.empty() ? "" : " (built for " + isa + ")",
+      field(first, "git_commit", "unknown"), field(first, "build_reps", "?"), field(first, "trace_reps", "?"),
+      kernels.empty() ? "unknown" : kernels);
+  // The Markdown rows name every parameter; the LaTeX rows only the varying ones, so name the rest here.
+  if (format == ReportFormat::kLatex && !shared.empty()) {
+    table.caption += " Parameters common to a builder's rows:";
+    for (std::size_t i = 0; i < shared.size(); ++i) table.caption += (i ? "; " : " ") + shared[i];
+    table.caption += ".";
+  }
+
+  // SAH costs are comparable only under one cost model: the table's usual constants are those of most of
+  // its rows with a cost, and a cost under others carries them as a note (and is not marked best). A
+  // collapse with c_trav = 2 reports a larger SAH for a tree that traces faster than c_trav = 1's.
+  const std::vector<std::pair<std::string, std::string>> model_fields = {
+      {"sah_c_trav", "c_trav"}, {"sah_c_isect", "c_isect"}, {"sah_block", "block"}};
+  auto model_of = [&](const CsvRow& r) {
+    std::vector<std::string> values;
+    for (const auto& [column, name] : model_fields) values.push_back(field(r, column));
+    return values;
+  };
+  // Models in order of first appearance, so that a tie goes to the one of the earlier rows.
+  std::vector<std::pair<std::vector<std::string>, int>> model_rows;
+  for (const CsvRow* r : group) {
+    if (!csv_number(*r, "sah_cost")) continue;
+    const auto model = model_of(*r);
+    auto it =
+        std::find_if(model_rows.begin(), model_rows.end(), [&](const auto& m) { return m.first == model; });
+    if (it == model_rows.end())
+      model_rows.push_back({model, 1});
+    else
+      ++it->second;
+  }
+  std::vector<std::string> usual_model;
+  int usual_rows = 0;
+  for (const auto& [model, rows] : model_rows)
+    if (rows > usual_rows) usual_model = model, usual_rows = rows;
+  // "c_trav=2, block=4": the constants of `model` that differ from `other` (all of them without one).
+  auto describe = [&](const std::vector<std::string>& model, const std::vector<std::string>* other) {
+    std::string text;
+    for (std::size_t i = 0; i < model.size(); ++i)
+      if (!other || model[i] != (*other)[i])
+        text +=
+            (text.empty() ? "" : ", ") + model_fields[i].second + "=" + (model[i].empty() ? "?" : model[i]);
+    return text;
+  };
+  auto model_note = [&](const CsvRow& r) { return describe(model_of(r), &usual_model); };
+  if (model_rows.size() > 1) {
+    const std::string usual = describe(usual_model, nullptr);
+    table.caption +=
+        " SAH costs are in each builder's own constants; those in brackets differ from the table's "
+        "usual " +
+        usual + ", and are not compared.";
+  }
+
+  // The share of rays that hit weighs on rays/s (a miss ends early), so a ratio is read beside it. It is
+  // the rays' answer, the same for every correct tree: the anchor's, else the first row's with one.
+  std::string hits;
+  for (const auto& rs : ray_sets) {
+    const CsvRow* source = anchor.count(rs) ? anchor.at(rs) : nullptr;
+    if (!source || field(*source, "hit_fraction").empty())
+      for (const CsvRow* r : group)
+        if (field(*r, "ray_set") == rs && !field(*r, "hit_fraction").empty()) {
+          source = r;
+          break;
+        }
+    if (source && !field(*source, "hit_fraction").empty())
+      hits += (hits.empty() ? "" : ", ") + rs + " " + field(*source, "hit_fraction");
+  }
+  if (!hits.empty())
+    table.caption += " Share of rays that hit (closest) or are occluded (any hit): " + hits + ".";
+
+  // One table row per (builder, params, layout), with one trace column per ray set.
+  std::vector<std::pair<std::string, std::string>> keys;
+  for (const CsvRow* r : group) {
+    const auto k = std::make_pair(row_label(*r), field(*r, "layout"));
+    if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
+  }
+  auto cell = [](std::optional<double> value, std::optional<double> anchor_value) {
+    ReportCell c{value, std::nullopt, false};
+    if (value && anchor_value && *anchor_value > 0) c.ratio = *value / *anchor_value;
+    return c;
+  };
+  auto timing_cell = [](std::optional<double> value, std::optional<RatioInterval> ratio) {
+    ReportCell c{value, std::nullopt, false};
+    c.interval = ratio;
+    return c;
+  };
+  auto anchor_number = [&](const CsvRow* a, const std::string& column) {
+    return a ? csv_number(*a, column) : std::nullopt;
+  };
+  constexpr double kMiB = 1 << 20;
+  auto mib = [&](std::optional<double> bytes) {
+    return bytes ? std::optional<double>(*bytes / kMiB) : std::nullopt;
+  };
+  for (const auto& [label, layout] : keys) {
+    std::map<std::string, const CsvRow*> by_set;
+    for (const CsvRow* r : group)
+      if (row_label(*r) == label && field(*r, "layout") == layout) by_set[field(*r, "ray_set")] = r;
+    const CsvRow& any = *by_set.begin()->second;
+    ReportRow row{label, short_label.at(label), layout, {}};
+    row.cells.push_back(cell(csv_number(any, "build_ms_median"), std::nullopt));
+    // Build plus layout compile against Embree's build, whose rtcCommitScene does both: round r's sum
+    // (build_layout_ms_samples) against Embree's build r.
+    const auto build_layout = csv_number(any, "build_layout_ms_median");
+    row.cells.push_back(
+        timing_cell(build_layout, timing_ratio(timings, any, any_anchor, build_layout, "build_ms_median",
+                                               &RowTimings::build_layout_ms, &RowTimings::build_ms)));
+    row.cells.push_back(cell(mib(csv_number(any, "mem_bytes")), mib(anchor_number(any_anchor, "mem_bytes"))));
+    row.cells.push_back(cell(csv_number(any, "sah_cost"), anchor_number(any_anchor, "sah_cost")));
+    if (row.cells.back().value) row.cells.back().note = model_note(any);
+    for (const auto& rs : ray_sets) {
+      const auto it = by_set.find(rs);
+      const auto a = anchor.find(rs);
+      if (it == by_set.end()) {
+        row.cells.push_back(ReportCell{});
+        continue;
+      }
+      const auto mrays = csv_number(*it->second, "trace_mrays_median");
+      row.cells.push_back(
+          timing_cell(mrays, timing_ratio(timings, *it->second, a == anchor.end() ? nullptr : a->second,
+                                          mrays, "trace_mrays_median", &RowTimings::trace_mrays)));
+    }
+    table.rows.push_back(std::move(row));
+  }
+  mark_best(table);
+  return table;
+}
+
+// A row of a result file, and where it is.
+struct Located {
+  const ResultFile* file;
+  std::size_t index;
+  const CsvRow& row() const { return file->rows[index]; }
+  std::string where() const { return file->where(index); }
+};
+
+GroupKey group_of(const CsvRow& r) {
+  return GroupKey{field(r, "scene"), field(r, "threads"), field(r, "frame", "0")};
+}
+
+// A cell of a table, as a reader names it: builder and parameters, layout, ray set.
+std::string cell_label(const CsvRow& r) {
+  return row_label(r) + " " + field(r, "layout") + " " + field(r, "ray_set");
+}
+
+// Run id -> group (GroupKey::text) -> cell labels, of the runs other than `run` with its fingerprint, in
+// the files' order of runs.
+using OtherRuns = std::vector<std::pair<std::string, std::map<std::string, std::set<std::string>>>>;
+
+OtherRuns cells_of_other_runs(const std::vector<Located>& all, const std::string& run,
+                              const std::string& fingerprint) {
+  OtherRuns out;
+  if (fingerprint.empty()) return out;  // older CSVs: no fingerprint tells which runs are alike
+  for (const Located& l : all) {
+    const CsvRow& r = l.row();
+    if (field(r, "run_id") == run || field(r, "run_fingerprint") != fingerprint) continue;
+    auto it =
+        std::find_if(out.begin(), out.end(), [&](const auto& o) { return o.first == field(r, "run_id"); });
+    if (it == out.end()) it = out.insert(out.end(), {field(r, "run_id"), {}});
+    it->second[group_of(r).text()].insert(cell_label(r));
+  }
+  return out;
+}
+
+// Report drops no cell silently: where another run of the same config and build had more cells in this
+// group (this one stopped early, or ran with --only), the note says how many and which are missing.
+std::vector<std::string> missing_cell_notes(const GroupKey& key, const std::vector<const CsvRow*>& group,
+                                            const OtherRuns& others) {
+  constexpr std::size_t kNamed = 5;  // missing cells named in full; the rest are counted
+  std::set<std::string> here;
+  for (const CsvRow* r : group) here.insert(cell_label(*r));
+  std::vector<std::string> notes;
+  for (const auto& [other_run, by_group] : others) {
+    const auto it = by_group.find(key.text());
+    if (it == by_group.end() || it->second.size() <= here.size()) continue;
+    std::vector<std::string> missing;
+    for (const auto& c : it->second)
+      if (!here.count(c)) missing.push_back(c);
+    std::string names;
+    for (std::size_t i = 0; i < std::min(missing.size(), kNamed); ++i) names += (i ? "; " : "") + missing[i];
+    if (missing.size() > kNamed) names += fmt::format("; and {} more", missing.size() - kNamed);
+    notes.push_back(fmt::format("this run has {} cells here, run {} of the same fingerprint had {}{}{}.",
+                                here.size(), other_run, it->second.size(),
+                                missing.empty() ? "" : "; missing: ", names));
+  }
+  return notes;
+}
+
+}  // namespace
+
+ReportFormat parse_report_format(std::string_view name) {
+  if (name == "markdown" || name == "md") return ReportFormat::kMarkdown;
+  if (name == "latex" || name == "tex") return ReportFormat::kLatex;
+  throw Error("unknown report format '" + std::string(name) + "' (known: markdown, latex)");
+}
+
+void print_report(const ReportOptions& options, std::ostream& out) {
+  std::vector<ResultFile> files;
+  for (const auto& path : options.inputs) {
+    files.push_back(read_result_file(path));
+    for (const auto& column : identity_columns())
+      if (!files.back().rows.empty() && !files.back().has_column(column))
+        throw Error(path.string() + ":1: not a sahbench result CSV: the header has no column '" + column +
+                    "'");
+  }
+  std::vector<Located> all;
+  for (const auto& f : files)
+    for (std::size_t i = 0; i < f.rows.size(); ++i) all.push_back({&f, i});
+  if (all.empty()) throw Error("no rows in the given CSV files");
+  std::string run = options.run_id;
+  // Rows are appended as cells finish, so the last row belongs to the latest run.
+  if (run.empty()) run = field(all.back().row(), "run_id");
+  std::vector<Located> located;
+  std::copy_if(all.begin(), all.end(), std::back_inserter(located),
+               [&](const Located& l) { return field(l.row(), "run_id") == run; });
+  if (located.empty()) throw Error("no rows with run_id '" + run + "'");
+  // One run has one fingerprint; two under one run id are two runs' rows mixed (CSVs from older versions
+  // have none, which is one value too).
+  const std::string fingerprint = field(located.front().row(), "run_fingerprint");
+  for (const Located& l : located)
+    if (field(l.row(), "run_fingerprint") != fingerprint)
+      throw Error(
+          fmt::format("run '{}' has rows of two fingerprints: {} has run_fingerprint '{}', {} has '{}'", run,
+                      located.front().where(), fingerprint, l.where(), field(l.row(), "run_fingerprint")));
+  // Results of `sahbench stress` have tables of their own (harness/report/stress_report.h).
+  {
+    std::vector<CsvRow> copies;
+    for (const Located& l : located) copies.push_back(l.row());
+    if (is_stress_result(copies)) return print_stress_report(copies, options.format, out);
+  }
+  std::vector<const CsvRow*> rows;
+  Timings timings;
+  for (const Located& l : located) {
+    rows.push_back(&l.row());
+    timings[&l.row()] = {l.where(), timing_samples(*l.file, l.index, "build_ms"),
+                         timing_samples(*l.file, l.index, "trace_mrays"),
+                         timing_samples(*l.file, l.index, "build_layout_ms")};
+  }
+
+  const CsvRow& first = *rows.front();
+  const bool latex = options.format == ReportFormat::kLatex;
+  if (latex)
+    fmt::print(
+        out,
+        "% sahbench report: run {}, commit {}, {}, {}, {}; config {}\n% Needs \\usepackage{{booktabs}} "
+        "(\\textuparrow and \\textdownarrow are textcomp's, in the LaTeX kernel since 2020).\n\n",
+        run, field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
+        field(first, "embree_version"), field(first, "config"));
+  else
+    fmt::print(
+        out,
+        "# sahbench report: run {}\n\ncommit {}, {}, {}, {}; build reps {}, trace reps {}; config {}\n\n",
+        run, field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
+        field(first, "embree_version"), field(first, "build_reps"), field(first, "trace_reps"),
+        field(first, "config"));
+
+  // Group by (scene, threads, frame); keep first-seen order.
+  std::vector<GroupKey> groups;
+  for (const CsvRow* r : rows)
+    if (std::find(groups.begin(), groups.end(), group_of(*r)) == groups.end()) groups.push_back(group_of(*r));
+  const auto others = cells_of_other_runs(all, run, fingerprint);
+  for (const auto& key : groups) {
+    std::vector<const CsvRow*> group;
+    for (const CsvRow* r : rows)
+      if (group_of(*r) == key) group.push_back(r);
+    ReportTable table = make_table(key, group, timings, options.format);
+    table.notes = missing_cell_notes(key, group, others);
+    if (latex)
+      render_latex(table, out);
+    else
+      render_markdown(table, out);
+  }
+  // Groups another run of the same fingerprint had and this one lacks altogether have no table to note.
+  std::vector<std::string> lost;
+  for (const auto& [other_run, by_group] : others)
+    for (const auto& [group_text, cells] : by_group)
+      if (std::none_of(groups.begin(), groups.end(),
+                       [&](const GroupKey& g) { return g.text() == group_text; }))
+        lost.push_back(fmt::format("{} ({} cells in run {})", group_text, cells.size(), other_run));
+  if (!lost.empty()) {
+    std::string text = "Run " + run + " has no cells of";
+    for (std::size_t i = 0; i < lost.size(); ++i) text += (i ? "; " : " ") + lost[i];
+    text += ", which another run of the same fingerprint has.";
+    fmt::print(out, "{}Note: {}\n\n", latex ? "% " : "", text);
+  }
+  if (!latex)
+    fmt::print(out,
+               "Ratios are to embree [quality=medium] with rtcIntersect1/rtcOccluded1 in the same run; build "
+               "ms and\n"
+               "Mrays/s are medians over the repetitions. Memory is the traversed structure's exact bytes. "
+               "The best\n"
+               "value of each column is in bold. Build + layout and Mrays/s ratios are the geometric mean of "
+               "the ratios\n"
+               "of rounds paired with Embree's (run in one shuffled order per round), with a 95% interval "
+               "(Student's t\n"
+               "on their logs): \u25B2 ahead of Embree (the interval wholly on the better side of 1: more "
+               "rays/s, less\n"
+               "time), \u25BC behind, no mark within noise; [n=1] is one round, with no interval; [medians] "
+               "is the\n"
+               "ratio of the medians, from rows without samples (older CSVs). Build + layout is our build "
+               "plus the\n"
+               "layout compile, against Embree's rtcCommitScene, which does both. Memory and SAH ratios are "
+               "exact.\n");
+}
+
+void run_report_command(const ReportOptions& options, std::ostream& out) {
+  if (options.output.empty()) return print_report(options, out);
+  // Write the whole report first, so that a bad CSV leaves no half-written file behind.
+  std::ostringstream text;
+  print_report(options, text);
+  std::error_code ec;
+  if (options.output.has_parent_path()) std::filesystem::create_directories(options.output.parent_path(), ec);
+  std::ofstream file(options.output);
+  if (!file) throw Error(options.output.string() + ": cannot open for writing");
+  file << text.str();
+  if (!file) throw Error(options.output.string() + ": write failed");
+}
+
+}  // namespace sahbench

@@ -1,0 +1,72 @@
+#pragma once
+// One table of `sahbench report`, independent of its output format: numeric cells with their ratio to
+// the anchor (Embree medium; for timings with a 95% interval and a mark where it lies wholly on one side
+// of 1) and a mark on the best value of each column, rendered as Markdown (GitHub and pandoc pipe
+// tables) or as a LaTeX table in the booktabs style.
+
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "harness/report/ratio_stats.h"
+
+namespace sahbench {
+
+struct ReportColumn {
+  std::string header;             ///< as the Markdown report has always printed it, e.g. "build ms"
+  std::string latex_header;       ///< already LaTeX, e.g. "Build (ms)"
+  int decimals = 2;               ///< digits printed after the point (more for values below 1: 3 significant)
+  bool larger_is_better = false;  ///< rays/s: largest is best; time, memory, SAH: smallest
+};
+
+struct ReportCell {
+  std::optional<double> value;  ///< empty: printed as "-"
+  std::optional<double> ratio;  ///< value / anchor's value, when the anchor has one
+  bool best = false;            ///< set by mark_best
+  /// Printed after the value in brackets, e.g. "c_trav=2": the value is on another scale than the
+  /// column's others, so mark_best leaves it out.
+  std::string note = {};
+  /// A timing's ratio to the anchor with its interval (ratio_stats.h), printed instead of `ratio` as
+  /// "(1.08 [1.03, 1.12] ▲)": ▲ ahead of the anchor, ▼ behind (verdict with the column's
+  /// larger_is_better), no mark within noise.
+  std::optional<RatioInterval> interval = {};
+};
+
+struct ReportRow {
+  std::string builder;        ///< full label: "binned_sah [bins=8;max_leaf=8;...]"
+  std::string builder_short;  ///< only the parameters that differ between rows of the builder
+  std::string layout;
+  std::vector<ReportCell> cells;  ///< one per column
+};
+
+struct ReportTable {
+  std::string title;    ///< "proc:sphere (100 triangles), 2 threads"
+  std::string caption;  ///< plain text (escaped for LaTeX when rendered)
+  std::string label;    ///< LaTeX \label key, letters, digits, ':' and '-' only
+  std::vector<ReportColumn> columns;
+  std::vector<ReportRow> rows;
+  std::vector<std::string> notes = {};  ///< plain text, printed after the table ("Note: ...")
+};
+
+/// Marks in each column every cell whose value, rounded as printed, is the best of the column: the
+/// smallest, or the largest for larger_is_better columns. Rounding first means that two values the
+/// reader sees as equal are both marked. Cells with a note are not compared. A column with fewer than two
+/// compared values marks nothing.
+void mark_best(ReportTable& table);
+
+/// "## title", the pipe table (best values in **bold**, ratios as "(0.85x)", timing ratios as
+/// "(0.85 [0.80, 0.90] ▼)"), "Table: caption" and a "Note:" paragraph per note.
+void render_markdown(const ReportTable& table, std::ostream& out);
+
+/// A `table` float with \caption, \label and a booktabs tabular (\toprule, \midrule, \bottomrule); best
+/// values in \textbf, ratios as "(0.85$\times$)", timing ratios as "(0.85 [0.80, 0.90] \textdownarrow)",
+/// notes in small type under the tabular. Needs \usepackage{booktabs} (the arrows are textcomp's, in
+/// the LaTeX kernel since 2020).
+void render_latex(const ReportTable& table, std::ostream& out);
+
+/// `text` with LaTeX's special characters escaped: \ & % $ # _ { } ~ ^ (and < > | outside math mode).
+std::string latex_escape(std::string_view text);
+
+}  // namespace sahbench

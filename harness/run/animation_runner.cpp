@@ -1,0 +1,557 @@
+#include "harness/run/animation_runner.h"
+
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <set>
+
+#include "builders/registry.h"
+#include "core/bvh_stats.h"
+#include "core/error.h"
+#include "core/memory_tracker.h"
+#include "core/refit.h"
+#include "core/validate.h"
+#include "harness/embree/embree_scene.h"
+#include "harness/embree/embree_trace.h"
+#include "harness/run/csv.h"
+#include "harness/run/environment.h"
+#include "harness/run/ray_sets.h"
+#include "harness/run/reference.h"
+#include "harness/run/result_row.h"
+#include "harness/run/run_common.h"
+#include "harness/run/run_session.h"
+#include "harness/run/timing.h"
+#include "scenes/animation.h"
+#include "scenes/load.h"
+#include "scenes/proc_spec.h"
+#include "scenes/procedural.h"
+#include "scenes/scene_path.h"
+#include "traversal/layout.h"
+
+namespace sahbench {
+namespace {
+
+// What a cell's tree is.
+enum class Variant {
+  kRebuild,        // one of our builders, built on this frame
+  kRefit,          // one of our builders, built on the first frame and refitted to this one
+  kEmbreeRebuild,  // rtcCommitScene on this frame
+  kEmbreeRefit,    // Embree's refit of its first-frame build
+};
+
+struct AnimatedBuilder : ResolvedRun {
+  Variant variant = Variant::kRebuild;
+  std::string name;   // the CSV builder column: "binned_sah", "refit(binned_sah)", "embree"
+  std::string label;  // for the log: the config's label, "refit(...)" around it for refits
+};
+
+// Each of our builder runs becomes a rebuild and a refit; Embree runs stay one (refit by quality).
+std::vector<AnimatedBuilder> expand_builders(const ExperimentConfig& cfg) {
+  std::vector<AnimatedBuilder> out;
+  for (const auto& run : cfg.builders) {
+    AnimatedBuilder b;
+    static_cast<ResolvedRun&>(b) = resolve_run(run, cfg.layouts);
+    b.label = run.label();
+    if (b.is_embree()) {
+      b.variant = b.quality == EmbreeQuality::kRefit ? Variant::kEmbreeRefit : Variant::kEmbreeRebuild;
+      b.name = "embree";
+      out.push_back(std::move(b));
+      continue;
+    }
+    b.variant = Variant::kRebuild;
+    b.name = run.name;
+    out.push_back(b);
+    b.variant = Variant::kRefit;
+    b.name = "refit(" + run.name + ")";
+    b.label = "refit(" + run.label() + ")";
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
+// One of our builders' refit cells in one scene: its tree of the first frame and that tree compiled into
+// each layout that traces it, both refitted in place to every frame (the tree for its SAH cost and the
+// build_ms column, each layout for tracing and layout_refit_ms). One per builder run serves every
+// thread count, since trees and layouts are the same for any.
+struct RefitState {
+  Bvh tree;
+  std::map<std::string, std::unique_ptr<CompiledLayout>> layouts;  // by the configured layout text
+};
+
+// One frame's triangles, rays and reference answers, shared by every cell of the frame.
+struct FrameData {
+  uint32_t index = 0;
+  double time = 0.0;
+  Scene scene;  // the frame's triangles, with the camera fixed for the whole animation
+  float diagonal = 1.0f;
+  std::vector<RaySet> sets;
+  std::vector<std::pair<std::string, std::string>> skipped;  // ray sets that do not apply, with why
+  std::vector<Reference> references;
+};
+
+Aabb bounds_of(std::span<const Triangle> triangles) {
+  Aabb box;
+  for (const auto& t : triangles) box.extend(t.bounds());
+  return box;
+}
+
+class AnimationRunner {
+ public:
+  AnimationRunner(const ExperimentConfig& cfg, const RunOptions& options, std::ostream& log)
+      : cfg_(cfg),
+        options_(options),
+        log_(log),
+        env_(current_environment()),
+        builders_(expand_builders(cfg)),
+        output_(options.output ? *options.output : cfg.output),
+        continue_with_(resume_command(cfg.path, options.output ? &*options.output : nullptr)) {}
+
+  int run() {
+    // As a static run: scenes checked and the lock taken before the CSV is touched.
+    const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
+    const OutputLock lock(output_);
+    CsvWriter csv(output_, animation_columns());
+    if (csv.dropped_partial_row())
+      log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
+    std::vector<std::string> builder_runs;
+    for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text);
+    id_.fingerprint = fingerprint_of(cfg_, scenes, builder_runs, env_);
+    id_.run_id = make_run_id(cfg_.name);
+    if (options_.resume) {
+      ResumePoint point = find_resume_point(output_, id_.fingerprint, log_);
+      if (!point.run_id.empty()) id_.run_id = point.run_id;
+      finished_ = std::move(point.finished);
+    }
+    embree_layouts_ = supported_embree_layouts(log_);
+
+    // Scenes are loaded one at a time; the plan counts cells as each scene's frames become known.
+    log_ << fmt::format("run {} (fingerprint {}): animation experiment, {} frames per scene; writing {}\n",
+                        id_.run_id, id_.fingerprint.hash, cfg_.animation->frames, output_.string());
+    const InterruptGuard interrupts;
+    start_ = std::chrono::steady_clock::now();
+    for (const auto& name : scenes) run_scene(name, csv);
+    log_ << fmt::format("done in {}; rows in {}\n", format_duration(elapsed_s()), output_.string());
+    print_summary();
+    return exit_code_;
+  }
+
+ private:
+  double elapsed_s() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+  std::vector<std::string> layouts_for(const AnimatedBuilder& b) const {
+    return sahbench::layouts_for(b, cfg_.layouts, embree_layouts_);
+  }
+
+  bool wanted(const std::string& scene, const AnimatedBuilder& b, const std::string& layout, int threads,
+              const std::string& ray_set, uint32_t frame) const {
+    const std::string key =
+        cell_key(scene, b.name, b.params_text, layout, threads, ray_set, static_cast<int>(frame));
+    if (finished_.count(key)) return false;
+    return options_.only.empty() || key.find(options_.only) != std::string::npos;
+  }
+
+  // Cells of `frame` still to run, over every builder, layout, thread count and configured ray set.
+  std::size_t pending_in_frame(const std::string& scene, uint32_t frame) const {
+    std::size_t n = 0;
+    for (const auto& b : builders_)
+      for (const auto& layout : layouts_for(b))
+        for (int threads : cfg_.threads)
+          for (const auto& rs : cfg_.ray_sets) n += wanted(scene, b, layout, threads, rs.name, frame);
+    return n;
+  }
+
+  void run_scene(const std::string& name, CsvWriter& csv) {
+    AnimatedScene animated;
+    const double load_ms = time_ms([&] { animated = load_animated(name); });
+    if (!animated.animated()) {
+      log_ << fmt::format("skipping scene {}: static (animation experiments run only on animated scenes)\n",
+                          name);
+      return;
+    }
+    const std::vector<double> times =
+        cfg_.animation->times.empty() ? animated.frame_times(cfg_.animation->frames) : cfg_.animation->times;
+    log_ << fmt::format(
+        "scene {}: {} triangles ({} removed), animated over [{:.4g}, {:.4g}] s, {} frames, from {} in "
+        "{:.0f} ms\n",
+        name, animated.scene.triangles.size(), animated.scene.removed.total(), animated.start, animated.end,
+        times.size(), animated.scene.source, load_ms);
+
+    std::vector<std::size_t> pending(times.size());
+    std::size_t total = 0;
+    for (uint32_t f = 0; f < times.size(); ++f) total += pending[f] = pending_in_frame(name, f);
+    planned_ += total;
+    if (total == 0) return;
+
+    // One camera for every frame: the config's [[camera]], else the file's, else the automatic framing of
+    // all frames together.
+    std::vector<Triangle> triangles;
+    std::optional<Camera> camera = animated.scene.camera;
+    if (const CameraConfig* view = cfg_.camera_for(name)) camera = to_camera(*view);
+    if (!camera) {
+      Aabb all;
+      for (double t : times) {
+        animated.positions_at(t, triangles);
+        all.extend(bounds_of(triangles));
+      }
+      camera = automatic_camera(all);
+    }
+
+    // Our trees of the first frame, refitted in place to every later frame (their layouts are compiled
+    // when first traced, see trace_ours).
+    std::vector<Triangle> first;
+    animated.positions_at(times.front(), first);
+    std::map<std::size_t, RefitState> refits;
+    for (std::size_t i = 0; i < builders_.size(); ++i)
+      if (builders_[i].variant == Variant::kRefit)
+        refits[i].tree = builders_[i].info->build(BuildInput::from_triangles(first), builders_[i].params);
+
+    for (uint32_t f = 0; f < times.size(); ++f) {
+      if (pending[f] == 0) continue;
+      FrameData frame = make_frame(animated, f, times[f], *camera);
+      for (const auto& [set, reason] : frame.skipped)
+        log_ << fmt::format("scene {} frame {}: skipping ray set '{}': {}\n", name, f, set, reason);
+      for (int threads : cfg_.threads) {
+        const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                                        static_cast<std::size_t>(threads));
+        for (std::size_t i = 0; i < builders_.size(); ++i) {
+          const AnimatedBuilder& b = builders_[i];
+          bool any = false;
+          for (const auto& layout : layouts_for(b))
+            for (const auto& rs : frame.sets) any |= wanted(name, b, layout, threads, rs.name, f);
+          if (!any) continue;
+          switch (b.variant) {
+            case Variant::kRebuild:
+              run_rebuild(frame, b, threads, csv);
+              break;
+            case Variant::kRefit:
+              run_refit(frame, b, threads, refits.at(i), csv);
+              break;
+            case Variant::kEmbreeRebuild:
+            case Variant::kEmbreeRefit:
+              run_embree(frame, b, threads, first, csv);
+              break;
+          }
+        }
+      }
+    }
+  }
+
+  FrameData make_frame(const AnimatedScene& animated, uint32_t index, double time, const Camera& camera) {
+    FrameData frame;
+    frame.index = index;
+    frame.time = time;
+    frame.scene = animated.scene;
+    frame.scene.camera = camera;
+    animated.positions_at(time, frame.scene.triangles);
+    frame.diagonal = scene_diagonal(frame.scene.triangles);
+    GeneratedRaySets generated = generate_ray_sets(frame.scene, cfg_.ray_sets, cfg_.seed);
+    frame.sets = std::move(generated.sets);
+    frame.skipped = std::move(generated.skipped);
+    for (const auto& rs : frame.sets)
+      frame.references.push_back(
+          make_reference(frame.scene, rs, cfg_.reference, cfg_.brute_force_max_triangles));
+    return frame;
+  }
+
+  CsvRow base_row(const FrameData& frame, const AnimatedBuilder& b, int threads) const {
+    CsvRow row = common_row(id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
+    row["frame_time"] = fmt::format("{:.6g}", frame.time);
+    return row;
+  }
+
+  void append(CsvWriter& csv, const CsvRow& row, const std::string& what) {
+    // A cell is one row here: stop before writing the next, never halfway through one.
+    InterruptGuard::check(done_, planned_, continue_with_);
+    csv.append(row);
+    rows_.push_back(row);
+    ++done_;
+    const double elapsed = elapsed_s();
+    const double left =
+        elapsed / static_cast<double>(done_) * static_cast<double>(planned_ - std::min(planned_, done_));
+    // The total grows as scenes are loaded (their frame counts are known only then).
+    log_ << fmt::format("[{}/{}+] {} | elapsed {}, left in loaded scenes ~{}\n", done_, planned_, what,
+                        format_duration(elapsed), format_duration(left));
+  }
+
+  void run_rebuild(const FrameData& frame, const AnimatedBuilder& b, int threads, CsvWriter& csv) {
+    Bvh bvh;
+    // The previous repetition's tree is freed before the clock starts, as in a static run.
+    const auto [build_t, peak] = time_builds(
+        cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
+        [&] { bvh = Bvh{}; });
+    trace_ours(frame, b, threads, bvh, build_t, peak, nullptr, csv);
+  }
+
+  void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, RefitState& state,
+                 CsvWriter& csv) {
+    // Every refit recomputes every box, so repeating it on the same frame times the same work.
+    const auto [refit_t, peak] = time_builds(
+        cfg_.reps, [&] { refit(state.tree, frame.scene.triangles); }, [] {});
+    trace_ours(frame, b, threads, state.tree, refit_t, peak, &state, csv);
+  }
+
+  // The layout `layout_name` of a refit cell, compiled the first time it is traced and kept in `state`
+  // for the frames after: from the refitted tree, which has the first frame's topology, and at once
+  // refitted to the frame's triangles. Layouts depend only on the tree's topology and the triangles, so
+  // this is the first frame's layout refitted, whichever frame traces it first. The first refit also
+  // makes bvh2 copy the tree it borrows, so that refitting the tree no longer moves the layout's boxes:
+  // every later frame's layout_refit_ms is then the layout's own refit.
+  CompiledLayout& refit_layout(RefitState& state, const std::string& layout_name,
+                               std::span<const Triangle> triangles) {
+    std::unique_ptr<CompiledLayout>& compiled = state.layouts[layout_name];
+    if (!compiled) {
+      compiled = compile_layout(parse_layout_spec(layout_name), state.tree, triangles);
+      compiled->refit(triangles);
+    }
+    return *compiled;
+  }
+
+  // Traces a tree of ours in every wanted cell of `frame`. A rebuild (`refit_state` null) is compiled into
+  // each layout, timed into layout_ms; a refit's layouts are refitted in place (refit_layout), timed into
+  // layout_refit_ms, and layout_ms is left empty (their one compile, of the first frame's tree, is the
+  // rebuild's layout_ms on the first frame).
+  void trace_ours(const FrameData& frame, const AnimatedBuilder& b, int threads, const Bvh& bvh,
+                  const TimingSummary& build_t, int64_t peak, RefitState* refit_state, CsvWriter& csv) {
+    const Scene& scene = frame.scene;
+    const SahCost cost = sah_cost_of(b.params);
+    const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
+    const bool valid = report.ok();
+    if (!valid) {
+      exit_code_ = 1;
+      log_ << fmt::format("INVALID tree from {} on {} frame {}:\n{}", b.label, scene.name, frame.index,
+                          report.summary());
+    }
+    // Statistics need a valid tree; an invalid one is reported and not traced (it could read out of bounds).
+    const BvhStats stats = valid ? compute_stats(bvh, scene.triangles.size(), cost) : BvhStats{};
+    for (const auto& layout_name : layouts_for(b)) {
+      bool any = false;
+      for (const auto& rs : frame.sets)
+        any |= wanted(scene.name, b, layout_name, threads, rs.name, frame.index);
+      if (!any) continue;
+      std::unique_ptr<CompiledLayout> fresh;  // a rebuild's
+      CompiledLayout* compiled = nullptr;
+      double layout_time = 0.0;  // median ms of the compile or of the layout refit
+      TimingSummary layout_t;    // a rebuild's compiles
+      if (valid && refit_state) {
+        compiled = &refit_layout(*refit_state, layout_name, scene.triangles);
+        const TimingSummary t = time_builds(
+                                    cfg_.reps, [&] { compiled->refit(scene.triangles); }, [] {})
+                                    .time;
+        layout_time = t.median;
+      } else if (valid) {
+        TimedCompile timed = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
+        fresh = std::move(timed.layout);
+        compiled = fresh.get();
+        layout_time = timed.time.median;
+        layout_t = timed.time;
+      }
+      for (std::size_t s = 0; s < frame.sets.size(); ++s) {
+        const RaySet& rs = frame.sets[s];
+        if (!wanted(scene.name, b, layout_name, threads, rs.name, frame.index)) continue;
+        CsvRow row = base_row(frame, b, threads);
+        row["isa"] = env_.isa;
+        row["layout"] = layout_name;
+        put_timing(row, "build_ms", build_t);
+        row["nodes"] = std::to_string(bvh.nodes.size());
+        row["arity"] = std::to_string(bvh.arity);
+        put_ray_set(row, rs);
+        if (refit_state) add_note(row, "tree and layout of frame 0 refitted");
+        if (!valid) {
+          add_note(row, "invalid tree, not traced: " + report.errors.front());
+          append(csv, row,
+                 fmt::format("{} f{} {} {} t={} {}: INVALID tree, not traced", scene.name, frame.index,
+                             b.label, layout_name, threads, rs.name));
+          continue;
+        }
+        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
+        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
+        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
+                                                 [&] { trace_layout(*compiled, rs, hits, occluded); });
+        const TraceCounts counts = count_layout(*compiled, rs);
+        const Reference& ref = frame.references[s];
+        row[refit_state ? "layout_refit_ms" : "layout_ms"] = fmt::format("{:.4f}", layout_time);
+        row["isa"] = compiled->isa();
+        row["mem_bytes"] = std::to_string(compiled->bytes());
+        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene.triangles.size());
+        row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
+        put_tree_stats(row, stats, cost);
+        put_timing(row, "trace_mrays", trace_t);
+        if (!refit_state) put_build_layout_ms(row, build_t, layout_t);
+        put_per_ray_counts(row, counts);
+        put_hit_fraction(row, hits, occluded);
+        put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
+        append(csv, row,
+               fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms + {} {:.3f} ms, SAH {:.2f}, {:.2f} Mrays/s, "
+                           "{} mismatches",
+                           scene.name, frame.index, b.label, layout_name, threads, rs.name,
+                           refit_state ? "refit" : "build", build_t.median,
+                           refit_state ? "layout refit" : "compile", layout_time, stats.sah_cost,
+                           trace_t.median, row["mismatches"]));
+      }
+    }
+  }
+
+  // Embree: a rebuild per frame, or (quality refit) its first-frame build refitted to this frame. The
+  // refit scene is made afresh for each frame and thread count from the first frame, so that every
+  // Embree refit, like ours, starts from the first frame's tree.
+  void run_embree(const FrameData& frame, const AnimatedBuilder& b, int threads,
+                  std::span<const Triangle> first, CsvWriter& csv) {
+    const Scene& scene = frame.scene;
+    EmbreeDevice device(threads);
+    std::unique_ptr<EmbreeScene> built;
+    BuildTiming timing;
+    if (b.variant == Variant::kEmbreeRefit) {
+      built = std::make_unique<EmbreeScene>(device, first, EmbreeQuality::kRefit);
+      for (int w = 0; w < cfg_.reps.build_warmup; ++w) built->update_vertices(scene.triangles);
+      std::vector<double> refit_ms;
+      for (int r = 0; r < cfg_.reps.build; ++r) {
+        const int64_t before = device.bytes();
+        device.reset_peak();
+        refit_ms.push_back(built->update_vertices(scene.triangles));
+        if (r == 0) timing.peak_bytes = device.peak_bytes() - before;
+      }
+      timing.time = summarize(refit_ms);
+    } else {
+      timing = time_embree_builds(cfg_.reps, device, scene.triangles, b.quality, built);
+    }
+    const TimingSummary build_t = timing.time;
+    const int64_t peak = timing.peak_bytes;
+    for (const auto& layout : embree_layouts_) {
+      for (std::size_t s = 0; s < frame.sets.size(); ++s) {
+        const RaySet& rs = frame.sets[s];
+        if (!wanted(scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
+        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
+        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
+        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
+                                                 [&] { trace_embree(*built, layout, rs, hits, occluded); });
+        const Reference& ref = frame.references[s];
+        CsvRow row = base_row(frame, b, threads);
+        row["isa"] = "embree:" + embree_isa(device);
+        row["layout"] = layout.name;
+        put_timing(row, "build_ms", build_t);
+        row["mem_bytes"] = std::to_string(built->bytes());
+        row["bytes_per_tri"] =
+            bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene.triangles.size());
+        row["mem_peak_bytes"] = std::to_string(peak);
+        put_ray_set(row, rs);
+        put_timing(row, "trace_mrays", trace_t);
+        if (b.variant != Variant::kEmbreeRefit) put_build_layout_ms(row, build_t, {});
+        put_hit_fraction(row, hits, occluded);
+        put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
+        if (b.variant == Variant::kEmbreeRefit)
+          add_note(row, "Embree refit of frame 0's build (dynamic scene, geometry quality refit)");
+        append(csv, row,
+               fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
+                           frame.index, b.label, layout.name, threads, rs.name,
+                           b.variant == Variant::kEmbreeRefit ? "refit" : "build", build_t.median,
+                           trace_t.median, row["mismatches"]));
+      }
+    }
+  }
+
+  // Per scene and thread count, one line per frame: for each of our builders and each of its layouts, the
+  // refit's cost (tree refit + layout refit) against the rebuild's (build + layout compile) and their
+  // ratio, the refit tree's SAH cost relative to the rebuild's, and Embree's refit time.
+  void print_summary() const {
+    struct Cell {
+      std::optional<double> build_ms, sah;
+      std::map<std::string, double> layout_ms;  // by layout: the compile (rebuild) or the layout refit
+    };
+    // (scene, threads) -> frame -> builder name + params -> first row's figures (build time and SAH
+    // are the same in every layout and ray-set row of a tree, layout times in every ray-set row).
+    std::map<std::pair<std::string, int>, std::map<int, std::map<std::string, Cell>>> table;
+    std::map<std::pair<std::string, int>, std::map<int, std::string>> frame_times;
+    std::vector<std::pair<std::string, int>> order;
+    for (const auto& row : rows_) {
+      const auto key = std::make_pair(row.at("scene"), std::stoi(row.at("threads")));
+      if (std::find(order.begin(), order.end(), key) == order.end()) order.push_back(key);
+      const int frame = std::stoi(row.at("frame"));
+      frame_times[key][frame] = row.at("frame_time");
+      Cell& cell = table[key][frame][row.at("builder") + "|" + row.at("builder_params")];
+      if (!cell.build_ms) cell.build_ms = csv_number(row, "build_ms_median");
+      if (!cell.sah) cell.sah = csv_number(row, "sah_cost");
+      for (const char* column : {"layout_ms", "layout_refit_ms"})
+        if (const auto ms = csv_number(row, column)) cell.layout_ms.emplace(row.at("layout"), *ms);
+    }
+    // "TREE+LAYOUT" (the layout part only where the tree was traced), and the total.
+    auto cost = [](const Cell& c, const std::string& layout) {
+      const auto it = c.layout_ms.find(layout);
+      if (it == c.layout_ms.end()) return std::make_pair(fmt::format("{:.3f}", *c.build_ms), *c.build_ms);
+      return std::make_pair(fmt::format("{:.3f}+{:.3f}", *c.build_ms, it->second), *c.build_ms + it->second);
+    };
+    for (const auto& key : order) {
+      log_ << fmt::format(
+          "\nsummary: {}, {} thread{} (median ms; refit = tree refit + layout refit, rebuild = build + "
+          "layout compile; speed-up = rebuild / refit; SAH = refit / rebuild)\n",
+          key.first, key.second, key.second == 1 ? "" : "s");
+      for (const auto& [frame, cells] : table.at(key)) {
+        std::string line = fmt::format("  frame {:>3} t={:<8}", frame, frame_times.at(key).at(frame));
+        for (const auto& b : builders_) {
+          if (b.variant != Variant::kRefit && b.variant != Variant::kEmbreeRefit) continue;
+          const auto refit_cell = cells.find(b.name + "|" + b.params_text);
+          if (refit_cell == cells.end() || !refit_cell->second.build_ms) continue;
+          const Cell& r = refit_cell->second;
+          if (b.variant == Variant::kEmbreeRefit) {
+            line += fmt::format(" | embree refit {:.3f}", *r.build_ms);
+            continue;
+          }
+          const auto rebuild_cell = cells.find(b.info->name + "|" + b.params_text);
+          const Cell* k =
+              rebuild_cell != cells.end() && rebuild_cell->second.build_ms ? &rebuild_cell->second : nullptr;
+          line += " | " + b.label;
+          if (k && r.sah && k->sah && *k->sah > 0) line += fmt::format(" SAH {:.3f}", *r.sah / *k->sah);
+          // A tree not traced in any layout (invalid) has its refit time alone.
+          if (r.layout_ms.empty()) line += fmt::format(" refit {:.3f}", *r.build_ms);
+          for (const auto& layout : layouts_for(b)) {
+            if (!r.layout_ms.count(layout)) continue;  // not traced in this frame (--only, invalid tree)
+            const auto [refit_text, refit_ms] = cost(r, layout);
+            line += fmt::format(", {}: refit {}", layout, refit_text);
+            if (!k) continue;
+            const auto [rebuild_text, rebuild_ms] = cost(*k, layout);
+            line += fmt::format(" rebuild {} ({:.1f}x)", rebuild_text, rebuild_ms / std::max(refit_ms, 1e-9));
+          }
+        }
+        log_ << line << "\n";
+      }
+    }
+  }
+
+  const ExperimentConfig& cfg_;
+  const RunOptions& options_;
+  std::ostream& log_;
+  Environment env_;
+  std::vector<AnimatedBuilder> builders_;
+  std::vector<EmbreeLayout> embree_layouts_;
+  std::filesystem::path output_;
+  std::string continue_with_;  // the command that resumes this run, for the interrupt message
+  RunIdentity id_;
+  std::set<std::string> finished_;
+  std::vector<CsvRow> rows_;  // written by this run, for the summary
+  std::size_t planned_ = 0, done_ = 0;
+  std::chrono::steady_clock::time_point start_;
+  int exit_code_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::string> animation_columns() {
+  std::vector<std::string> columns = result_columns();
+  columns.insert(std::find(columns.begin(), columns.end(), "layout_ms") + 1, "layout_refit_ms");
+  columns.push_back("frame_time");
+  return columns;
+}
+
+int run_animation_experiment(const ExperimentConfig& cfg, const RunOptions& options, std::ostream& log) {
+  if (!cfg.animation) throw Error(cfg.path.string() + ": not an animation experiment (no [animation] table)");
+  return AnimationRunner(cfg, options, log).run();
+}
+
+}  // namespace sahbench

@@ -1,0 +1,47 @@
+#pragma once
+// Ray sets, generated once per scene from a seed and given unchanged to every builder, layout and to
+// Embree (DESIGN.md). Each ray is a pure function of (seed, set, index), so generation runs in parallel
+// and gives the same rays for any thread count.
+//
+// Primary rays come from the scene's camera (glTF) when it has one, else from the automatic framing:
+// a pinhole camera with a 45-degree vertical field of view, looking at the centre of the scene's box
+// from the direction (1, 0.6, 1.4) (above and to the side, y up), at the distance where the box's
+// bounding sphere fills the view. Secondary rays (shadow, diffuse, ambient occlusion) start at the
+// primary hits, found by a reference tree (binned SAH, watertight test), and are offset from the
+// surface as in Waechter and Binder 2019, "A Fast and Robust Method for Avoiding Self-Intersection"
+// (Ray Tracing Gems, chapter 6).
+
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/ray.h"
+#include "harness/config/config.h"
+#include "scenes/camera.h"
+#include "scenes/scene.h"
+
+namespace sahbench {
+
+struct RaySet {
+  std::string name;
+  RayKind kind = RayKind::kPrimary;
+  bool occlusion = false;  ///< any-hit query (shadow, ambient occlusion) rather than closest hit
+  std::vector<Ray> rays;
+};
+
+struct GeneratedRaySets {
+  std::vector<RaySet> sets;
+  std::vector<std::pair<std::string, std::string>> skipped;  ///< (set name, reason)
+};
+
+/// Generates every configured set for `scene`. A set that does not apply (a shadow set asking for the
+/// scene's own lights when it has none; secondary rays when no primary ray hits) is skipped with a
+/// reason rather than generated empty.
+GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetConfig> configs, uint64_t seed);
+
+/// The automatic point lights: `count` points in the top tenth of the scene box, spread over its middle
+/// 80% horizontally (y up), deterministic from the seed.
+std::vector<Vec3> automatic_lights(const Scene& scene, uint32_t count, uint64_t seed);
+
+}  // namespace sahbench

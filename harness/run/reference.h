@@ -1,0 +1,44 @@
+#pragma once
+// The reference every cell of `sahbench run` is checked against (static and animation experiments):
+// brute force on small scenes, Embree in robust mode on large ones, and the count of a cell's answers
+// that differ from it (traversal/hit_compare.h says what counts as the same answer).
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/ray.h"
+#include "core/triangle.h"
+#include "harness/config/config.h"
+#include "harness/run/ray_sets.h"
+#include "scenes/scene.h"
+
+namespace sahbench {
+
+/// The reference answers for one ray set: closest hits, or occlusion flags for any-hit sets. `name` is
+/// the CSV's `reference` column: "brute_force", "embree_robust", or "none" (no answers, no check).
+struct Reference {
+  std::string name = "none";
+  std::vector<Hit> hits;
+  std::vector<uint8_t> occluded;
+};
+
+/// The answers of `policy` for `rs` on `scene`. kAuto is brute force up to `brute_force_max_triangles`
+/// triangles and Embree robust above; kNone gives no answers. Runs in parallel with TBB under the
+/// caller's thread limit (brute force), or on an Embree device of its own that is released before the
+/// call returns.
+Reference make_reference(const Scene& scene, const RaySet& rs, ReferencePolicy policy,
+                         uint64_t brute_force_max_triangles);
+
+/// The length of the diagonal of the box around `triangles` (1 when there are none): the scene's size,
+/// from which count_mismatches derives each ray's tie tolerance.
+float scene_diagonal(std::span<const Triangle> triangles);
+
+/// Answers in `hits` (closest-hit sets) or `occluded` (any-hit sets) that differ from `ref`'s: a different
+/// hit/miss answer, or a different primitive at a different distance (same_hit, with the tolerance scaled
+/// by `scene_diagonal` in units of each ray's t).
+uint64_t count_mismatches(const Reference& ref, const RaySet& rs, float scene_diagonal,
+                          std::span<const Hit> hits, std::span<const uint8_t> occluded);
+
+}  // namespace sahbench

@@ -1,0 +1,289 @@
+// The layout registry and the binary layouts. Wide layouts (BVH4/BVH8) register here too.
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+
+#include "core/error.h"
+#include "core/refit.h"
+#include "traversal/bvh2_traversal.h"
+#include "traversal/layout.h"
+#include "traversal/ray_chunks.h"
+#include "traversal/variant_dispatch.h"
+#include "traversal/wide_layout.h"
+
+namespace sahbench {
+namespace {
+
+// Rays handed to one task: enough to amortise scheduling, few enough to balance incoherent rays.
+constexpr std::size_t kRayChunk = 256;
+
+// The counters of `trace(i, counters)` summed over rays [0, count), in chunks of kRayChunk.
+template <class Trace>
+TraceCounts count_rays(std::size_t count, Trace trace) {
+  return sum_over_ray_chunks(count, kRayChunk, [&](std::size_t begin, std::size_t end) {
+    TraversalCounters counters;
+    for (std::size_t i = begin; i != end; ++i) trace(i, counters);
+    return TraceCounts{end - begin, counters.nodes_visited(), counters.prim_tests};
+  });
+}
+
+/// A binary tree in the common format, traversed by the traversal/ kernels. `bvh2` traverses the tree
+/// as built, its triangles reached through the references. `bvh2_packed` copies the triangles into
+/// leaf order, so a leaf's triangles are contiguous and no reference is chased per primitive (as
+/// tinybvh and Embree store leaves); its references become the identity and hits are mapped back to
+/// scene indices through `ids_`. The triangle and box tests are template parameters (variant_dispatch.h).
+template <class Tri, class Box>
+class Bvh2Layout final : public CompiledLayout {
+ public:
+  /// The tree as built; `bvh` and `triangles` must outlive the layout. Any hit visits children in `order`.
+  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, AnyHitOrder order)
+      : bvh_(&bvh), triangles_(triangles), triangle_count_(triangles.size()), order_(order) {}
+
+  /// Packed: owns a copy of the nodes in depth-first order and the triangles in leaf order.
+  static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles,
+                                            AnyHitOrder order) {
+    auto layout = std::unique_ptr<Bvh2Layout>(new Bvh2Layout());
+    layout->order_ = order;
+    layout->owned_ = depth_first(bvh);
+    const std::size_t refs = layout->owned_.prim_refs.size();
+    layout->packed_.resize(refs);
+    layout->ids_ = std::move(layout->owned_.prim_refs);
+    layout->owned_.prim_refs.resize(refs);
+    tbb::parallel_for(std::size_t{0}, refs, [&](std::size_t i) {
+      layout->owned_.prim_refs[i] = static_cast<uint32_t>(i);
+      layout->packed_[i] = triangles[layout->ids_[i]];
+    });
+    layout->bvh_ = &layout->owned_;
+    layout->triangles_ = layout->packed_;
+    layout->triangle_count_ = triangles.size();
+    return layout;
+  }
+
+  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
+    for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) {
+        Hit hit = closest_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
+        if (hit.found() && !ids_.empty()) hit.prim = ids_[hit.prim];
+        hits[i] = hit;
+      }
+    });
+  }
+  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
+    for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit<Tri, Box>(*bvh_, triangles_, rays[i], order_);
+    });
+  }
+  TraceCounts count_closest(std::span<const Ray> rays) const override {
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) {
+      closest_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c);
+    });
+  }
+  TraceCounts count_any(std::span<const Ray> rays) const override {
+    return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) {
+      any_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c, order_);
+    });
+  }
+  // Refit (core/refit.h): as built, a copy of the borrowed tree is made the first time, and the new
+  // triangles are borrowed like the old ones; packed, the packed copies are rewritten first.
+  void refit(std::span<const Triangle> triangles) override {
+    if (triangles.size() != triangle_count_)
+      throw Error("refit with " + std::to_string(triangles.size()) + " triangles, compiled over " +
+                  std::to_string(triangle_count_));
+    if (ids_.empty()) {
+      if (bvh_ != &owned_) {
+        owned_ = *bvh_;
+        bvh_ = &owned_;
+      }
+      triangles_ = triangles;
+    } else {
+      tbb::parallel_for(std::size_t{0}, ids_.size(), [&](std::size_t i) { packed_[i] = triangles[ids_[i]]; });
+    }
+    sahbench::refit(owned_, triangles_);
+  }
+
+  // As built: nodes and references. Packed: nodes, the packed triangles and the ids that map them back
+  // (the identity references are an artefact of reusing the common-format kernel and are not counted).
+  std::size_t bytes() const override {
+    if (ids_.empty()) return bvh_->bytes();
+    return bvh_->nodes.size() * sizeof(Node) + packed_.size() * sizeof(Triangle) +
+           ids_.size() * sizeof(uint32_t);
+  }
+
+ private:
+  Bvh2Layout() = default;
+
+  // The same tree with its nodes in depth-first order, each node's children kept together and placed just
+  // before the first child's own children, and its references in the order the leaves are met: a ray
+  // descending to the nearest leaf then reads nodes that are close in memory, whatever order the builder
+  // wrote them in (the top-down builders hand out slots as their tasks need them), so layouts of
+  // the same tree from different builders also trace alike.
+  static Bvh depth_first(const Bvh& bvh) {
+    Bvh out;
+    out.arity = bvh.arity;
+    out.nodes.reserve(bvh.nodes.size());
+    out.prim_refs.reserve(bvh.prim_refs.size());
+    if (bvh.nodes.empty()) return out;
+    out.nodes.push_back(bvh.nodes[0]);
+    std::vector<std::pair<uint32_t, uint32_t>> stack = {{0, 0}};  // (index in bvh, index in out)
+    while (!stack.empty()) {
+      const auto [from, to] = stack.back();
+      stack.pop_back();
+      const Node& node = bvh.nodes[from];
+      if (node.is_leaf()) {
+        out.nodes[to].first = static_cast<uint32_t>(out.prim_refs.size());
+        out.prim_refs.insert(out.prim_refs.end(), bvh.prim_refs.begin() + node.first,
+                             bvh.prim_refs.begin() + node.first + node.prim_count);
+        continue;
+      }
+      const auto first = static_cast<uint32_t>(out.nodes.size());
+      out.nodes[to].first = first;
+      for (uint32_t c = 0; c < node.child_count; ++c) out.nodes.push_back(bvh.nodes[node.first + c]);
+      for (uint32_t c = node.child_count; c-- > 0;) stack.push_back({node.first + c, first + c});
+    }
+    return out;
+  }
+
+  const Bvh* bvh_ = nullptr;
+  std::span<const Triangle> triangles_;
+  std::size_t triangle_count_ = 0;  // of the scene, for refit's check
+  Bvh owned_;                       // packed; as built, once refitted
+  std::vector<Triangle> packed_;    // packed only
+  std::vector<uint32_t> ids_;       // packed only: scene index of each packed triangle
+  AnyHitOrder order_ = AnyHitOrder::kAuto;
+};
+
+void require_binary(const Bvh& bvh, const char* layout) {
+  if (bvh.arity != 2)
+    throw Error(std::string("layout '") + layout + "' needs a binary tree, the builder gave arity " +
+                std::to_string(bvh.arity));
+}
+
+std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Triangle> tris,
+                                             const LayoutSpec& spec) {
+  require_binary(bvh, "bvh2");
+  return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
+    return std::make_unique<Bvh2Layout<Tri, Box>>(bvh, tris, spec.variant.any_hit);
+  });
+}
+
+std::unique_ptr<CompiledLayout> compile_bvh2_packed(const Bvh& bvh, std::span<const Triangle> tris,
+                                                    const LayoutSpec& spec) {
+  require_binary(bvh, "bvh2_packed");
+  return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
+    return Bvh2Layout<Tri, Box>::packed(bvh, tris, spec.variant.any_hit);
+  });
+}
+
+const std::vector<LayoutInfo>& registry() {
+  static const std::vector<LayoutInfo> all = {
+      {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false,
+       compile_bvh2},
+      {"bvh2_packed", "common-format nodes, triangles copied into leaf order", 2, false, compile_bvh2_packed},
+      {"bvh4", "4-wide SoA nodes (128 B), triangles packed 4 per block, SIMD kernels (sse/avx2/avx512)", 4,
+       true,
+       [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
+         return compile_wide_layout(4, bvh, tris, spec);
+       }},
+      {"bvh8",
+       "8-wide SoA nodes (256 B), triangles packed 4 per block, SIMD kernels (avx2/avx512, sse in halves)", 8,
+       true,
+       [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
+         return compile_wide_layout(8, bvh, tris, spec);
+       }},
+  };
+  return all;
+}
+
+}  // namespace
+
+std::span<const LayoutInfo> layouts() {
+  return registry();
+}
+
+const LayoutInfo& find_layout(std::string_view name) {
+  for (const auto& l : registry())
+    if (l.name == name) return l;
+  std::string known;
+  for (const auto& l : registry()) known += (known.empty() ? "" : ", ") + l.name;
+  throw Error("unknown layout '" + std::string(name) + "' (known: " + known + ")");
+}
+
+void CompiledLayout::refit(std::span<const Triangle>) {
+  throw Error("this layout does not refit");
+}
+
+std::string LayoutSpec::text() const {
+  std::string options;
+  auto add = [&](std::string_view key, std::string_view value) {
+    options += options.empty() ? ':' : ',';
+    options.append(key).append("=").append(value);
+  };
+  const KernelVariant defaults;
+  if (variant.triangle != defaults.triangle) add("tri", to_string(variant.triangle));
+  if (variant.box != defaults.box) add("box", to_string(variant.box));
+  if (variant.any_hit != defaults.any_hit) add("anyhit", to_string(variant.any_hit));
+  if (isa != KernelIsa::kAuto) add("isa", to_string(isa));
+  return name + options;
+}
+
+LayoutSpec parse_layout_spec(std::string_view text) {
+  LayoutSpec spec;
+  const auto colon = text.find(':');
+  spec.name = std::string(text.substr(0, colon));
+  const LayoutInfo& info = find_layout(spec.name);
+  if (colon == std::string_view::npos) return spec;
+
+  const std::string where = "layout '" + std::string(text) + "'";
+  std::string_view rest = text.substr(colon + 1);
+  std::vector<std::string> seen;
+  while (true) {
+    const auto comma = rest.find(',');
+    const std::string_view item = rest.substr(0, comma);
+    const auto eq = item.find('=');
+    if (eq == std::string_view::npos || eq == 0)
+      throw Error(where + ": option '" + std::string(item) +
+                  "' is not of the form key=value (keys: tri, box, anyhit" + (info.has_isa ? ", isa)" : ")"));
+    const std::string key(item.substr(0, eq));
+    const std::string value(item.substr(eq + 1));
+    if (std::find(seen.begin(), seen.end(), key) != seen.end())
+      throw Error(where + ": option '" + key + "' is given twice");
+    seen.push_back(key);
+    if (key == "tri") {
+      const auto kind = parse_triangle_test(value);
+      if (!kind) throw Error(where + ": tri = '" + value + "' is not one of watertight, mt, mt0, mtn");
+      spec.variant.triangle = *kind;
+    } else if (key == "box") {
+      const auto kind = parse_box_test(value);
+      if (!kind) throw Error(where + ": box = '" + value + "' is not one of robust, fast, fma");
+      spec.variant.box = *kind;
+    } else if (key == "anyhit") {
+      const auto order = parse_any_hit_order(value);
+      if (!order)
+        throw Error(where + ": anyhit = '" + value + "' is not one of auto, nearest, stored, nearest_stored");
+      spec.variant.any_hit = *order;
+    } else if (key == "isa" && info.has_isa) {
+      const auto isa = parse_kernel_isa(value);
+      if (!isa) throw Error(where + ": isa = '" + value + "' is not one of auto, scalar, sse, avx2, avx512");
+      spec.isa = *isa;
+    } else {
+      throw Error(where + ": unknown option '" + key + "' (known: tri, box, anyhit" +
+                  (info.has_isa ? ", isa)" : ")"));
+    }
+    if (comma == std::string_view::npos) break;
+    rest = rest.substr(comma + 1);
+  }
+  return spec;
+}
+
+std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,
+                                               std::span<const Triangle> triangles) {
+  return find_layout(spec.name).compile(bvh, triangles, spec);
+}
+
+std::unique_ptr<CompiledLayout> compile_layout(std::string_view spec, const Bvh& bvh,
+                                               std::span<const Triangle> triangles) {
+  return compile_layout(parse_layout_spec(spec), bvh, triangles);
+}
+
+}  // namespace sahbench

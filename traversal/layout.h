@@ -62,6 +62,7 @@ struct LayoutSpec {
   /// The canonical text: the name, then the options that differ from the defaults, in the order above.
   /// This is what the CSV's layout column holds, so "bvh2:tri=watertight" and "bvh2" are one cell.
   std::string text() const;
+  bool operator==(const LayoutSpec&) const = default;
 };
 
 struct LayoutInfo {

@@ -22,116 +22,7 @@ constexpr int kMaxInt = std::numeric_limits<int>::max();
 constexpr int64_t kMaxUint32 = std::numeric_limits<uint32_t>::max();
 constexpr int64_t kMaxInt64 = std::numeric_limits<int64_t>::max();
 
-// The file being read, for the "<file>:<line>:" prefix of every message.
-struct Source {
-  std::string file;
-
-  [[noreturn]] void fail(uint32_t line, const std::string& what) const {
-    throw Error(file + ":" + std::to_string(line) + ": " + what);
-  }
-  [[noreturn]] void fail(const toml::node& at, const std::string& what) const { fail(line_of(at), what); }
-  // Line 1 where toml++ recorded no position (e.g. a table only implied by a dotted key).
-  static uint32_t line_of(const toml::node& node) { return std::max<uint32_t>(node.source().begin.line, 1); }
-};
-
-std::string type_name(const toml::node& node) {
-  switch (node.type()) {
-    case toml::node_type::table:
-      return "a table";
-    case toml::node_type::array:
-      return "a list";
-    case toml::node_type::string:
-      return "a string";
-    case toml::node_type::integer:
-      return "an integer";
-    case toml::node_type::floating_point:
-      return "a float";
-    case toml::node_type::boolean:
-      return "a boolean";
-    case toml::node_type::date:
-      return "a date";
-    case toml::node_type::time:
-      return "a time";
-    case toml::node_type::date_time:
-      return "a date-time";
-    default:
-      return "nothing";
-  }
-}
-
-std::string join(const std::vector<std::string>& items, std::string_view separator = ", ") {
-  std::string out;
-  for (const auto& item : items) out += (out.empty() ? "" : std::string(separator)) + item;
-  return out;
-}
-
-// A table's entries in file order: toml++ keeps keys sorted by name, but sweeps vary the last key written
-// fastest and errors should name the first offending key in the file.
-std::vector<std::pair<std::string, const toml::node*>> in_file_order(const toml::table& table) {
-  std::vector<std::pair<const toml::key*, const toml::node*>> entries;
-  for (const auto& [key, node] : table) entries.emplace_back(&key, &node);
-  std::sort(entries.begin(), entries.end(), [](const auto& a, const auto& b) {
-    const auto& pa = a.first->source().begin;
-    const auto& pb = b.first->source().begin;
-    return pa.line != pb.line ? pa.line < pb.line : pa.column < pb.column;
-  });
-  std::vector<std::pair<std::string, const toml::node*>> out;
-  for (const auto& [key, node] : entries) out.emplace_back(std::string(key->str()), node);
-  return out;
-}
-
-// Fails on the first key of `table` (in file order) that is not in `known`.
-void check_keys(const Source& src, const toml::table& table, std::string_view table_name,
-                const std::vector<std::string>& known) {
-  for (const auto& [key, node] : in_file_order(table)) {
-    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
-    const auto* list = node->as_array();
-    const std::string what = node->is_table()                     ? "table [" + key + "]"
-                             : list && list->is_array_of_tables() ? "table [[" + key + "]]"
-                                                                  : "key '" + key + "'";
-    src.fail(*node, "unknown " + what + " in " + std::string(table_name) + " (known: " + join(known) + ")");
-  }
-}
-
-const toml::table& as_table(const Source& src, const toml::node& node, const std::string& what) {
-  if (const auto* table = node.as_table()) return *table;
-  src.fail(node, what + " must be a table, not " + type_name(node));
-}
-
-int64_t read_int(const Source& src, const toml::node& node, const std::string& key, int64_t min,
-                 int64_t max) {
-  const auto* value = node.as_integer();
-  if (!value) src.fail(node, key + " must be an integer, not " + type_name(node));
-  const int64_t v = value->get();
-  // Limits at the type's range are no real limit: say only the bound that matters then.
-  const bool unbounded = max >= kMaxInt;
-  if (v < min && unbounded)
-    src.fail(node, key + " = " + std::to_string(v) + " must be at least " + std::to_string(min));
-  if (v < min || v > max)
-    src.fail(node, key + " = " + std::to_string(v) + " is outside [" + std::to_string(min) + ", " +
-                       std::to_string(max) + "]");
-  return v;
-}
-
-std::string read_string(const Source& src, const toml::node& node, const std::string& key) {
-  const auto* value = node.as_string();
-  if (!value) src.fail(node, key + " must be a string, not " + type_name(node));
-  if (value->get().empty()) src.fail(node, key + " must not be empty");
-  return value->get();
-}
-
-// One of `choices`, spelled exactly.
-std::string read_choice(const Source& src, const toml::node& node, const std::string& key,
-                        const std::vector<std::string>& choices) {
-  std::string value = read_string(src, node, key);
-  if (std::find(choices.begin(), choices.end(), value) == choices.end())
-    src.fail(node, key + " = \"" + value + "\" is not one of " + join(choices, " | "));
-  return value;
-}
-
 // The config's spelling of each enumerator; a ray kind's is also the default name of its ray sets.
-template <class Enum>
-using Spellings = std::vector<std::pair<std::string, Enum>>;
 const Spellings<RayKind> kRayKinds = {{"primary", RayKind::kPrimary},
                                       {"shadow", RayKind::kShadow},
                                       {"diffuse", RayKind::kDiffuse},
@@ -141,54 +32,6 @@ const Spellings<ReferencePolicy> kReferencePolicies = {{"auto", ReferencePolicy:
                                                        {"embree", ReferencePolicy::kEmbree},
                                                        {"brute_force", ReferencePolicy::kBruteForce},
                                                        {"none", ReferencePolicy::kNone}};
-
-template <class Enum>
-Enum read_enum(const Source& src, const toml::node& node, const std::string& key,
-               const Spellings<Enum>& spellings) {
-  std::vector<std::string> choices;
-  for (const auto& [text, value] : spellings) choices.push_back(text);
-  const std::string text = read_choice(src, node, key, choices);
-  for (const auto& [t, value] : spellings)
-    if (t == text) return value;
-  throw Error("unreachable: " + text);  // read_choice accepted only spellings
-}
-
-template <class Enum>
-std::string spelling(const Spellings<Enum>& spellings, Enum value) {
-  for (const auto& [text, v] : spellings)
-    if (v == value) return text;
-  throw Error("invalid enumerator " + std::to_string(static_cast<int>(value)));
-}
-
-// Names that end up in file names and CSV cells: letters, digits, '-' and '_'.
-std::string read_name(const Source& src, const toml::node& node, const std::string& key) {
-  std::string value = read_string(src, node, key);
-  for (char c : value)
-    if (!((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_'))
-      src.fail(node, key + " = \"" + value + "\" may contain only letters, digits, '-' and '_'");
-  return value;
-}
-
-const toml::array& read_list(const Source& src, const toml::node& node, const std::string& key,
-                             const std::string& of) {
-  const auto* list = node.as_array();
-  if (!list) src.fail(node, key + " must be a list of " + of + ", not " + type_name(node));
-  if (list->empty()) src.fail(node, key + " must not be an empty list");
-  return *list;
-}
-
-// A non-empty list of distinct non-empty strings.
-std::vector<std::string> read_string_list(const Source& src, const toml::node& node, const std::string& key) {
-  std::vector<std::string> out;
-  for (const auto& item : read_list(src, node, key, "strings")) {
-    if (!item.is_string()) src.fail(item, key + " must be a list of strings, not contain " + type_name(item));
-    std::string value = read_string(src, item, key + " item");
-    if (std::find(out.begin(), out.end(), value) != out.end())
-      src.fail(item, key + " lists \"" + value + "\" twice");
-    out.push_back(std::move(value));
-  }
-  return out;
-}
 
 // An integer or a non-empty list of distinct integers, each at least 1.
 std::vector<int> read_threads(const Source& src, const toml::node& node) {
@@ -253,14 +96,14 @@ void read_experiment(const Source& src, const toml::table& root, ExperimentConfi
     for (const auto& item : read_list(src, *n, "experiment.layouts", "strings")) {
       if (!item.is_string())
         src.fail(item, "experiment.layouts must be a list of strings, not contain " + type_name(item));
-      std::string layout;
+      LayoutSpec layout;
       try {
-        layout = parse_layout_spec(read_string(src, item, "experiment.layouts item")).text();
+        layout = parse_layout_spec(read_string(src, item, "experiment.layouts item"));
       } catch (const Error& e) {
         src.fail(item, std::string("experiment.layouts: ") + e.what());
       }
       if (std::find(config.layouts.begin(), config.layouts.end(), layout) != config.layouts.end())
-        src.fail(item, "experiment.layouts lists \"" + layout + "\" twice");
+        src.fail(item, "experiment.layouts lists \"" + layout.text() + "\" twice");
       config.layouts.push_back(layout);
     }
   }
@@ -322,17 +165,6 @@ void read_animation(const Source& src, const toml::node& node, ExperimentConfig&
     animation.frames = static_cast<uint32_t>(animation.times.size());
   }
   config.animation = std::move(animation);
-}
-
-// The tables of an array of tables ([[key]]); `key = {...}` or anything else is an error.
-std::vector<const toml::table*> read_table_array(const Source& src, const toml::node& node,
-                                                 const std::string& key) {
-  const auto* list = node.as_array();
-  if (!list || !list->is_array_of_tables())
-    src.fail(node, key + " must be written as [[" + key + "]] tables, not " + type_name(node));
-  std::vector<const toml::table*> out;
-  for (const auto& item : *list) out.push_back(item.as_table());
-  return out;
 }
 
 // One builder parameter with all of its values (one unless swept), each with its line.

@@ -24,114 +24,33 @@ constexpr int64_t kMaxReps = 1000;
 constexpr int64_t kMaxThreads = 1024;
 constexpr double kMaxTimeLimitS = 86400.0;
 
-// "<file>:<line>: what", the line of the node concerned (1 where toml++ has none).
-class Reader {
- public:
-  explicit Reader(std::string file) : file_(std::move(file)) {}
-
-  [[noreturn]] void fail(const toml::node& at, const std::string& what) const {
-    throw Error(file_ + ":" + std::to_string(std::max<uint32_t>(at.source().begin.line, 1)) + ": " + what);
-  }
-
-  void check_keys(const toml::table& table, const std::string& where,
-                  const std::vector<std::string>& known) const {
-    for (const auto& [key, node] : table) {
-      if (std::find(known.begin(), known.end(), std::string(key.str())) != known.end()) continue;
-      std::string list;
-      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-      fail(node, "unknown key '" + std::string(key.str()) + "' in " + where + " (known: " + list + ")");
-    }
-  }
-
-  int64_t integer(const toml::node& node, const std::string& key, int64_t min, int64_t max) const {
-    const auto* v = node.as_integer();
-    if (!v) fail(node, key + " must be an integer");
-    if (v->get() < min || v->get() > max)
-      fail(node, key + " = " + std::to_string(v->get()) + " is outside [" + std::to_string(min) + ", " +
-                     std::to_string(max) + "]");
-    return v->get();
-  }
-
-  // A float or an integer, finite, within [min, max].
-  double real(const toml::node& node, const std::string& key, double min, double max) const {
-    double value;
-    if (const auto* f = node.as_floating_point()) {
-      value = f->get();
-    } else if (const auto* i = node.as_integer()) {
-      value = static_cast<double>(i->get());
-    } else {
-      fail(node, key + " must be a number");
-    }
-    if (!std::isfinite(value) || value < min || value > max) {
-      std::ostringstream s;
-      s << key << " = " << value << " is outside [" << min << ", " << max << "]";
-      fail(node, s.str());
-    }
-    return value;
-  }
-
-  std::string string(const toml::node& node, const std::string& key) const {
-    const auto* v = node.as_string();
-    if (!v) fail(node, key + " must be a string");
-    if (v->get().empty()) fail(node, key + " must not be empty");
-    return v->get();
-  }
-
-  // Letters, digits, '-' and '_': names that end up in file names and CSV cells.
-  std::string name(const toml::node& node, const std::string& key) const {
-    std::string value = string(node, key);
-    for (const char c : value)
-      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_')
-        fail(node, key + " = \"" + value + "\" may contain only letters, digits, '-' and '_'");
-    return value;
-  }
-
-  // A list of distinct strings (empty allowed where `allow_empty`).
-  std::vector<std::string> strings(const toml::node& node, const std::string& key, bool allow_empty) const {
-    const auto* list = node.as_array();
-    if (!list) fail(node, key + " must be a list of strings");
-    if (list->empty() && !allow_empty) fail(node, key + " must not be empty");
-    std::vector<std::string> out;
-    for (const auto& item : *list) {
-      std::string value = string(item, key + " item");
-      if (std::find(out.begin(), out.end(), value) != out.end())
-        fail(item, key + " lists \"" + value + "\" twice");
-      out.push_back(std::move(value));
-    }
-    return out;
-  }
-
- private:
-  std::string file_;
-};
-
-void read_settings(const Reader& r, const toml::table& root, StressConfig& c) {
+void read_settings(const Source& r, const toml::table& root, StressConfig& c) {
   const toml::node* node = root.get("stress");
   if (!node) throw Error(c.path.string() + ":1: missing table [stress]");
   const auto* t = node->as_table();
   if (!t) r.fail(*node, "stress must be a table");
-  r.check_keys(*t, "[stress]",
-               {"name", "output", "rays", "threads", "trace_reps", "trace_warmup", "build_time_limit_s",
-                "builders", "layouts", "embree"});
+  check_keys(r, *t, "[stress]",
+             {"name", "output", "rays", "threads", "trace_reps", "trace_warmup", "build_time_limit_s",
+              "builders", "layouts", "embree"});
   const toml::node* name = t->get("name");
   if (!name) r.fail(*node, "[stress] needs a name");
-  c.name = r.name(*name, "stress.name");
+  c.name = read_name(r, *name, "stress.name");
   c.output = "results/" + c.name + ".csv";
-  if (const auto* v = t->get("output")) c.output = r.string(*v, "stress.output");
+  if (const auto* v = t->get("output")) c.output = read_string(r, *v, "stress.output");
   if (const auto* v = t->get("rays"))
-    c.rays = static_cast<uint32_t>(r.integer(*v, "stress.rays", 1, kMaxCaseRays));
+    c.rays = static_cast<uint32_t>(read_int(r, *v, "stress.rays", 1, kMaxCaseRays));
   if (const auto* v = t->get("threads"))
-    c.threads = static_cast<int>(r.integer(*v, "stress.threads", 1, kMaxThreads));
+    c.threads = static_cast<int>(read_int(r, *v, "stress.threads", 1, kMaxThreads));
   if (const auto* v = t->get("trace_reps"))
-    c.trace_reps = static_cast<int>(r.integer(*v, "stress.trace_reps", 1, kMaxReps));
+    c.trace_reps = static_cast<int>(read_int(r, *v, "stress.trace_reps", 1, kMaxReps));
   if (const auto* v = t->get("trace_warmup"))
-    c.trace_warmup = static_cast<int>(r.integer(*v, "stress.trace_warmup", 0, kMaxReps));
+    c.trace_warmup = static_cast<int>(read_int(r, *v, "stress.trace_warmup", 0, kMaxReps));
   if (const auto* v = t->get("build_time_limit_s"))
-    c.build_time_limit_s = r.real(*v, "stress.build_time_limit_s", 0.001, kMaxTimeLimitS);
+    c.build_time_limit_s = read_real(r, *v, "stress.build_time_limit_s", 0.001, kMaxTimeLimitS);
 
   c.builders = all_builder_specs();
   if (const auto* v = t->get("builders")) {
-    const std::vector<std::string> texts = r.strings(*v, "stress.builders", false);
+    const std::vector<std::string> texts = read_string_list(r, *v, "stress.builders", false);
     const auto& list = *v->as_array();
     c.builders.clear();
     for (std::size_t i = 0; i < texts.size(); ++i) {
@@ -149,11 +68,12 @@ void read_settings(const Reader& r, const toml::table& root, StressConfig& c) {
   }
   c.layouts = all_layout_variants();
   if (const auto* v = t->get("layouts")) {
-    c.layouts = r.strings(*v, "stress.layouts", false);
+    const std::vector<std::string> texts = read_string_list(r, *v, "stress.layouts", false);
     const auto& list = *v->as_array();
-    for (std::size_t i = 0; i < c.layouts.size(); ++i) {
+    c.layouts.clear();
+    for (std::size_t i = 0; i < texts.size(); ++i) {
       try {
-        c.layouts[i] = parse_layout_spec(c.layouts[i]).text();
+        c.layouts.push_back(parse_layout_spec(texts[i]));
       } catch (const Error& e) {
         r.fail(*list.get(i), "stress.layouts: " + std::string(e.what()));
       }
@@ -161,7 +81,7 @@ void read_settings(const Reader& r, const toml::table& root, StressConfig& c) {
   }
   if (const auto* v = t->get("embree")) {
     c.embree_robust.clear();
-    const auto modes = r.strings(*v, "stress.embree", true);
+    const auto modes = read_string_list(r, *v, "stress.embree", true);
     const auto& list = *v->as_array();
     for (std::size_t i = 0; i < modes.size(); ++i) {
       if (modes[i] != "default" && modes[i] != "robust")
@@ -171,23 +91,23 @@ void read_settings(const Reader& r, const toml::table& root, StressConfig& c) {
   }
 }
 
-void read_cases(const Reader& r, const toml::table& root, StressConfig& c) {
+void read_cases(const Source& r, const toml::table& root, StressConfig& c) {
   const toml::node* node = root.get("case");
   if (!node) throw Error(c.path.string() + ":1: no [[case]] tables: a stress config needs at least one");
   const auto* list = node->as_array();
   if (!list || !list->is_array_of_tables()) r.fail(*node, "case must be [[case]] tables");
   for (const auto& item : *list) {
     const auto& t = *item.as_table();
-    r.check_keys(t, "[[case]]",
-                 {"name", "kind", "seed", "size", "rays", "scale", "offset", "aspect", "outer"});
+    check_keys(r, t, "[[case]]",
+               {"name", "kind", "seed", "size", "rays", "scale", "offset", "aspect", "outer"});
     StressCaseSpec s;
     const toml::node* name = t.get("name");
     const toml::node* kind = t.get("kind");
     if (!name || !kind) r.fail(item, "[[case]] needs a name and a kind");
-    s.name = r.name(*name, "case.name");
+    s.name = read_name(r, *name, "case.name");
     for (const auto& other : c.cases)
       if (other.name == s.name) r.fail(*name, "case name \"" + s.name + "\" is used twice");
-    s.kind = r.string(*kind, "case.kind");
+    s.kind = read_string(r, *kind, "case.kind");
     const StressKindInfo* info = nullptr;
     try {
       info = &find_stress_kind(s.kind);
@@ -197,11 +117,11 @@ void read_cases(const Reader& r, const toml::table& root, StressConfig& c) {
     const std::string where = "case " + s.name + ": ";
     s.rays = c.rays;
     if (const auto* v = t.get("seed"))
-      s.seed = static_cast<uint64_t>(r.integer(*v, where + "seed", 0, std::numeric_limits<int64_t>::max()));
+      s.seed = static_cast<uint64_t>(read_int(r, *v, where + "seed", 0, std::numeric_limits<int64_t>::max()));
     if (const auto* v = t.get("size"))
-      s.size = static_cast<uint64_t>(r.integer(*v, where + "size", 1, kMaxCaseTriangles));
+      s.size = static_cast<uint64_t>(read_int(r, *v, where + "size", 1, kMaxCaseTriangles));
     if (const auto* v = t.get("rays"))
-      s.rays = static_cast<uint32_t>(r.integer(*v, where + "rays", 1, kMaxCaseRays));
+      s.rays = static_cast<uint32_t>(read_int(r, *v, where + "rays", 1, kMaxCaseRays));
     // Real parameters: only those the kind reads, so that none is silently ignored.
     struct Real {
       const char* key;
@@ -217,7 +137,7 @@ void read_cases(const Reader& r, const toml::table& root, StressConfig& c) {
       if (!v) continue;
       if (std::find(info->params.begin(), info->params.end(), real.key) == info->params.end())
         r.fail(*v, where + "kind " + s.kind + " does not read '" + real.key + "'");
-      *real.value = r.real(*v, where + real.key, real.min, real.max);
+      *real.value = read_real(r, *v, where + real.key, real.min, real.max);
     }
     c.cases.push_back(std::move(s));
   }
@@ -243,8 +163,8 @@ std::vector<BuilderRun> all_builder_specs() {
   return out;
 }
 
-std::vector<std::string> all_layout_variants() {
-  std::vector<std::string> out;
+std::vector<LayoutSpec> all_layout_variants() {
+  std::vector<LayoutSpec> out;
   for (const auto& layout : layouts())
     for (const auto tri :
          {TriangleTestKind::kWatertight, TriangleTestKind::kMollerTrumbore,
@@ -253,7 +173,7 @@ std::vector<std::string> all_layout_variants() {
         LayoutSpec spec;
         spec.name = layout.name;
         spec.variant = {tri, box};
-        out.push_back(spec.text());
+        out.push_back(spec);
       }
   return out;
 }
@@ -264,8 +184,8 @@ StressConfig load_stress_config(const std::filesystem::path& path) {
 
 StressConfig parse_stress_config(std::string_view toml_text, const std::string& source_name) {
   const toml::table root = parse_toml(toml_text, source_name);
-  const Reader r(source_name);
-  r.check_keys(root, "the top level", {"stress", "case"});
+  const Source r{source_name};
+  check_keys(r, root, "the top level", {"stress", "case"});
   StressConfig c;
   c.path = source_name;
   read_settings(r, root, c);

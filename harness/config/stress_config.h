@@ -47,7 +47,7 @@ struct StressConfig {
   int trace_warmup = 1;
   double build_time_limit_s = 30.0;
   std::vector<BuilderRun> builders;  ///< parse_builder_run's, each checked against the registry
-  std::vector<std::string> layouts;  ///< layout specs in canonical form (LayoutSpec::text)
+  std::vector<LayoutSpec> layouts;   ///< parsed and checked
   std::vector<bool> embree_robust{false, true};
   std::vector<StressCaseSpec> cases;
 
@@ -58,7 +58,7 @@ struct StressConfig {
 /// wide arity a registered layout traverses (e.g. wide_collapse:arity=4 beside its default 8).
 std::vector<BuilderRun> all_builder_specs();
 /// Every registered layout with every triangle test and every box test, the defaults first.
-std::vector<std::string> all_layout_variants();
+std::vector<LayoutSpec> all_layout_variants();
 
 StressConfig load_stress_config(const std::filesystem::path& path);
 StressConfig parse_stress_config(std::string_view toml_text, const std::string& source_name);

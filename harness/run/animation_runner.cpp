@@ -146,7 +146,7 @@ class AnimationRunner {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   }
 
-  std::vector<std::string> layouts_for(const AnimatedBuilder& b) const {
+  std::vector<CellLayout> layouts_for(const AnimatedBuilder& b) const {
     return sahbench::layouts_for(b, cfg_.layouts, embree_layouts_);
   }
 
@@ -164,7 +164,7 @@ class AnimationRunner {
     for (const auto& b : builders_)
       for (const auto& layout : layouts_for(b))
         for (int threads : cfg_.threads)
-          for (const auto& rs : cfg_.ray_sets) n += wanted(scene, b, layout, threads, rs.name, frame);
+          for (const auto& rs : cfg_.ray_sets) n += wanted(scene, b, layout.name, threads, rs.name, frame);
     return n;
   }
 
@@ -225,7 +225,7 @@ class AnimationRunner {
           const AnimatedBuilder& b = builders_[i];
           bool any = false;
           for (const auto& layout : layouts_for(b))
-            for (const auto& rs : frame.sets) any |= wanted(name, b, layout, threads, rs.name, f);
+            for (const auto& rs : frame.sets) any |= wanted(name, b, layout.name, threads, rs.name, f);
           if (!any) continue;
           switch (b.variant) {
             case Variant::kRebuild:
@@ -298,17 +298,17 @@ class AnimationRunner {
     trace_ours(frame, b, threads, state.tree, refit_t, peak, &state, csv);
   }
 
-  // The layout `layout_name` of a refit cell, compiled the first time it is traced and kept in `state`
+  // The layout `layout` of a refit cell, compiled the first time it is traced and kept in `state`
   // for the frames after: from the refitted tree, which has the first frame's topology, and at once
   // refitted to the frame's triangles. Layouts depend only on the tree's topology and the triangles, so
   // this is the first frame's layout refitted, whichever frame traces it first. The first refit also
   // makes bvh2 copy the tree it borrows, so that refitting the tree no longer moves the layout's boxes:
   // every later frame's layout_refit_ms is then the layout's own refit.
-  CompiledLayout& refit_layout(RefitState& state, const std::string& layout_name,
+  CompiledLayout& refit_layout(RefitState& state, const CellLayout& layout,
                                std::span<const Triangle> triangles) {
-    std::unique_ptr<CompiledLayout>& compiled = state.layouts[layout_name];
+    std::unique_ptr<CompiledLayout>& compiled = state.layouts[layout.name];
     if (!compiled) {
-      compiled = compile_layout(parse_layout_spec(layout_name), state.tree, triangles);
+      compiled = compile_layout(*layout.ours, state.tree, triangles);
       compiled->refit(triangles);
     }
     return *compiled;
@@ -331,7 +331,8 @@ class AnimationRunner {
     }
     // Statistics need a valid tree; an invalid one is reported and not traced (it could read out of bounds).
     const BvhStats stats = valid ? compute_stats(bvh, scene.triangles.size(), cost) : BvhStats{};
-    for (const auto& layout_name : layouts_for(b)) {
+    for (const CellLayout& layout : layouts_for(b)) {
+      const std::string& layout_name = layout.name;
       bool any = false;
       for (const auto& rs : frame.sets)
         any |= wanted(scene.name, b, layout_name, threads, rs.name, frame.index);
@@ -341,13 +342,13 @@ class AnimationRunner {
       double layout_time = 0.0;  // median ms of the compile or of the layout refit
       TimingSummary layout_t;    // a rebuild's compiles
       if (valid && refit_state) {
-        compiled = &refit_layout(*refit_state, layout_name, scene.triangles);
+        compiled = &refit_layout(*refit_state, layout, scene.triangles);
         const TimingSummary t = time_builds(
                                     cfg_.reps, [&] { compiled->refit(scene.triangles); }, [] {})
                                     .time;
         layout_time = t.median;
       } else if (valid) {
-        TimedCompile timed = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
+        TimedCompile timed = compile_timed(*layout.ours, bvh, scene.triangles, cfg_.reps);
         fresh = std::move(timed.layout);
         compiled = fresh.get();
         layout_time = timed.time.median;
@@ -510,7 +511,8 @@ class AnimationRunner {
           if (k && r.sah && k->sah && *k->sah > 0) line += fmt::format(" SAH {:.3f}", *r.sah / *k->sah);
           // A tree not traced in any layout (invalid) has its refit time alone.
           if (r.layout_ms.empty()) line += fmt::format(" refit {:.3f}", *r.build_ms);
-          for (const auto& layout : layouts_for(b)) {
+          for (const CellLayout& cell_layout : layouts_for(b)) {
+            const std::string& layout = cell_layout.name;
             if (!r.layout_ms.count(layout)) continue;  // not traced in this frame (--only, invalid tree)
             const auto [refit_text, refit_ms] = cost(r, layout);
             line += fmt::format(", {}: refit {}", layout, refit_text);

@@ -53,7 +53,7 @@ std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream
   return out;
 }
 
-ResolvedRun resolve_run(const BuilderRun& run, const std::vector<std::string>& layouts) {
+ResolvedRun resolve_run(const BuilderRun& run, const std::vector<LayoutSpec>& layouts) {
   ResolvedRun b;
   if (run.is_embree()) {
     std::string quality = "medium";
@@ -67,8 +67,8 @@ ResolvedRun resolve_run(const BuilderRun& run, const std::vector<std::string>& l
   b.params = resolve_params(b.info->name, b.info->params, run.params);
   b.params_text = b.params.to_string();
   b.arity = b.info->arity ? b.info->arity(b.params) : 2;
-  const bool traceable = std::any_of(layouts.begin(), layouts.end(), [&](const std::string& l) {
-    return find_layout(parse_layout_spec(l).name).arity == b.arity;
+  const bool traceable = std::any_of(layouts.begin(), layouts.end(), [&](const LayoutSpec& l) {
+    return find_layout(l.name).arity == b.arity;
   });
   if (!traceable)
     throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
@@ -76,14 +76,14 @@ ResolvedRun resolve_run(const BuilderRun& run, const std::vector<std::string>& l
   return b;
 }
 
-std::vector<std::string> layouts_for(const ResolvedRun& b, const std::vector<std::string>& configured,
-                                     std::span<const EmbreeLayout> embree) {
-  std::vector<std::string> out;
+std::vector<CellLayout> layouts_for(const ResolvedRun& b, const std::vector<LayoutSpec>& configured,
+                                    std::span<const EmbreeLayout> embree) {
+  std::vector<CellLayout> out;
   if (b.is_embree()) {
-    for (const auto& l : embree) out.push_back(l.name);
+    for (const auto& l : embree) out.push_back({l.name, nullptr});
   } else {
     for (const auto& l : configured)
-      if (find_layout(parse_layout_spec(l).name).arity == b.arity) out.push_back(l);
+      if (find_layout(l.name).arity == b.arity) out.push_back({l.text(), &l});
   }
   return out;
 }

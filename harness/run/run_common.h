@@ -52,12 +52,18 @@ struct ResolvedRun {
 /// Resolves `run`: Embree's quality ("medium" where the run does not say), or our builder and its
 /// parameters. Our builder must build trees of an arity that one of `layouts` traces; else an Error
 /// names the builder run and the arity.
-ResolvedRun resolve_run(const BuilderRun& run, const std::vector<std::string>& layouts);
+ResolvedRun resolve_run(const BuilderRun& run, const std::vector<LayoutSpec>& layouts);
+
+/// A layout a cell is traced with: one of ours, with its spec as the config parsed it, or one of Embree's.
+struct CellLayout {
+  std::string name;                  ///< the CSV's layout column: LayoutSpec::text() or Embree's name
+  const LayoutSpec* ours = nullptr;  ///< into the config's layouts; null for Embree's
+};
 
 /// The layouts that trace `b`'s trees: every one of `embree` for Embree, else those of `configured`
-/// with the arity of `b`'s trees.
-std::vector<std::string> layouts_for(const ResolvedRun& b, const std::vector<std::string>& configured,
-                                     std::span<const EmbreeLayout> embree);
+/// (which must outlive the result) with the arity of `b`'s trees.
+std::vector<CellLayout> layouts_for(const ResolvedRun& b, const std::vector<LayoutSpec>& configured,
+                                    std::span<const EmbreeLayout> embree);
 
 /// The columns every row of a cell starts with: the run (run_id, run_fingerprint, fingerprint_parts,
 /// config, seed, build_reps, trace_reps),

@@ -94,6 +94,8 @@ Fingerprint fingerprint_of(const ExperimentConfig& cfg, const std::vector<std::s
     sets += fmt::format("{} {} {}x{} count {} lights {} {} ao {}\n", rs.name, static_cast<int>(rs.kind),
                         rs.width, rs.height, rs.count, rs.lights, rs.light_source, rs.ao_radius);
   for (const auto& c : cfg.cameras) cameras += c.scene + ": " + camera_note(c) + "\n";
+  std::vector<std::string> layouts;
+  for (const LayoutSpec& l : cfg.layouts) layouts.push_back(l.text());
   // Part name -> the text it hashes.
   const std::vector<std::pair<std::string, std::string>> text = {
       {"seed", std::to_string(cfg.seed)},
@@ -101,7 +103,7 @@ Fingerprint fingerprint_of(const ExperimentConfig& cfg, const std::vector<std::s
                                   r.build_warmup, r.trace, r.trace_warmup, r.interleave)},
       {"scenes", sources},
       {"builders", fmt::format("{}", fmt::join(builder_runs, "\n"))},
-      {"layouts", fmt::format("{}", fmt::join(cfg.layouts, "\n"))},
+      {"layouts", fmt::format("{}", fmt::join(layouts, "\n"))},
       {"threads", fmt::format("{}", fmt::join(cfg.threads, ","))},
       {"ray_sets", sets},
       {"cameras", cameras},

@@ -136,7 +136,7 @@ class ExperimentRunner {
   }
 
  private:
-  std::vector<std::string> layouts_for(const ResolvedBuilder& b) const {
+  std::vector<CellLayout> layouts_for(const ResolvedBuilder& b) const {
     return sahbench::layouts_for(b, cfg_.layouts, supported_embree_layouts_);
   }
 
@@ -147,7 +147,8 @@ class ExperimentRunner {
       for (const auto& layout : layouts_for(b))
         for (int threads : cfg_.threads)
           for (const auto& rs : cfg_.ray_sets) {
-            const std::string key = cell_key(scene, b.run.name, b.params_text, layout, threads, rs.name, 0);
+            const std::string key =
+                cell_key(scene, b.run.name, b.params_text, layout.name, threads, rs.name, 0);
             if (finished.count(key)) continue;
             if (!options_.only.empty() && key.find(options_.only) == std::string::npos) continue;
             out.insert(key);
@@ -219,10 +220,10 @@ class ExperimentRunner {
     bool wanted(const ResolvedBuilder& b, const std::string& layout, const RaySet& rs) const {
       return pending.count(cell_key(scene.name, b.run.name, b.params_text, layout, threads, rs.name, 0)) > 0;
     }
-    bool any_wanted(const ResolvedBuilder& b, const std::vector<std::string>& layouts) const {
+    bool any_wanted(const ResolvedBuilder& b, const std::vector<CellLayout>& layouts) const {
       for (const auto& layout : layouts)
         for (const auto& rs : sets)
-          if (wanted(b, layout, rs)) return true;
+          if (wanted(b, layout.name, rs)) return true;
       return false;
     }
   };
@@ -396,12 +397,12 @@ class ExperimentRunner {
       // Tracing a broken tree can read out of bounds: its cells get rows that say why, and no timings.
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.run.label(), scene.name, report.summary());
-      for (const auto& layout_name : layouts_for(b))
+      for (const CellLayout& layout : layouts_for(b))
         for (const auto& rs : group.sets) {
-          if (!group.wanted(b, layout_name, rs)) continue;
+          if (!group.wanted(b, layout.name, rs)) continue;
           CsvRow row = base_row(group, b);
           row["isa"] = env_.isa;
-          row["layout"] = layout_name;
+          row["layout"] = layout.name;
           put_timing(row, "build_ms", build_t);
           row["nodes"] = std::to_string(bvh.nodes.size());
           row["arity"] = std::to_string(bvh.arity);
@@ -409,18 +410,19 @@ class ExperimentRunner {
           add_note(row, "invalid tree, not traced: " + report.errors.front());
           csv_ms_ += time_ms([&] { csv.append(row); });
           progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name,
-                                         b.run.label(), layout_name, group.threads, rs.name));
+                                         b.run.label(), layout.name, group.threads, rs.name));
         }
       return;
     }
     const SahCost cost = sah_cost_of(b.params);
     const BvhStats stats = compute_stats(bvh, scene.triangles.size(), cost);
 
-    for (const auto& layout_name : layouts_for(b)) {
+    for (const CellLayout& layout : layouts_for(b)) {
+      const std::string& layout_name = layout.name;
       bool any = false;
       for (const auto& rs : group.sets) any |= group.wanted(b, layout_name, rs);
       if (!any) continue;
-      TimedCompile compiled = compile_timed(parse_layout_spec(layout_name), bvh, scene.triangles, cfg_.reps);
+      TimedCompile compiled = compile_timed(*layout.ours, bvh, scene.triangles, cfg_.reps);
       // The layout borrows the tree (bvh2 as built): both stay alive with the cells.
       std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled.layout));
       auto keep = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::shared_ptr<const CompiledLayout>>>(

@@ -268,10 +268,9 @@ class StressRunner {
   std::vector<LayoutSpec> layouts_for(uint32_t arity, std::set<uint32_t>& arities_with_variants) const {
     const bool all_variants = arities_with_variants.insert(arity).second;
     std::vector<LayoutSpec> out;
-    for (const std::string& text : cfg_.layouts) {
-      LayoutSpec spec = parse_layout_spec(text);
+    for (const LayoutSpec& spec : cfg_.layouts) {
       if (find_layout(spec.name).arity != arity) continue;
-      if (all_variants || spec.variant == KernelVariant{}) out.push_back(std::move(spec));
+      if (all_variants || spec.variant == KernelVariant{}) out.push_back(spec);
     }
     return out;
   }

@@ -106,7 +106,7 @@ count = 99
   expected.threads = {1, 4};
   expected.scenes = {"proc:soup:tris=100k", "scenes/a.obj"};
   expected.optional_scenes = {"crytek_sponza"};
-  expected.layouts = {"bvh2"};
+  expected.layouts = {parse_layout_spec("bvh2")};
   expected.reference = ReferencePolicy::kAuto;
   expected.brute_force_max_triangles = 5000;
   expected.reps = {7, 0, 3, 2, false};
@@ -178,7 +178,7 @@ TEST(HarnessConfigDefaults, OptionalKeysMissing) {
   EXPECT_EQ(config.threads, std::vector<int>{1});
   EXPECT_EQ(config.scenes, std::vector<std::string>{"proc:soup:tris=1k"});
   EXPECT_TRUE(config.optional_scenes.empty());
-  EXPECT_EQ(config.layouts, std::vector<std::string>{"bvh2"});
+  EXPECT_EQ(config.layouts, std::vector<LayoutSpec>{parse_layout_spec("bvh2")});
   EXPECT_EQ(config.reps, Repetitions{});
   EXPECT_EQ(config.reps, (Repetitions{5, 1, 5, 1, true}));
   EXPECT_EQ(config.reference, ReferencePolicy::kAuto);

@@ -142,7 +142,8 @@ TEST(HarnessStressConfig, ChecksKindsParametersAndNames) {
   ASSERT_EQ(c.cases.size(), 1u);
   EXPECT_EQ(c.cases[0].scale, 1e-6);
   EXPECT_EQ(c.cases[0].rays, 10u);
-  EXPECT_EQ(c.layouts, (std::vector<std::string>{"bvh2", "bvh2:tri=mt"}));
+  EXPECT_EQ(c.layouts,
+            (std::vector<LayoutSpec>{parse_layout_spec("bvh2"), parse_layout_spec("bvh2:tri=mt")}));
   EXPECT_EQ(c.output, "results/s.csv");
   auto error_of = [&](const std::string& text) {
     try {
@@ -178,7 +179,8 @@ TEST(HarnessStressConfig, DefaultsCoverEveryBuilderLayoutAndVariant) {
   const std::vector<BuilderRun> specs = all_builder_specs();
   for (const BuilderInfo& b : builders())
     EXPECT_NE(std::find(specs.begin(), specs.end(), BuilderRun{b.name, {}}), specs.end()) << b.name;
-  const std::vector<std::string> variants = all_layout_variants();
+  std::vector<std::string> variants;
+  for (const LayoutSpec& spec : all_layout_variants()) variants.push_back(spec.text());
   EXPECT_EQ(variants.size(), layouts().size() * 12);  // 4 triangle tests x 3 box tests
   for (const LayoutInfo& l : layouts()) {
     EXPECT_NE(std::find(variants.begin(), variants.end(), l.name), variants.end()) << l.name;
@@ -251,7 +253,8 @@ TEST(HarnessStress, ReducedSuiteKeepsItsGuarantees) {
   }
   // Every builder ran on every case, and every layout variant was traced on each case.
   EXPECT_EQ(built.size(), cfg.cases.size() * cfg.builders.size());
-  for (const std::string& variant : cfg.layouts) {
+  for (const LayoutSpec& spec : cfg.layouts) {
+    const std::string variant = spec.text();
     std::size_t traced = 0;
     for (const CsvRow& r : rows) traced += r.at("layout") == variant;
     EXPECT_GE(traced, cfg.cases.size()) << variant;

@@ -14,6 +14,7 @@
 #include "harness/report/ratio_stats.h"
 #include "harness/report/result_cells.h"
 #include "harness/run/csv.h"
+#include "tests/support/error_of.h"
 
 namespace sahbench {
 namespace {
@@ -24,17 +25,7 @@ std::filesystem::path temp_csv(const std::string& name) {
   return dir / name;
 }
 
-// The Error `f` throws; a test fails when it throws none.
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no Error thrown";
-  return "";
-}
+using test::error_of;
 
 TEST(RatioStats, SamplesParseInRoundOrder) {
   EXPECT_EQ(parse_samples("12.5;12.7;12.4"), (std::vector<double>{12.5, 12.7, 12.4}));

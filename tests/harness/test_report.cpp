@@ -15,6 +15,7 @@
 #include "harness/report/report.h"
 #include "harness/report/report_table.h"
 #include "harness/run/csv.h"
+#include "tests/support/error_of.h"
 
 namespace sahbench {
 namespace {
@@ -27,17 +28,7 @@ std::filesystem::path temp_csv(const std::string& name) {
   return path;
 }
 
-// The Error `f` throws; a test fails when it throws none.
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no Error thrown";
-  return "";
-}
+using test::error_of;
 
 std::vector<std::string> columns_with_samples() {
   std::vector<std::string> columns = design_columns();

@@ -205,7 +205,8 @@ struct ExperimentConfig {
   std::vector<std::string> optional_scenes;  ///< skipped with a message when not found (the shared scenes)
   /// Expanded sweeps, in file order; within a sweep, the cartesian product with the last key fastest.
   std::vector<BuilderRun> builders;
-  std::vector<LayoutSpec> layouts{LayoutSpec{"bvh2"}};  ///< parsed and checked; none twice
+  std::vector<LayoutSpec> layouts{
+      LayoutSpec{"bvh2", KernelVariant{}, KernelIsa::kAuto}};  ///< parsed; none twice
   std::vector<RaySetConfig> ray_sets;
   /// At most one per scene, each naming a scene of this experiment.
   std::vector<CameraConfig> cameras;

@@ -190,6 +190,7 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   CompareResult result;
   std::vector<Finding> findings;
   std::vector<JsonEntry> smaller, bigger;
+  std::vector<std::string> unanchored;  // cells with an anchor in the baseline only
 
   for (const auto& [key, bi] : base.cells) {
     if (is_embree(bf, bi)) continue;
@@ -220,6 +221,10 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
     // Timings: only as ratios to Embree in the same run, each from samples paired by round, and their
     // change flagged only when its interval excludes no change and it exceeds the margin.
     const auto ab = base.find(key_of(bf, bi, true)), ac = cur.find(key_of(cf, ci, true));
+    if (ab && !ac) {
+      ++result.missing_anchors;
+      unanchored.push_back(key);
+    }
     if (!ab || !ac) continue;
     for (const TimingMetric& t : kTimingMetrics) {
       const auto rb = ratio_to_anchor(bf, bi, *ab, t.prefix), rc = ratio_to_anchor(cf, ci, *ac, t.prefix);
@@ -240,12 +245,12 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   }
 
   for (const auto& f : findings) (f.regression ? result.regressions : result.improvements) += 1;
-  result.regressions += result.missing_cells;
+  result.regressions += result.missing_cells + result.missing_anchors;
   fmt::print(out,
              "# sahbench compare\n\nbaseline {} vs {}: {} cells compared, {} missing, {} regressions, {} "
              "improvements{}\n\n",
              options.baseline.string(), options.current.string(), result.compared_cells, result.missing_cells,
-             result.regressions - result.missing_cells, result.improvements,
+             result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
              options.deterministic_only ? " (deterministic metrics only)" : "");
   if (!options.deterministic_only)
     fmt::print(
@@ -273,6 +278,12 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
                  f.regression ? "REGRESSION" : "improved", markdown_key(f.cell), f.metric, f.baseline,
                  f.current, change, interval);
     }
+  }
+  if (result.missing_anchors) {
+    fmt::print(out,
+               "\nCells whose new run has no Embree anchor (embree [quality=medium], embree_1), so their "
+               "timings were not compared (counted as regressions):\n");
+    for (const auto& key : unanchored) fmt::print(out, "- {}\n", key);
   }
   if (result.missing_cells) {
     fmt::print(out, "\nCells in the baseline but not in the new run:\n");

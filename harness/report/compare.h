@@ -41,6 +41,9 @@ struct CompareResult {
   int compared_cells = 0;
   int missing_cells = 0;             ///< in the baseline but not in the new run
   int timings_without_interval = 0;  ///< timing ratios of one round in a run, which cannot be told from noise
+  /// Cells whose baseline has its Embree anchor and whose new run has none: their timings cannot be
+  /// compared, and each counts as a regression (a run with --only that left Embree out is no pass).
+  int missing_anchors = 0;
 };
 
 /// The required columns: the cell key (scene, builder, builder_params, layout, threads, ray_set, frame),

@@ -85,7 +85,11 @@ double t_quantile_975(double df) {
 }
 
 RatioInterval paired_ratio(std::span<const double> ours, std::span<const double> anchor) {
-  const std::size_t n = std::min(ours.size(), anchor.size());
+  // Sample r of both was taken in round r: lists of different lengths were not taken in the same rounds.
+  if (ours.size() != anchor.size())
+    throw Error(fmt::format("{} samples against the anchor's {}: not taken in the same rounds", ours.size(),
+                            anchor.size()));
+  const std::size_t n = ours.size();
   if (n == 0) throw Error("no round has samples of both");
   std::vector<double> logs(n);
   for (std::size_t r = 0; r < n; ++r) {

@@ -351,10 +351,11 @@ std::vector<std::string> missing_cell_notes(const GroupKey& key, const std::vect
   std::vector<std::string> notes;
   for (const auto& [other_run, by_group] : others) {
     const auto it = by_group.find(key.text());
-    if (it == by_group.end() || it->second.size() <= here.size()) continue;
+    if (it == by_group.end()) continue;
     std::vector<std::string> missing;
     for (const auto& c : it->second)
       if (!here.count(c)) missing.push_back(c);
+    if (missing.empty()) continue;
     std::string names;
     for (std::size_t i = 0; i < std::min(missing.size(), kNamed); ++i) names += (i ? "; " : "") + missing[i];
     if (missing.size() > kNamed) names += fmt::format("; and {} more", missing.size() - kNamed);

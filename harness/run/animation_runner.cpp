@@ -110,7 +110,7 @@ class AnimationRunner {
         env_(current_environment()),
         builders_(expand_builders(cfg)),
         output_(options.output ? *options.output : cfg.output),
-        continue_with_(resume_command(cfg.path, options.output ? &*options.output : nullptr)) {}
+        continue_with_(resume_command(options)) {}
 
   int run() {
     // As a static run: scenes checked and the lock taken before the CSV is touched.
@@ -267,9 +267,10 @@ class AnimationRunner {
     return row;
   }
 
+  // Stops before the next timed step once SIGINT or SIGTERM has come; measured rows are written already.
+  void check_interrupt() const { InterruptGuard::check(done_, planned_, continue_with_); }
+
   void append(CsvWriter& csv, const CsvRow& row, const std::string& what) {
-    // A cell is one row here: stop before writing the next, never halfway through one.
-    InterruptGuard::check(done_, planned_, continue_with_);
     csv.append(row);
     rows_.push_back(row);
     ++done_;
@@ -282,6 +283,7 @@ class AnimationRunner {
   }
 
   void run_rebuild(const FrameData& frame, const AnimatedBuilder& b, int threads, CsvWriter& csv) {
+    check_interrupt();
     Bvh bvh;
     // The previous repetition's tree is freed before the clock starts, as in a static run.
     const auto [build_t, peak] = time_builds(
@@ -292,6 +294,7 @@ class AnimationRunner {
 
   void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, RefitState& state,
                  CsvWriter& csv) {
+    check_interrupt();
     // Every refit recomputes every box, so repeating it on the same frame times the same work.
     const auto [refit_t, peak] = time_builds(
         cfg_.reps, [&] { refit(state.tree, frame.scene.triangles); }, [] {});
@@ -374,6 +377,7 @@ class AnimationRunner {
         }
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
+        check_interrupt();
         const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
                                                  [&] { trace_layout(*compiled, rs, hits, occluded); });
         const TraceCounts counts = count_layout(*compiled, rs);
@@ -405,6 +409,7 @@ class AnimationRunner {
   // Embree refit, like ours, starts from the first frame's tree.
   void run_embree(const FrameData& frame, const AnimatedBuilder& b, int threads,
                   std::span<const Triangle> first, CsvWriter& csv) {
+    check_interrupt();
     const Scene& scene = frame.scene;
     EmbreeDevice device(threads);
     std::unique_ptr<EmbreeScene> built;
@@ -431,6 +436,7 @@ class AnimationRunner {
         if (!wanted(scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
         std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
         std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
+        check_interrupt();
         const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
                                                  [&] { trace_embree(*built, layout, rs, hits, occluded); });
         const Reference& ref = frame.references[s];

@@ -6,6 +6,8 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <csignal>
 #include <cstring>
 #include <fstream>
@@ -43,19 +45,31 @@ std::string scene_source(const std::string& name) {
     if (!found) return name + "@missing";
     file = *found;
   }
-  if (std::filesystem::is_directory(file)) return name + "@" + file.string();
-  std::ifstream in(file, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return fmt::format("{}@{}:{}:{:016x}", name, std::filesystem::absolute(file).string(), bytes.size(),
-                     fnv1a(bytes));
+  // A .gltf names its buffers by relative path: every file of its folder is part of the scene.
+  std::vector<std::filesystem::path> files = {file};
+  if (file.extension() == ".gltf") {
+    files.clear();
+    for (const auto& entry : std::filesystem::directory_iterator(file.parent_path()))
+      if (entry.is_regular_file()) files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+  }
+  std::string text = name;
+  for (const auto& f : files) {
+    std::ifstream in(f, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    text += fmt::format(" {}:{}:{:016x}", f.filename().string(), bytes.size(), fnv1a(bytes));
+  }
+  return text;
 }
 
 std::atomic<bool> g_interrupted{false};
 struct sigaction g_previous_int {};
 struct sigaction g_previous_term {};
 
+// The first SIGINT or SIGTERM asks the run to stop between two timed steps; a second of either ends the
+// process at once (_exit is async-signal-safe), for a step that takes too long.
 extern "C" void on_interrupt(int) {
-  g_interrupted.store(true);
+  if (g_interrupted.exchange(true)) ::_exit(130);
 }
 
 }  // namespace
@@ -111,7 +125,7 @@ Fingerprint fingerprint_of(const ExperimentConfig& cfg, const std::vector<std::s
       {"animation", cfg.animation ? fmt::format("frames {} times {}", cfg.animation->frames,
                                                 fmt::join(cfg.animation->times, ","))
                                   : "static"},
-      {"build", env.git_commit + " " + env.compiler + " " + env.isa},
+      {"build", env.git_commit + " " + env.compiler + " " + env.isa + " " + env.cpu + " " + env.embree},
   };
 
   Fingerprint fp;
@@ -146,11 +160,9 @@ OutputLock::OutputLock(const std::filesystem::path& csv) : path_(csv.string() + 
 }
 
 OutputLock::~OutputLock() {
-  if (fd_ < 0) return;
-  // Unlink before unlocking: a writer that opens the path afterwards creates and locks a new file.
-  std::error_code ignored;
-  std::filesystem::remove(path_, ignored);
-  ::close(fd_);
+  // The file stays: unlinking it would let a writer that opened it just before lock a file no longer on
+  // disk while a third creates and locks a new one, two writers at once. Closing releases the lock.
+  if (fd_ >= 0) ::close(fd_);
 }
 
 ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerprint& fp, std::ostream& log) {
@@ -204,7 +216,7 @@ InterruptGuard::InterruptGuard() {
   struct sigaction action {};
   action.sa_handler = on_interrupt;
   sigemptyset(&action.sa_mask);
-  action.sa_flags = SA_RESETHAND;  // a second signal takes the default action: the process ends
+  action.sa_flags = 0;
   sigaction(SIGINT, &action, &g_previous_int);
   sigaction(SIGTERM, &action, &g_previous_term);
 }
@@ -222,9 +234,28 @@ void InterruptGuard::check(std::size_t done, std::size_t total, const std::strin
   if (requested()) throw Interrupted(done, total, continue_with);
 }
 
-std::string resume_command(const std::filesystem::path& config, const std::filesystem::path* output) {
-  return fmt::format("sahbench run {} --resume{}", config.string(),
-                     output ? " --output " + output->string() : "");
+namespace {
+
+// `text` as one shell word: as it is when it holds only characters no shell treats specially, else in
+// single quotes (a quote inside written '\'').
+std::string shell_word(const std::string& text) {
+  const bool plain = !text.empty() && std::all_of(text.begin(), text.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) ||
+           std::string_view("_./:=,+-@%").find(c) != std::string_view::npos;
+  });
+  if (plain) return text;
+  std::string out = "'";
+  for (const char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+}  // namespace
+
+std::string resume_command(const RunOptions& options) {
+  std::string command = "sahbench run " + shell_word(options.config.string()) + " --resume";
+  if (options.output) command += " --output " + shell_word(options.output->string());
+  if (!options.only.empty()) command += " --only " + shell_word(options.only);
+  return command;
 }
 
 }  // namespace sahbench

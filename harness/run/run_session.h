@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "harness/config/config.h"
 #include "harness/run/environment.h"
+#include "harness/run/run_options.h"
 
 namespace sahbench {
 
@@ -81,8 +82,8 @@ class Interrupted : public Error {
   Interrupted(std::size_t done, std::size_t total, const std::string& continue_with);
 };
 
-/// While alive, SIGINT and SIGTERM only set a flag that check() turns into Interrupted; a second signal
-/// ends the process at once (the handler is reset after the first). The previous handlers come back on
+/// While alive, SIGINT and SIGTERM only set a flag that check() turns into Interrupted; a second signal of
+/// either kind ends the process at once (exit status 130). The previous handlers come back on
 /// destruction.
 class InterruptGuard {
  public:
@@ -96,7 +97,8 @@ class InterruptGuard {
   static void check(std::size_t done, std::size_t total, const std::string& continue_with);
 };
 
-/// "sahbench run CONFIG --resume" (with --output OUT when the run was given one): how to continue.
-std::string resume_command(const std::filesystem::path& config, const std::filesystem::path* output);
+/// "sahbench run CONFIG --resume", with the run's --output and --only, each quoted for a shell where it
+/// needs it: how to continue.
+std::string resume_command(const RunOptions& options);
 
 }  // namespace sahbench

@@ -86,7 +86,7 @@ class ExperimentRunner {
         env_(current_environment()),
         builders_(resolve_builders(cfg)),
         output_(options.output ? *options.output : cfg.output),
-        continue_with_(resume_command(cfg.path, options.output ? &*options.output : nullptr)) {}
+        continue_with_(resume_command(options)) {}
 
   int run() {
     // Every required scene is checked, and the lock taken, before the CSV is touched: the writer then

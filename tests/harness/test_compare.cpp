@@ -345,6 +345,19 @@ TEST(HarnessCompare, ALostCellIsARegression) {
   EXPECT_NE(text.find("Cells in the baseline but not in the new run"), std::string::npos) << text;
 }
 
+TEST(HarnessCompare, ANewRunWithoutItsEmbreeAnchorIsARegressionNotAPass) {
+  // A run with --only that left Embree out: its timings cannot be compared, which is no pass.
+  std::vector<CsvRow> rows = make_run({});
+  std::erase_if(rows, [](const CsvRow& r) { return r.at("builder") == "embree"; });
+  std::string text;
+  const CompareResult r = run_compare(write("no_anchor", rows), false, baseline(), &text);
+  EXPECT_EQ(r.missing_anchors, 2);
+  EXPECT_GE(r.regressions, 2);
+  EXPECT_NE(text.find("Cells whose new run has no Embree anchor"), std::string::npos) << text;
+  // Deterministic metrics alone need no anchor.
+  EXPECT_EQ(run_compare(write("no_anchor_det", rows), true).regressions, 0);
+}
+
 TEST(HarnessCompare, JsonForDashboards) {
   std::ostringstream out;
   const auto json = dir() / "bench.json";

@@ -117,7 +117,9 @@ TEST(RunSession, ResumeAfterAKilledRerunGivesTheFullSetUnderOneRunId) {
   ASSERT_EQ(run_experiment({config, true, "", std::nullopt}, log), 0) << log.str();
   std::set<std::string> keys;
   for (const auto& r : read_csv(csv))
-    if (r.at("run_id") == rerun_id) EXPECT_TRUE(keys.insert(key_of(r)).second) << "twice: " << key_of(r);
+    if (r.at("run_id") == rerun_id) {
+      EXPECT_TRUE(keys.insert(key_of(r)).second) << "twice: " << key_of(r);
+    }
   EXPECT_EQ(keys.size(), 16u) << "the resumed run holds every cell once\n" << log.str();
 }
 
@@ -185,6 +187,14 @@ TEST(RunSession, SigintBetweenCellsKeepsWholeRowsAndSaysHowToContinue) {
   const auto all = read_csv(csv);
   EXPECT_EQ(all.size(), 24u);
   for (const auto& r : all) EXPECT_EQ(r.at("run_id"), all.front().at("run_id"));
+}
+
+TEST(RunSession, TheContinueCommandKeepsOutputAndOnlyQuotedForAShell) {
+  const RunOptions options{"configs/paper.toml", false, "crytek_sponza|it's", "out dir/r.csv"};
+  EXPECT_EQ(
+      resume_command(options),
+      "sahbench run configs/paper.toml --resume --output 'out dir/r.csv' --only 'crytek_sponza|it'\\''s'");
+  EXPECT_EQ(resume_command({"c.toml", false, "", std::nullopt}), "sahbench run c.toml --resume");
 }
 
 TEST(RunSession, AnOutOfRangeChildGivesAnInvalidTreeRowNotACrash) {

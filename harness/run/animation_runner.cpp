@@ -19,11 +19,13 @@
 #include "core/validate.h"
 #include "harness/embree/embree_scene.h"
 #include "harness/embree/embree_trace.h"
+#include "harness/run/cell_pipeline.h"
 #include "harness/run/csv.h"
 #include "harness/run/environment.h"
 #include "harness/run/ray_sets.h"
 #include "harness/run/reference.h"
 #include "harness/run/result_row.h"
+#include "harness/run/round_order.h"
 #include "harness/run/run_common.h"
 #include "harness/run/run_session.h"
 #include "harness/run/timing.h"
@@ -115,37 +117,25 @@ class AnimationRunner {
   int run() {
     // As a static run: scenes checked and the lock taken before the CSV is touched.
     const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
-    const OutputLock lock(output_);
-    CsvWriter csv(output_, animation_columns());
-    if (csv.dropped_partial_row())
-      log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
     std::vector<std::string> builder_runs;
     for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text);
-    id_.fingerprint = fingerprint_of(cfg_, scenes, builder_runs, env_);
-    id_.run_id = make_run_id(cfg_.name);
-    if (options_.resume) {
-      ResumePoint point = find_resume_point(output_, id_.fingerprint, log_);
-      if (!point.run_id.empty()) id_.run_id = point.run_id;
-      finished_ = std::move(point.finished);
-    }
+    OpenRun open = open_run(cfg_, options_, output_, animation_columns(), scenes, builder_runs, env_, log_);
+    id_ = open.id;
+    finished_ = std::move(open.finished);
+    CsvWriter& csv = *open.csv;
     embree_layouts_ = supported_embree_layouts(log_);
 
     // Scenes are loaded one at a time; the plan counts cells as each scene's frames become known.
     log_ << fmt::format("run {} (fingerprint {}): animation experiment, {} frames per scene; writing {}\n",
                         id_.run_id, id_.fingerprint.hash, cfg_.animation->frames, output_.string());
     const InterruptGuard interrupts;
-    start_ = std::chrono::steady_clock::now();
     for (const auto& name : scenes) run_scene(name, csv);
-    log_ << fmt::format("done in {}; rows in {}\n", format_duration(elapsed_s()), output_.string());
+    log_ << fmt::format("done in {}; rows in {}\n", format_duration(progress_.elapsed_s()), output_.string());
     print_summary();
     return exit_code_;
   }
 
  private:
-  double elapsed_s() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
-
   std::vector<CellLayout> layouts_for(const AnimatedBuilder& b) const {
     return sahbench::layouts_for(b, cfg_.layouts, embree_layouts_);
   }
@@ -187,7 +177,7 @@ class AnimationRunner {
     std::vector<std::size_t> pending(times.size());
     std::size_t total = 0;
     for (uint32_t f = 0; f < times.size(); ++f) total += pending[f] = pending_in_frame(name, f);
-    planned_ += total;
+    progress_.plan(total);
     if (total == 0) return;
 
     // One camera for every frame: the config's [[camera]], else the file's, else the automatic framing of
@@ -221,25 +211,7 @@ class AnimationRunner {
       for (int threads : cfg_.threads) {
         const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                                         static_cast<std::size_t>(threads));
-        for (std::size_t i = 0; i < builders_.size(); ++i) {
-          const AnimatedBuilder& b = builders_[i];
-          bool any = false;
-          for (const auto& layout : layouts_for(b))
-            for (const auto& rs : frame.sets) any |= wanted(name, b, layout.name, threads, rs.name, f);
-          if (!any) continue;
-          switch (b.variant) {
-            case Variant::kRebuild:
-              run_rebuild(frame, b, threads, csv);
-              break;
-            case Variant::kRefit:
-              run_refit(frame, b, threads, refits.at(i), csv);
-              break;
-            case Variant::kEmbreeRebuild:
-            case Variant::kEmbreeRefit:
-              run_embree(frame, b, threads, first, csv);
-              break;
-          }
-        }
+        run_frame(frame, threads, refits, first, csv);
       }
     }
   }
@@ -268,37 +240,110 @@ class AnimationRunner {
   }
 
   // Stops before the next timed step once SIGINT or SIGTERM has come; measured rows are written already.
-  void check_interrupt() const { InterruptGuard::check(done_, planned_, continue_with_); }
+  void check_interrupt() const { InterruptGuard::check(progress_.done(), progress_.total(), continue_with_); }
 
   void append(CsvWriter& csv, const CsvRow& row, const std::string& what) {
     csv.append(row);
     rows_.push_back(row);
-    ++done_;
-    const double elapsed = elapsed_s();
-    const double left =
-        elapsed / static_cast<double>(done_) * static_cast<double>(planned_ - std::min(planned_, done_));
-    // The total grows as scenes are loaded (their frame counts are known only then).
-    log_ << fmt::format("[{}/{}+] {} | elapsed {}, left in loaded scenes ~{}\n", done_, planned_, what,
-                        format_duration(elapsed), format_duration(left));
+    progress_.cell_done(what);
   }
 
-  void run_rebuild(const FrameData& frame, const AnimatedBuilder& b, int threads, CsvWriter& csv) {
-    check_interrupt();
-    Bvh bvh;
-    // The previous repetition's tree is freed before the clock starts, as in a static run.
-    const auto [build_t, peak] = time_builds(
-        cfg_.reps, [&] { bvh = b.info->build(BuildInput::from_triangles(frame.scene.triangles), b.params); },
-        [&] { bvh = Bvh{}; });
-    trace_ours(frame, b, threads, bvh, build_t, peak, nullptr, csv);
+  // One builder run's tree source on one frame: its tree (a rebuild's own, or the refit state's) or its
+  // Embree scene.
+  struct FrameJob {
+    const AnimatedBuilder* builder = nullptr;
+    std::shared_ptr<Bvh> tree;  // a rebuild's
+    RefitState* refit = nullptr;
+    std::shared_ptr<EmbreeBuild> embree;
+    TreeSource source;
+  };
+
+  // Our rebuild: built on the frame, the last freed first. Our refit: the first frame's tree refitted in
+  // place (every refit recomputes every box, so repeating it times the same work). Embree: a rebuild per
+  // frame, or its refit scene of the first frame made afresh here and refitted to this frame, so that
+  // every Embree refit, like ours, starts from the first frame's tree.
+  FrameJob make_job(const FrameData& frame, const AnimatedBuilder& b, int threads, RefitState* refit,
+                    std::span<const Triangle> first) const {
+    FrameJob job;
+    job.builder = &b;
+    const std::vector<Triangle>& triangles = frame.scene.triangles;
+    switch (b.variant) {
+      case Variant::kRebuild:
+        job.tree = std::make_shared<Bvh>();
+        job.source = our_build(b.label, *b.info, b.params, triangles, job.tree);
+        break;
+      case Variant::kRefit:
+        job.refit = refit;
+        job.source = our_refit(b.label, refit->tree, triangles);
+        break;
+      case Variant::kEmbreeRebuild:
+        job.embree = std::make_shared<EmbreeBuild>(threads);
+        job.source = embree_build(b.label, job.embree, triangles, b.quality);
+        break;
+      case Variant::kEmbreeRefit:
+        job.embree = std::make_shared<EmbreeBuild>(threads);
+        job.embree->scene = std::make_unique<EmbreeScene>(job.embree->device, first, EmbreeQuality::kRefit);
+        job.source = embree_refit(b.label, job.embree, triangles);
+        break;
+    }
+    return job;
   }
 
-  void run_refit(const FrameData& frame, const AnimatedBuilder& b, int threads, RefitState& state,
-                 CsvWriter& csv) {
+  bool any_wanted(const FrameData& frame, const AnimatedBuilder& b, int threads) const {
+    for (const auto& layout : layouts_for(b))
+      for (const auto& rs : frame.sets)
+        if (wanted(frame.scene.name, b, layout.name, threads, rs.name, frame.index)) return true;
+    return false;
+  }
+
+  // The cells of one frame and thread count: every builder run's tree source timed in interleaved,
+  // shuffled rounds, then every wanted cell queued, its traces timed the same way, and its row written.
+  void run_frame(const FrameData& frame, int threads, std::map<std::size_t, RefitState>& refits,
+                 std::span<const Triangle> first, CsvWriter& csv) {
     check_interrupt();
-    // Every refit recomputes every box, so repeating it on the same frame times the same work.
-    const auto [refit_t, peak] = time_builds(
-        cfg_.reps, [&] { refit(state.tree, frame.scene.triangles); }, [] {});
-    trace_ours(frame, b, threads, state.tree, refit_t, peak, &state, csv);
+    std::vector<FrameJob> jobs;
+    for (std::size_t i = 0; i < builders_.size(); ++i) {
+      if (!any_wanted(frame, builders_[i], threads)) continue;
+      const auto refit = refits.find(i);
+      jobs.push_back(
+          make_job(frame, builders_[i], threads, refit == refits.end() ? nullptr : &refit->second, first));
+    }
+    std::vector<TreeSource*> sources;
+    for (auto& job : jobs) sources.push_back(&job.source);
+    const std::string group = fmt::format("{} frame {}", frame.scene.name, frame.index);
+    const auto interrupt = [this] { check_interrupt(); };
+    time_sources(sources, cfg_.reps, order_seed(cfg_.seed, group, threads, "build"), interrupt);
+    std::vector<TraceCell> cells;
+    for (const FrameJob& job : jobs) {
+      if (job.embree)
+        queue_embree(frame, job, threads, cells);
+      else
+        queue_ours(frame, job, threads, csv, cells);
+    }
+    time_cells(cells, cfg_.reps, order_seed(cfg_.seed, group, threads, "trace"), interrupt, {});
+    progress_.batch(cells.size());
+    for (auto& cell : cells) {
+      finish_cell(cell, frame.references[cell.set_index], frame.diagonal);
+      append(
+          csv, cell.row,
+          fmt::format("{}: {} {} ms, {} Mrays/s, {} mismatches", cell.label, cell.row["builder"],
+                      cell.row["build_ms_median"], cell.row["trace_mrays_median"], cell.row["mismatches"]));
+    }
+  }
+
+  CsvRow base_row(const FrameData& frame, const FrameJob& job, int threads, const std::string& layout) const {
+    const AnimatedBuilder& b = *job.builder;
+    CsvRow row = common_row(id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
+    row["frame_time"] = fmt::format("{:.6g}", frame.time);
+    row["layout"] = layout;
+    put_timing(row, "build_ms", job.source.time());
+    return row;
+  }
+
+  std::string label(const FrameData& frame, const FrameJob& job, int threads, const std::string& layout,
+                    const RaySet& rs) const {
+    return fmt::format("{} f{} {} {} t={} {}", frame.scene.name, frame.index, job.builder->label, layout,
+                       threads, rs.name);
   }
 
   // The layout `layout` of a refit cell, compiled the first time it is traced and kept in `state`
@@ -317,149 +362,88 @@ class AnimationRunner {
     return *compiled;
   }
 
-  // Traces a tree of ours in every wanted cell of `frame`. A rebuild (`refit_state` null) is compiled into
-  // each layout, timed into layout_ms; a refit's layouts are refitted in place (refit_layout), timed into
+  // Queues the cells of a tree of ours on `frame`, checked first. A rebuild is compiled into each layout,
+  // timed into layout_ms; a refit's layouts are refitted in place (refit_layout), timed into
   // layout_refit_ms, and layout_ms is left empty (their one compile, of the first frame's tree, is the
-  // rebuild's layout_ms on the first frame).
-  void trace_ours(const FrameData& frame, const AnimatedBuilder& b, int threads, const Bvh& bvh,
-                  const TimingSummary& build_t, int64_t peak, RefitState* refit_state, CsvWriter& csv) {
+  // rebuild's layout_ms on the first frame). An invalid tree's rows are written at once, untraced.
+  void queue_ours(const FrameData& frame, const FrameJob& job, int threads, CsvWriter& csv,
+                  std::vector<TraceCell>& cells) {
+    const AnimatedBuilder& b = *job.builder;
     const Scene& scene = frame.scene;
-    const SahCost cost = sah_cost_of(b.params);
-    const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
-    const bool valid = report.ok();
-    if (!valid) {
+    const Bvh& bvh = job.refit ? job.refit->tree : *job.tree;
+    const CheckedTree checked = check_tree(bvh, scene.triangles, b.params);
+    if (!checked.ok()) {
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {} frame {}:\n{}", b.label, scene.name, frame.index,
-                          report.summary());
+                          checked.report.summary());
     }
-    // Statistics need a valid tree; an invalid one is reported and not traced (it could read out of bounds).
-    const BvhStats stats = valid ? compute_stats(bvh, scene.triangles.size(), cost) : BvhStats{};
     for (const CellLayout& layout : layouts_for(b)) {
-      const std::string& layout_name = layout.name;
-      bool any = false;
-      for (const auto& rs : frame.sets)
-        any |= wanted(scene.name, b, layout_name, threads, rs.name, frame.index);
-      if (!any) continue;
-      std::unique_ptr<CompiledLayout> fresh;  // a rebuild's
-      CompiledLayout* compiled = nullptr;
-      double layout_time = 0.0;  // median ms of the compile or of the layout refit
-      TimingSummary layout_t;    // a rebuild's compiles
-      if (valid && refit_state) {
-        compiled = &refit_layout(*refit_state, layout, scene.triangles);
-        const TimingSummary t = time_builds(
-                                    cfg_.reps, [&] { compiled->refit(scene.triangles); }, [] {})
-                                    .time;
-        layout_time = t.median;
-      } else if (valid) {
-        TimedCompile timed = compile_timed(*layout.ours, bvh, scene.triangles, cfg_.reps);
-        fresh = std::move(timed.layout);
-        compiled = fresh.get();
-        layout_time = timed.time.median;
-        layout_t = timed.time;
-      }
-      for (std::size_t s = 0; s < frame.sets.size(); ++s) {
-        const RaySet& rs = frame.sets[s];
-        if (!wanted(scene.name, b, layout_name, threads, rs.name, frame.index)) continue;
-        CsvRow row = base_row(frame, b, threads);
-        row["isa"] = env_.isa;
-        row["layout"] = layout_name;
-        put_timing(row, "build_ms", build_t);
-        row["nodes"] = std::to_string(bvh.nodes.size());
-        row["arity"] = std::to_string(bvh.arity);
+      std::vector<std::size_t> sets;
+      for (std::size_t s = 0; s < frame.sets.size(); ++s)
+        if (wanted(scene.name, b, layout.name, threads, frame.sets[s].name, frame.index)) sets.push_back(s);
+      if (sets.empty()) continue;
+      auto row_for = [&](const RaySet& rs) {
+        CsvRow row = base_row(frame, job, threads, layout.name);
         put_ray_set(row, rs);
-        if (refit_state) add_note(row, "tree and layout of frame 0 refitted");
-        if (!valid) {
-          add_note(row, "invalid tree, not traced: " + report.errors.front());
+        if (job.refit) add_note(row, "tree and layout of frame 0 refitted");
+        return row;
+      };
+      if (!checked.ok()) {
+        for (const std::size_t s : sets) {
+          CsvRow row = row_for(frame.sets[s]);
+          row["isa"] = env_.isa;
+          put_invalid_tree(row, bvh, checked.report);
           append(csv, row,
-                 fmt::format("{} f{} {} {} t={} {}: INVALID tree, not traced", scene.name, frame.index,
-                             b.label, layout_name, threads, rs.name));
-          continue;
+                 label(frame, job, threads, layout.name, frame.sets[s]) + ": INVALID tree, not traced");
         }
-        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
-        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        check_interrupt();
-        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
-                                                 [&] { trace_layout(*compiled, rs, hits, occluded); });
-        const TraceCounts counts = count_layout(*compiled, rs);
-        const Reference& ref = frame.references[s];
-        row[refit_state ? "layout_refit_ms" : "layout_ms"] = fmt::format("{:.4f}", layout_time);
-        row["isa"] = compiled->isa();
-        row["mem_bytes"] = std::to_string(compiled->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(compiled->bytes(), scene.triangles.size());
-        row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
-        put_tree_stats(row, stats, cost);
-        put_timing(row, "trace_mrays", trace_t);
-        if (!refit_state) put_build_layout_ms(row, build_t, layout_t);
-        put_per_ray_counts(row, counts);
-        put_hit_fraction(row, hits, occluded);
-        put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
-        append(csv, row,
-               fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms + {} {:.3f} ms, SAH {:.2f}, {:.2f} Mrays/s, "
-                           "{} mismatches",
-                           scene.name, frame.index, b.label, layout_name, threads, rs.name,
-                           refit_state ? "refit" : "build", build_t.median,
-                           refit_state ? "layout refit" : "compile", layout_time, stats.sah_cost,
-                           trace_t.median, row["mismatches"]));
+        continue;
+      }
+      std::shared_ptr<const CompiledLayout> compiled;
+      TimingSummary layout_t;
+      if (job.refit) {
+        CompiledLayout& kept = refit_layout(*job.refit, layout, scene.triangles);
+        TreeSource layout_refit;
+        layout_refit.make = [&] { return time_ms([&] { kept.refit(scene.triangles); }); };
+        TreeSource* one = &layout_refit;
+        time_sources({&one, 1}, cfg_.reps, 0, [this] { check_interrupt(); });
+        layout_t = layout_refit.time();
+        compiled =
+            std::shared_ptr<const CompiledLayout>(std::shared_ptr<void>(), &kept);  // the state owns it
+      } else {
+        TimedCompile timed = compile_timed(*layout.ours, bvh, scene.triangles, cfg_.reps);
+        layout_t = timed.time;
+        // The layout borrows the tree (bvh2 as built): the cells keep both alive.
+        auto owner = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::unique_ptr<CompiledLayout>>>(
+            job.tree, std::move(timed.layout));
+        compiled = std::shared_ptr<const CompiledLayout>(owner, owner->second.get());
+      }
+      for (const std::size_t s : sets) {
+        const RaySet& rs = frame.sets[s];
+        CsvRow row = row_for(rs);
+        row[job.refit ? "layout_refit_ms" : "layout_ms"] = fmt::format("{:.4f}", layout_t.median);
+        if (!job.refit) put_build_layout_ms(row, job.source.time(), layout_t);
+        put_our_layout(row, *compiled, bvh, checked, scene.triangles.size(), job.source.peak);
+        cells.push_back(
+            our_cell(std::move(row), label(frame, job, threads, layout.name, rs), compiled, rs, s));
       }
     }
   }
 
-  // Embree: a rebuild per frame, or (quality refit) its first-frame build refitted to this frame. The
-  // refit scene is made afresh for each frame and thread count from the first frame, so that every
-  // Embree refit, like ours, starts from the first frame's tree.
-  void run_embree(const FrameData& frame, const AnimatedBuilder& b, int threads,
-                  std::span<const Triangle> first, CsvWriter& csv) {
-    check_interrupt();
-    const Scene& scene = frame.scene;
-    EmbreeDevice device(threads);
-    std::unique_ptr<EmbreeScene> built;
-    BuildTiming timing;
-    if (b.variant == Variant::kEmbreeRefit) {
-      built = std::make_unique<EmbreeScene>(device, first, EmbreeQuality::kRefit);
-      for (int w = 0; w < cfg_.reps.build_warmup; ++w) built->update_vertices(scene.triangles);
-      std::vector<double> refit_ms;
-      for (int r = 0; r < cfg_.reps.build; ++r) {
-        const int64_t before = device.bytes();
-        device.reset_peak();
-        refit_ms.push_back(built->update_vertices(scene.triangles));
-        if (r == 0) timing.peak_bytes = device.peak_bytes() - before;
-      }
-      timing.time = summarize(refit_ms);
-    } else {
-      timing = time_embree_builds(cfg_.reps, device, scene.triangles, b.quality, built);
-    }
-    const TimingSummary build_t = timing.time;
-    const int64_t peak = timing.peak_bytes;
+  // Queues a cell per supported Embree layout and wanted ray set of an Embree build or refit.
+  void queue_embree(const FrameData& frame, const FrameJob& job, int threads, std::vector<TraceCell>& cells) {
+    const AnimatedBuilder& b = *job.builder;
+    const bool refit = b.variant == Variant::kEmbreeRefit;
     for (const auto& layout : embree_layouts_) {
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
-        if (!wanted(scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
-        std::vector<Hit> hits(rs.occlusion ? 0 : rs.rays.size());
-        std::vector<uint8_t> occluded(rs.occlusion ? rs.rays.size() : 0);
-        check_interrupt();
-        const TimingSummary trace_t = time_trace(cfg_.reps.trace_warmup, cfg_.reps.trace, rs.rays.size(),
-                                                 [&] { trace_embree(*built, layout, rs, hits, occluded); });
-        const Reference& ref = frame.references[s];
-        CsvRow row = base_row(frame, b, threads);
-        row["isa"] = "embree:" + embree_isa(device);
-        row["layout"] = layout.name;
-        put_timing(row, "build_ms", build_t);
-        row["mem_bytes"] = std::to_string(built->bytes());
-        row["bytes_per_tri"] =
-            bytes_per_triangle(static_cast<std::size_t>(built->bytes()), scene.triangles.size());
-        row["mem_peak_bytes"] = std::to_string(peak);
-        put_ray_set(row, rs);
-        put_timing(row, "trace_mrays", trace_t);
-        if (b.variant != Variant::kEmbreeRefit) put_build_layout_ms(row, build_t, {});
-        put_hit_fraction(row, hits, occluded);
-        put_mismatches(row, ref, rs, frame.diagonal, hits, occluded);
-        if (b.variant == Variant::kEmbreeRefit)
-          add_note(row, "Embree refit of frame 0's build (dynamic scene, geometry quality refit)");
-        append(csv, row,
-               fmt::format("{} f{} {} {} t={} {}: {} {:.3f} ms, {:.2f} Mrays/s, {} mismatches", scene.name,
-                           frame.index, b.label, layout.name, threads, rs.name,
-                           b.variant == Variant::kEmbreeRefit ? "refit" : "build", build_t.median,
-                           trace_t.median, row["mismatches"]));
+        if (!wanted(frame.scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
+        CsvRow row = base_row(frame, job, threads, layout.name);
+        if (!refit) put_build_layout_ms(row, job.source.time(), {});
+        put_embree_scene(row, *job.embree->scene, job.embree->device, frame.scene.triangles.size(),
+                         job.source.peak);
+        if (refit) add_note(row, "Embree refit of frame 0's build (dynamic scene, geometry quality refit)");
+        cells.push_back(embree_cell(std::move(row), label(frame, job, threads, layout.name, rs),
+                                    *job.embree->scene, layout, rs, s, job.embree));
       }
     }
   }
@@ -543,8 +527,7 @@ class AnimationRunner {
   RunIdentity id_;
   std::set<std::string> finished_;
   std::vector<CsvRow> rows_;  // written by this run, for the summary
-  std::size_t planned_ = 0, done_ = 0;
-  std::chrono::steady_clock::time_point start_;
+  Progress progress_{0, log_};
   int exit_code_ = 0;
 };
 

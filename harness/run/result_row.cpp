@@ -102,4 +102,10 @@ void put_mismatches(CsvRow& row, const Reference& ref, const RaySet& rs, float s
       ref.name == "none" ? "" : std::to_string(count_mismatches(ref, rs, scene_diagonal, hits, occluded));
 }
 
+void add_note(CsvRow& row, const std::string& note) {
+  std::string& notes = row["notes"];
+  if (!notes.empty()) notes += "; ";
+  notes += note;
+}
+
 }  // namespace sahbench

@@ -59,4 +59,7 @@ void put_per_ray_counts(CsvRow& row, const TraceCounts& counts);
 void put_mismatches(CsvRow& row, const Reference& ref, const RaySet& rs, float scene_diagonal,
                     std::span<const Hit> hits, std::span<const uint8_t> occluded);
 
+/// Appends `note` to the row's `notes`, after "; " when it has some already.
+void add_note(CsvRow& row, const std::string& note);
+
 }  // namespace sahbench

@@ -12,6 +12,7 @@
 #include "harness/embree/embree_scene.h"
 #include "harness/embree/embree_trace.h"
 #include "harness/run/csv.h"
+#include "harness/run/result_row.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
 #include "scenes/procedural.h"
@@ -88,11 +89,6 @@ std::vector<CellLayout> layouts_for(const ResolvedRun& b, const std::vector<Layo
   return out;
 }
 
-void add_note(CsvRow& row, const std::string& note) {
-  std::string& notes = row["notes"];
-  notes += (notes.empty() ? "" : "; ") + note;
-}
-
 std::string camera_note(const CameraConfig& camera) {
   return fmt::format("camera eye ({}) target ({}) up ({}) fov {}", fmt::join(camera.eye, ", "),
                      fmt::join(camera.target, ", "), fmt::join(camera.up, ", "), camera.fov);
@@ -127,61 +123,39 @@ CsvRow common_row(const RunIdentity& id, const Environment& env, const Experimen
   return row;
 }
 
-BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device,
-                               std::span<const Triangle> triangles, EmbreeQuality quality,
-                               std::unique_ptr<EmbreeScene>& built) {
-  for (int w = 0; w < reps.build_warmup; ++w)
-    built = std::make_unique<EmbreeScene>(device, triangles, quality);
-  std::vector<double> build_ms;
-  int64_t peak = 0;
-  for (int r = 0; r < reps.build; ++r) {
-    built.reset();
-    const int64_t before = device.bytes();
-    device.reset_peak();
-    built = std::make_unique<EmbreeScene>(device, triangles, quality);
-    build_ms.push_back(built->commit_ms());
-    if (r == 0) peak = device.peak_bytes() - before;
+OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const std::filesystem::path& output,
+                 const std::vector<std::string>& columns, const std::vector<std::string>& scenes,
+                 const std::vector<std::string>& builder_runs, const Environment& env, std::ostream& log) {
+  OpenRun run;
+  run.lock = std::make_unique<OutputLock>(output);
+  run.csv = std::make_unique<CsvWriter>(output, columns);
+  if (run.csv->dropped_partial_row())
+    log << fmt::format("{}: removed a partial last row (an interrupted write)\n", output.string());
+  run.id.fingerprint = fingerprint_of(cfg, scenes, builder_runs, env);
+  run.id.run_id = make_run_id(cfg.name);
+  if (options.resume) {
+    ResumePoint point = find_resume_point(output, run.id.fingerprint, log);
+    if (!point.run_id.empty()) run.id.run_id = point.run_id;
+    run.finished = std::move(point.finished);
   }
-  return {summarize(build_ms), peak};
+  return run;
 }
 
-TimedCompile compile_timed(const LayoutSpec& spec, const Bvh& bvh, std::span<const Triangle> triangles,
-                           const Repetitions& reps) {
-  TimedCompile out;
-  std::vector<double> compile_ms;
-  for (int r = 0; r < std::max(1, reps.build); ++r) {
-    out.layout.reset();
-    compile_ms.push_back(time_ms([&] { out.layout = compile_layout(spec, bvh, triangles); }));
-  }
-  out.time = summarize(std::move(compile_ms));
-  return out;
+Progress::Progress(std::size_t total, std::ostream& log)
+    : total_(total), log_(log), start_(std::chrono::steady_clock::now()) {}
+
+double Progress::elapsed_s() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
-void trace_layout(const CompiledLayout& layout, const RaySet& rs, std::span<Hit> hits,
-                  std::span<uint8_t> occluded) {
-  if (rs.occlusion)
-    layout.trace_any(rs.rays, occluded);
-  else
-    layout.trace_closest(rs.rays, hits);
-}
-
-TraceCounts count_layout(const CompiledLayout& layout, const RaySet& rs) {
-  return rs.occlusion ? layout.count_any(rs.rays) : layout.count_closest(rs.rays);
-}
-
-void trace_embree(const EmbreeScene& scene, const EmbreeLayout& layout, const RaySet& rs, std::span<Hit> hits,
-                  std::span<uint8_t> occluded) {
-  if (layout.packet_width == 1) {
-    if (rs.occlusion)
-      embree_occluded1(scene, rs.rays, occluded);
-    else
-      embree_intersect1(scene, rs.rays, hits);
-  } else {
-    if (rs.occlusion)
-      embree_occluded_packets(scene, rs.rays, occluded, layout.packet_width);
-    else
-      embree_intersect_packets(scene, rs.rays, hits, layout.packet_width);
-  }
+void Progress::cell_done(const std::string& what) {
+  ++done_;
+  const double elapsed = elapsed_s();
+  const std::size_t counted = std::min(total_, std::max(done_, batch_end_));
+  const double left = elapsed / static_cast<double>(std::max<std::size_t>(counted, 1)) *
+                      static_cast<double>(total_ - counted);
+  log_ << fmt::format("[{}/{}] {} | elapsed {}, left ~{}\n", done_, total_, what, format_duration(elapsed),
+                      format_duration(left));
 }
 
 }  // namespace sahbench

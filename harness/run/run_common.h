@@ -3,6 +3,8 @@
 // (animation_runner.cpp) share, so that both name runs, pick scenes and layouts, resume and log the same
 // way. Internal to the harness.
 
+#include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <iosfwd>
@@ -13,15 +15,14 @@
 #include <vector>
 
 #include "builders/registry.h"
-#include "core/memory_tracker.h"
 #include "harness/config/config.h"
 #include "harness/embree/embree_layouts.h"
 #include "harness/embree/embree_scene.h"
 #include "harness/run/csv.h"
 #include "harness/run/environment.h"
 #include "harness/run/ray_sets.h"
+#include "harness/run/run_options.h"
 #include "harness/run/run_session.h"
-#include "harness/run/timing.h"
 #include "scenes/scene.h"
 #include "traversal/layout.h"
 
@@ -65,72 +66,52 @@ struct CellLayout {
 std::vector<CellLayout> layouts_for(const ResolvedRun& b, const std::vector<LayoutSpec>& configured,
                                     std::span<const EmbreeLayout> embree);
 
-/// The columns every row of a cell starts with: the run (run_id, run_fingerprint, fingerprint_parts,
-/// config, seed, build_reps, trace_reps),
-/// the machine (git_commit, cpu, compiler, embree_version), the scene and `frame`, the builder run
-/// (`builder`, its `params_text`) and the thread count. A scene viewed through the config's [[camera]]
-/// gets it in `notes` (camera_note), so a row says which view its rays came from.
-/// Appends `note` to the row's `notes`, after "; " when it has some already.
-void add_note(CsvRow& row, const std::string& note);
-
 /// "camera eye (x, y, z) target (x, y, z) up (x, y, z) fov F": the view of a [[camera]], for `notes`.
 std::string camera_note(const CameraConfig& camera);
 
+/// The columns every row of a cell starts with: the run (run_id, run_fingerprint, fingerprint_parts,
+/// config, seed, build_reps, trace_reps), the machine (git_commit, cpu, compiler, embree_version), the
+/// scene and `frame`, the builder run (`builder`, its `params_text`) and the thread count. A scene viewed
+/// through the config's [[camera]] gets it in `notes` (camera_note), so a row says which view its rays
+/// came from.
 CsvRow common_row(const RunIdentity& id, const Environment& env, const ExperimentConfig& cfg,
                   const Scene& scene, uint32_t frame, const std::string& builder,
                   const std::string& params_text, int threads);
 
-/// A build's time over its repetitions (ms), and the bytes it allocated at its peak in the first timed one.
-struct BuildTiming {
-  TimingSummary time;
-  int64_t peak_bytes = 0;
+/// A run of `sahbench run` opened for writing: its output CSV locked (OutputLock) and open with
+/// `columns` (a row cut off by a crash removed), its identity (a new run id, or with --resume the id of
+/// the run whose fingerprint matches), and the cells that run finished already. The lock is taken, and
+/// every required scene checked by the caller, before the CSV is touched.
+struct OpenRun {
+  std::unique_ptr<OutputLock> lock;
+  std::unique_ptr<CsvWriter> csv;
+  RunIdentity id;
+  std::set<std::string> finished;  ///< cell keys (cell_key) a resume skips
 };
 
-/// Times a build as every run does: `reps.build_warmup` untimed calls of `step`, then `reps.build` timed
-/// ones, each after an untimed `reset` (so that no repetition pays for freeing the last one's result);
-/// the peak is the heap's (memory_tracker.h) over the first timed one.
-template <class Step, class Reset>
-BuildTiming time_builds(const Repetitions& reps, Step step, Reset reset) {
-  for (int w = 0; w < reps.build_warmup; ++w) step();
-  std::vector<double> ms;
-  int64_t peak = 0;
-  for (int r = 0; r < reps.build; ++r) {
-    reset();
-    const int64_t before = heap_bytes();
-    reset_heap_peak();
-    ms.push_back(time_ms(step));
-    if (r == 0) peak = heap_peak_bytes() - before;
-  }
-  return {summarize(ms), peak};
-}
+/// `builder_runs`: one "name params" line per builder run, for the fingerprint.
+OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const std::filesystem::path& output,
+                 const std::vector<std::string>& columns, const std::vector<std::string>& scenes,
+                 const std::vector<std::string>& builder_runs, const Environment& env, std::ostream& log);
 
-/// Embree's build of `triangles` at `quality`, timed the same way: warm-up builds, then timed ones, each
-/// after freeing the last; the time is rtcCommitScene's (EmbreeScene::commit_ms) and the peak the
-/// device's over the first timed build. `built` keeps the last build.
-BuildTiming time_embree_builds(const Repetitions& reps, EmbreeDevice& device,
-                               std::span<const Triangle> triangles, EmbreeQuality quality,
-                               std::unique_ptr<EmbreeScene>& built);
+/// Progress on stderr: "[i/N] what | elapsed, left ~T" per finished cell. Cells timed together finish
+/// together: announcing the batch (batch) makes the time left reckon with all of it from its first line
+/// on. A plan that learns its cells as it goes (animation frames) adds them with plan().
+class Progress {
+ public:
+  Progress(std::size_t total, std::ostream& log);
+  void plan(std::size_t cells) { total_ += cells; }
+  void skip(std::size_t cells) { total_ -= std::min(total_, cells); }
+  void batch(std::size_t cells) { batch_end_ = std::min(total_, done_ + cells); }
+  void cell_done(const std::string& what);
+  std::size_t done() const { return done_; }
+  std::size_t total() const { return total_; }
+  double elapsed_s() const;
 
-/// A layout compiled max(1, reps.build) times, each after freeing the one before: the last compile and
-/// the median of their times (ms).
-struct TimedCompile {
-  std::unique_ptr<CompiledLayout> layout;
-  TimingSummary time;  ///< ms of each compile
+ private:
+  std::size_t total_, done_ = 0, batch_end_ = 0;
+  std::ostream& log_;
+  std::chrono::steady_clock::time_point start_;
 };
-TimedCompile compile_timed(const LayoutSpec& spec, const Bvh& bvh, std::span<const Triangle> triangles,
-                           const Repetitions& reps);
-
-/// One pass of `layout` over `rs`: closest hits into `hits`, or for an any-hit set occlusion into
-/// `occluded`.
-void trace_layout(const CompiledLayout& layout, const RaySet& rs, std::span<Hit> hits,
-                  std::span<uint8_t> occluded);
-
-/// The counting pass of `layout` over `rs` (count_closest, or count_any for an any-hit set).
-TraceCounts count_layout(const CompiledLayout& layout, const RaySet& rs);
-
-/// One pass of Embree's `layout` over `rs` in `scene` (rtcIntersect1/rtcOccluded1 or packets of its
-/// width): closest hits into `hits`, or for an any-hit set occlusion into `occluded`.
-void trace_embree(const EmbreeScene& scene, const EmbreeLayout& layout, const RaySet& rs, std::span<Hit> hits,
-                  std::span<uint8_t> occluded);
 
 }  // namespace sahbench

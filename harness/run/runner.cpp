@@ -21,6 +21,7 @@
 #include "harness/embree/embree_scene.h"
 #include "harness/embree/embree_trace.h"
 #include "harness/run/animation_runner.h"
+#include "harness/run/cell_pipeline.h"
 #include "harness/run/csv.h"
 #include "harness/run/environment.h"
 #include "harness/run/ray_sets.h"
@@ -37,34 +38,6 @@
 
 namespace sahbench {
 namespace {
-
-class Progress {
- public:
-  Progress(std::size_t total, std::ostream& log)
-      : total_(total), log_(log), start_(std::chrono::steady_clock::now()) {}
-  /// Interleaved cells finish together: announcing the batch first makes the time left reckon with all
-  /// of it from its first line on, rather than with one cell for the whole batch's time.
-  void batch(std::size_t cells) { batch_end_ = std::min(total_, done_ + cells); }
-  void cell_done(const std::string& what) {
-    ++done_;
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const std::size_t counted = std::max(done_, batch_end_);
-    const double left = elapsed / static_cast<double>(counted) * static_cast<double>(total_ - counted);
-    log_ << fmt::format("[{}/{}] {} | elapsed {}, left ~{}\n", done_, total_, what, format_duration(elapsed),
-                        format_duration(left));
-  }
-  void skip(std::size_t cells) { total_ -= std::min(total_, cells); }
-  std::size_t done() const { return done_; }
-  std::size_t total() const { return total_; }
-  double elapsed_s() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
-
- private:
-  std::size_t total_, done_ = 0, batch_end_ = 0;
-  std::ostream& log_;
-  std::chrono::steady_clock::time_point start_;
-};
 
 // One builder run of the config, resolved against the registry.
 struct ResolvedBuilder : ResolvedRun {
@@ -92,21 +65,12 @@ class ExperimentRunner {
     // Every required scene is checked, and the lock taken, before the CSV is touched: the writer then
     // checks the header and removes a row cut off by a crash before anything reads the file.
     const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
-    const OutputLock lock(output_);
-    CsvWriter csv(output_, result_columns());
-    if (csv.dropped_partial_row())
-      log_ << fmt::format("{}: removed a partial last row (an interrupted write)\n", output_.string());
     std::vector<std::string> builder_runs;
     for (const auto& b : builders_) builder_runs.push_back(b.run.name + " " + b.params_text);
-    id_.fingerprint = fingerprint_of(cfg_, scenes, builder_runs, env_);
-    id_.run_id = make_run_id(cfg_.name);
-    std::set<std::string> finished;
-    if (options_.resume) {
-      ResumePoint point = find_resume_point(output_, id_.fingerprint, log_);
-      if (!point.run_id.empty()) id_.run_id = point.run_id;
-      finished = std::move(point.finished);
-    }
-
+    OpenRun open = open_run(cfg_, options_, output_, result_columns(), scenes, builder_runs, env_, log_);
+    id_ = open.id;
+    const std::set<std::string>& finished = open.finished;
+    CsvWriter& csv = *open.csv;
     supported_embree_layouts_ = supported_embree_layouts(log_);
     // Plan: which cells of each scene are still to do.
     std::size_t total = 0;
@@ -228,69 +192,38 @@ class ExperimentRunner {
     }
   };
 
-  // An Embree build and the device it lives in, kept together for its cells.
-  struct EmbreeBuild {
-    explicit EmbreeBuild(int threads) : device(threads) {}
-    EmbreeDevice device;
-    std::unique_ptr<EmbreeScene> scene;
-  };
-
-  // One builder run's builds: a tree of ours or an Embree scene, rebuilt once per round.
+  // One builder run's tree source: a tree of ours or an Embree scene, made afresh in every round.
   struct BuildJob {
     const ResolvedBuilder* builder = nullptr;
     std::shared_ptr<Bvh> tree;            // ours
     std::shared_ptr<EmbreeBuild> embree;  // Embree's
-    std::vector<double> ms;
-    int64_t peak = 0;  // bytes allocated at the peak of the first timed build
-
-    // One build after freeing the last, so that no repetition pays for freeing the one before; `timed`:
-    // its milliseconds go into `ms` (rtcCommitScene's for Embree), the first one's peak into `peak`.
-    void build(const Scene& scene, bool timed) {
-      const ResolvedBuilder& b = *builder;
-      if (b.is_embree()) {
-        embree->scene.reset();
-        const int64_t before = embree->device.bytes();
-        embree->device.reset_peak();
-        embree->scene = std::make_unique<EmbreeScene>(embree->device, scene.triangles, b.quality);
-        if (!timed) return;
-        if (ms.empty()) peak = embree->device.peak_bytes() - before;
-        ms.push_back(embree->scene->commit_ms());
-        return;
-      }
-      *tree = Bvh{};
-      const int64_t before = heap_bytes();
-      reset_heap_peak();
-      const double t =
-          time_ms([&] { *tree = b.info->build(BuildInput::from_triangles(scene.triangles), b.params); });
-      if (!timed) return;
-      if (ms.empty()) peak = heap_peak_bytes() - before;
-      ms.push_back(t);
-    }
+    TreeSource source;
   };
 
-  // Times the builds of `runs` (warm-ups, then the timed rounds, each in its own shuffle), then traces
-  // every wanted cell of them (trace_cells) and writes their rows.
+  static BuildJob make_job(const ResolvedBuilder& b, const Scene& scene, int threads) {
+    BuildJob job;
+    job.builder = &b;
+    if (b.is_embree()) {
+      job.embree = std::make_shared<EmbreeBuild>(threads);
+      job.source = embree_build(b.run.label(), job.embree, scene.triangles, b.quality);
+    } else {
+      job.tree = std::make_shared<Bvh>();
+      job.source = our_build(b.run.label(), *b.info, b.params, scene.triangles, job.tree);
+    }
+    return job;
+  }
+
+  // Times the builds of `runs` (time_sources), then queues every wanted cell of them, times their traces
+  // (time_cells) and writes their rows.
   void measure(const Group& group, const std::vector<const ResolvedBuilder*>& runs,
                const std::vector<Reference>& references, CsvWriter& csv, Progress& progress) {
     std::vector<BuildJob> jobs;
-    for (const ResolvedBuilder* b : runs) {
-      BuildJob job;
-      job.builder = b;
-      if (b->is_embree())
-        job.embree = std::make_shared<EmbreeBuild>(group.threads);
-      else
-        job.tree = std::make_shared<Bvh>();
-      jobs.push_back(std::move(job));
-    }
-    for (int w = 0; w < cfg_.reps.build_warmup; ++w)
-      for (auto& job : jobs) job.build(group.scene, false);
-    const uint64_t seed = order_seed(cfg_.seed, group.scene.name, group.threads, "build");
-    for (int r = 0; r < cfg_.reps.build; ++r) {
-      for (const std::size_t k : round_order(seed, jobs.size(), r)) {
-        check_interrupt(progress);
-        jobs[k].build(group.scene, true);
-      }
-    }
+    for (const ResolvedBuilder* b : runs) jobs.push_back(make_job(*b, group.scene, group.threads));
+    std::vector<TreeSource*> sources;
+    for (auto& job : jobs) sources.push_back(&job.source);
+    const auto interrupt = [&] { check_interrupt(progress); };
+    time_sources(sources, cfg_.reps, order_seed(cfg_.seed, group.scene.name, group.threads, "build"),
+                 interrupt);
     std::vector<TraceCell> cells;
     for (auto& job : jobs) {
       check_interrupt(progress);
@@ -299,158 +232,76 @@ class ExperimentRunner {
       else
         queue_ours(group, job, csv, progress, cells);
     }
-    time_cells(cells, group, progress);
-    finish_cells(cells, group.sets, references, csv, progress);
-  }
-
-  // A cell built and compiled, waiting for its trace timing: its row so far, one pass of its kernel over
-  // its ray set (writing `hits` or `occluded`), the counting pass, and what keeps its structures alive.
-  struct TraceCell {
-    CsvRow row;
-    std::string label;  // builder, layout, threads and ray set, for the log
-    double build_ms = 0.0;
-    std::size_t set = 0, rays = 0;
-    std::function<void()> trace;
-    std::function<TraceCounts()> count;  // empty for Embree, which has no counting kernel
-    // Where the passes write: the mismatch count reads the last one's. Shared with `trace`.
-    std::shared_ptr<std::vector<Hit>> hits;
-    std::shared_ptr<std::vector<uint8_t>> occluded;
-    std::shared_ptr<const void> keep_alive;
-    std::vector<double> mrays;
-  };
-
-  // The ray set's columns of a cell's row, its log label, and the buffers its passes write.
-  static void set_up_cell(TraceCell& cell, const Group& group, const ResolvedBuilder& b,
-                          const std::string& layout, std::size_t set, double build_ms,
-                          std::shared_ptr<const void> keep_alive) {
-    const RaySet& rs = group.sets[set];
-    put_ray_set(cell.row, rs);
-    cell.label =
-        fmt::format("{} {} {} t={} {}", group.scene.name, b.run.label(), layout, group.threads, rs.name);
-    cell.build_ms = build_ms;
-    cell.set = set;
-    cell.rays = rs.rays.size();
-    cell.keep_alive = std::move(keep_alive);
-    cell.hits = std::make_shared<std::vector<Hit>>(rs.occlusion ? 0 : rs.rays.size());
-    cell.occluded = std::make_shared<std::vector<uint8_t>>(rs.occlusion ? rs.rays.size() : 0);
-  }
-
-  // Trace repetitions. Interleaved: every cell's warm-ups, then round r of every cell, in the round's own
-  // shuffle (round_order). Otherwise each cell's warm-ups and repetitions back to back.
-  void time_cells(std::vector<TraceCell>& cells, const Group& group, const Progress& progress) {
-    auto time_once = [&](TraceCell& cell) {
-      check_interrupt(progress);
-      cell.mrays.push_back(static_cast<double>(cell.rays) / (time_ms(cell.trace) * 1e3));
-    };
-    if (!cfg_.reps.interleave) {
-      for (auto& cell : cells) {
-        for (int w = 0; w < cfg_.reps.trace_warmup; ++w) cell.trace();
-        for (int r = 0; r < cfg_.reps.trace; ++r) time_once(cell);
-      }
-      return;
-    }
-    for (auto& cell : cells)
-      for (int w = 0; w < cfg_.reps.trace_warmup; ++w) cell.trace();
-    const uint64_t seed = order_seed(cfg_.seed, group.scene.name, group.threads, "trace");
-    for (int r = 0; r < cfg_.reps.trace && !cells.empty(); ++r) {
-      log_ << fmt::format("{} t={}: trace repetition {} of {}, {} cells in shuffled turns\n",
-                          group.scene.name, group.threads, r + 1, cfg_.reps.trace, cells.size());
-      for (const std::size_t k : round_order(seed, cells.size(), r)) time_once(cells[k]);
-    }
-  }
-
-  // Completes each timed cell's row (timings, counts, hits and mismatches from its last pass) and
-  // writes it.
-  void finish_cells(std::vector<TraceCell>& cells, const std::vector<RaySet>& sets,
-                    const std::vector<Reference>& refs, CsvWriter& csv, Progress& progress) {
+    time_cells(cells, cfg_.reps, order_seed(cfg_.seed, group.scene.name, group.threads, "trace"), interrupt,
+               [&](int r) {
+                 log_ << fmt::format("{} t={}: trace repetition {} of {}, {} cells in shuffled turns\n",
+                                     group.scene.name, group.threads, r + 1, cfg_.reps.trace, cells.size());
+               });
     progress.batch(cells.size());
     for (auto& cell : cells) {
-      const RaySet& rs = sets[cell.set];
-      const Reference& ref = refs[cell.set];
-      CsvRow& row = cell.row;
-      const TimingSummary trace_t = summarize(cell.mrays);
-      put_timing(row, "trace_mrays", trace_t);
-      if (cell.count) put_per_ray_counts(row, cell.count());
-      put_hit_fraction(row, *cell.hits, *cell.occluded);
-      put_mismatches(row, ref, rs, diagonal_, *cell.hits, *cell.occluded);
-      csv_ms_ += time_ms([&] { csv.append(row); });
-      progress.cell_done(fmt::format("{}: build {:.1f} ms, {:.2f} Mrays/s, {} mismatches", cell.label,
-                                     cell.build_ms, trace_t.median, row["mismatches"]));
+      finish_cell(cell, references[cell.set_index], diagonal_);
+      csv_ms_ += time_ms([&] { csv.append(cell.row); });
+      progress.cell_done(fmt::format("{}: build {} ms, {} Mrays/s, {} mismatches", cell.label,
+                                     cell.row["build_ms_median"], cell.row["trace_mrays_median"],
+                                     cell.row["mismatches"]));
     }
   }
 
-  CsvRow base_row(const Group& group, const ResolvedBuilder& b) const {
-    return common_row(id_, env_, cfg_, group.scene, 0, b.run.name, b.params_text, group.threads);
+  CsvRow base_row(const Group& group, const ResolvedBuilder& b, const std::string& layout,
+                  const TimingSummary& build_t) const {
+    CsvRow row = common_row(id_, env_, cfg_, group.scene, 0, b.run.name, b.params_text, group.threads);
+    row["layout"] = layout;
+    put_timing(row, "build_ms", build_t);
+    return row;
+  }
+
+  std::string label(const Group& group, const ResolvedBuilder& b, const std::string& layout,
+                    const RaySet& rs) const {
+    return fmt::format("{} {} {} t={} {}", group.scene.name, b.run.label(), layout, group.threads, rs.name);
   }
 
   // Checks the built tree of one of our builder runs, then compiles it and queues a cell per wanted
-  // layout and ray set. The validator runs before anything else walks the tree: an invalid tree's cells
-  // are written at once, untraced and without statistics.
+  // layout and ray set. An invalid tree's cells are written at once, untraced and without statistics.
   void queue_ours(const Group& group, const BuildJob& job, CsvWriter& csv, Progress& progress,
                   std::vector<TraceCell>& cells) {
     const ResolvedBuilder& b = *job.builder;
     const Scene& scene = group.scene;
     const Bvh& bvh = *job.tree;
-    const TimingSummary build_t = summarize(job.ms);
-    const ValidationReport report = validate(bvh, std::span<const Triangle>(scene.triangles));
-    if (!report.ok()) {
-      // Tracing a broken tree can read out of bounds: its cells get rows that say why, and no timings.
+    const TimingSummary build_t = job.source.time();
+    const CheckedTree checked = check_tree(bvh, scene.triangles, b.params);
+    if (!checked.ok()) {
       exit_code_ = 1;
-      log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.run.label(), scene.name, report.summary());
+      log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.run.label(), scene.name,
+                          checked.report.summary());
       for (const CellLayout& layout : layouts_for(b))
         for (const auto& rs : group.sets) {
           if (!group.wanted(b, layout.name, rs)) continue;
-          CsvRow row = base_row(group, b);
+          CsvRow row = base_row(group, b, layout.name, build_t);
           row["isa"] = env_.isa;
-          row["layout"] = layout.name;
-          put_timing(row, "build_ms", build_t);
-          row["nodes"] = std::to_string(bvh.nodes.size());
-          row["arity"] = std::to_string(bvh.arity);
           put_ray_set(row, rs);
-          add_note(row, "invalid tree, not traced: " + report.errors.front());
+          put_invalid_tree(row, bvh, checked.report);
           csv_ms_ += time_ms([&] { csv.append(row); });
-          progress.cell_done(fmt::format("{} {} {} t={} {}: INVALID tree, not traced", scene.name,
-                                         b.run.label(), layout.name, group.threads, rs.name));
+          progress.cell_done(label(group, b, layout.name, rs) + ": INVALID tree, not traced");
         }
       return;
     }
-    const SahCost cost = sah_cost_of(b.params);
-    const BvhStats stats = compute_stats(bvh, scene.triangles.size(), cost);
-
     for (const CellLayout& layout : layouts_for(b)) {
-      const std::string& layout_name = layout.name;
       bool any = false;
-      for (const auto& rs : group.sets) any |= group.wanted(b, layout_name, rs);
+      for (const auto& rs : group.sets) any |= group.wanted(b, layout.name, rs);
       if (!any) continue;
       TimedCompile compiled = compile_timed(*layout.ours, bvh, scene.triangles, cfg_.reps);
-      // The layout borrows the tree (bvh2 as built): both stay alive with the cells.
-      std::shared_ptr<const CompiledLayout> shared_layout(std::move(compiled.layout));
-      auto keep = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::shared_ptr<const CompiledLayout>>>(
-          job.tree, shared_layout);
+      // The layout borrows the tree (bvh2 as built): the cells keep both alive.
+      auto shared = std::make_shared<std::pair<std::shared_ptr<Bvh>, std::unique_ptr<CompiledLayout>>>(
+          job.tree, std::move(compiled.layout));
+      const std::shared_ptr<const CompiledLayout> kept(shared, shared->second.get());
       for (std::size_t s = 0; s < group.sets.size(); ++s) {
         const RaySet& rs = group.sets[s];
-        if (!group.wanted(b, layout_name, rs)) continue;
-        TraceCell cell;
-        CsvRow& row = cell.row;
-        row = base_row(group, b);
-        row["isa"] = shared_layout->isa();
-        row["layout"] = layout_name;
-        put_timing(row, "build_ms", build_t);
+        if (!group.wanted(b, layout.name, rs)) continue;
+        CsvRow row = base_row(group, b, layout.name, build_t);
         row["layout_ms"] = fmt::format("{:.4f}", compiled.time.median);
         put_build_layout_ms(row, build_t, compiled.time);
-        row["mem_bytes"] = std::to_string(shared_layout->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(shared_layout->bytes(), scene.triangles.size());
-        row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(job.peak) : "";
-        put_tree_stats(row, stats, cost);
-        row["arity"] = std::to_string(bvh.arity);
-        set_up_cell(cell, group, b, layout_name, s, build_t.median, keep);
-        const CompiledLayout* layout_ptr = shared_layout.get();
-        const RaySet* set_ptr = &rs;
-        cell.trace = [layout_ptr, set_ptr, hits = cell.hits, occluded = cell.occluded] {
-          trace_layout(*layout_ptr, *set_ptr, *hits, *occluded);
-        };
-        cell.count = [layout_ptr, set_ptr] { return count_layout(*layout_ptr, *set_ptr); };
-        cells.push_back(std::move(cell));
+        put_our_layout(row, *kept, bvh, checked, scene.triangles.size(), job.source.peak);
+        cells.push_back(our_cell(std::move(row), label(group, b, layout.name, rs), kept, rs, s));
       }
     }
   }
@@ -458,28 +309,17 @@ class ExperimentRunner {
   // Queues a cell per supported Embree layout and wanted ray set of an Embree build.
   void queue_embree(const Group& group, const BuildJob& job, std::vector<TraceCell>& cells) {
     const ResolvedBuilder& b = *job.builder;
-    const TimingSummary build_t = summarize(job.ms);
-    const EmbreeScene* embree = job.embree->scene.get();
+    const TimingSummary build_t = job.source.time();
+    const EmbreeBuild& embree = *job.embree;
     for (const auto& layout : supported_embree_layouts_) {
       for (std::size_t s = 0; s < group.sets.size(); ++s) {
         const RaySet& rs = group.sets[s];
         if (!group.wanted(b, layout.name, rs)) continue;
-        TraceCell cell;
-        CsvRow& row = cell.row;
-        row = base_row(group, b);
-        row["isa"] = "embree:" + embree_isa(job.embree->device);
-        row["layout"] = layout.name;
-        put_timing(row, "build_ms", build_t);
+        CsvRow row = base_row(group, b, layout.name, build_t);
         put_build_layout_ms(row, build_t, {});  // rtcCommitScene builds and packs in one call
-        row["mem_bytes"] = std::to_string(embree->bytes());
-        row["bytes_per_tri"] = bytes_per_triangle(embree->bytes(), group.scene.triangles.size());
-        row["mem_peak_bytes"] = std::to_string(job.peak);
-        set_up_cell(cell, group, b, layout.name, s, build_t.median, job.embree);
-        const RaySet* set_ptr = &rs;
-        cell.trace = [embree, layout, set_ptr, hits = cell.hits, occluded = cell.occluded] {
-          trace_embree(*embree, layout, *set_ptr, *hits, *occluded);
-        };
-        cells.push_back(std::move(cell));
+        put_embree_scene(row, *embree.scene, embree.device, group.scene.triangles.size(), job.source.peak);
+        cells.push_back(embree_cell(std::move(row), label(group, b, layout.name, rs), *embree.scene, layout,
+                                    rs, s, job.embree));
       }
     }
   }

@@ -19,6 +19,7 @@
 #include "harness/embree/embree_scene.h"
 #include "harness/embree/embree_trace.h"
 #include "harness/run/bounded_run.h"
+#include "harness/run/cell_pipeline.h"
 #include "harness/run/csv.h"
 #include "harness/run/environment.h"
 #include "harness/run/result_row.h"
@@ -144,6 +145,7 @@ class StressRunner {
   struct CaseContext {
     const StressCase* c = nullptr;
     std::shared_ptr<const std::vector<Triangle>> triangles;
+    RaySet rays;  // the case's rays as one closest-hit set
     std::vector<ExactHit> exact;
     double reference_ms = 0.0;
     uint64_t must_hit = 0;
@@ -161,6 +163,7 @@ class StressRunner {
     const double gen_ms = time_ms([&] { c = generate_stress_case(spec); });
     ctx.c = &c;
     ctx.triangles = std::make_shared<const std::vector<Triangle>>(c.scene.triangles);
+    ctx.rays = {"stress", RayKind::kRandom, false, c.rays};
     ctx.guaranteed = c.closed && within_watertight_range(c);
     ctx.reference_ms = time_ms([&] { ctx.exact = ExactReference(*ctx.triangles).closest(c.rays); });
     uint64_t exact_hits = 0, ties = 0, must_hit_missed = 0;
@@ -236,21 +239,27 @@ class StressRunner {
       row[std::string("build_ms") + suffix] = fmt::format("{:.4f}", ms);
   }
 
-  // Times closest-hit tracing of the case's rays, compares with the exact answers and fills the row.
-  template <class Trace>
-  ErrorMetrics put_trace(CsvRow& row, const CaseContext& ctx, Trace trace) const {
-    const std::vector<Ray>& rays = ctx.c->rays;
-    std::vector<Hit> hits(rays.size());
-    for (int w = 0; w < cfg_.trace_warmup; ++w) trace(rays, hits);
-    std::vector<double> mrays;
-    for (int r = 0; r < cfg_.trace_reps; ++r) {
-      const double ms = time_ms([&] { trace(rays, hits); });
-      mrays.push_back(static_cast<double>(rays.size()) / (std::max(ms, 1e-6) * 1e3));
-    }
-    const TimingSummary t = summarize(mrays);
-    put_timing(row, "trace_mrays", t);
+  // Times a cell's closest-hit traces back to back (the pipeline's time_cells), compares its last pass
+  // with the exact answers and fills the row. `index`: where each of the cell's rays sits among the
+  // case's, when it traces only some of them (the rest count as misses); null when it traces all.
+  ErrorMetrics put_trace(CsvRow& row, TraceCell& cell, const CaseContext& ctx,
+                         const std::vector<std::size_t>* index = nullptr) const {
+    Repetitions reps;
+    reps.trace = cfg_.trace_reps;
+    reps.trace_warmup = cfg_.trace_warmup;
+    reps.interleave = false;
+    std::vector<TraceCell> one;
+    one.push_back(std::move(cell));
+    time_cells(one, reps, 0, [] {}, {});
+    cell = std::move(one.front());
+    put_timing(row, "trace_mrays", summarize(cell.mrays));
     row["trace_reps"] = std::to_string(cfg_.trace_reps);
-    const ErrorMetrics m = measure_errors(hits, ctx.exact, ctx.c->must_hit);
+    std::vector<Hit> all;
+    if (index) {
+      all.assign(ctx.c->rays.size(), Hit{});
+      for (std::size_t k = 0; k < index->size(); ++k) all[(*index)[k]] = (*cell.hits)[k];
+    }
+    const ErrorMetrics m = measure_errors(index ? all : *cell.hits, ctx.exact, ctx.c->must_hit);
     row["mismatches"] = std::to_string(m.errors());
     row["false_misses"] = std::to_string(m.false_misses);
     row["false_hits"] = std::to_string(m.false_hits);
@@ -260,6 +269,7 @@ class StressRunner {
     row["t_err_ulps_max"] = std::to_string(m.t_err_ulps_max);
     row["t_err_ulps_mean"] = fmt::format("{:.3f}", m.t_err_ulps_mean);
     row["leaks"] = std::to_string(m.leaks);
+    if (cell.count) put_per_ray_counts(row, cell.count());
     return m;
   }
 
@@ -321,18 +331,16 @@ class StressRunner {
     const uint64_t nan_bounds = count_nan_bounds(bvh);
     row["nan_bounds"] = std::to_string(nan_bounds);
     row["arity"] = std::to_string(bvh.arity);
-    const ValidationReport report = validate(bvh, std::span<const Triangle>(*ctx.triangles));
-    if (!report.ok() || nan_bounds) {
+    const CheckedTree checked = check_tree(bvh, *ctx.triangles, params);
+    if (!checked.ok() || nan_bounds) {
       row["build_failed"] = "1";
-      row["notes"] =
-          "invalid tree, not traced: " + (report.ok() ? std::string("NaN bounds") : report.errors.front());
+      row["notes"] = "invalid tree, not traced: " +
+                     (checked.ok() ? std::string("NaN bounds") : checked.report.errors.front());
       write(row);
       fail(label + ": " + row["notes"]);
       return;
     }
-    const SahCost cost = sah_cost_of(params);
-    const BvhStats stats = compute_stats(bvh, ctx.triangles->size(), cost);
-    put_tree_stats(row, stats, cost);
+    put_tree_stats(row, checked.stats, checked.cost);
 
     const std::vector<LayoutSpec> specs = layouts_for(bvh.arity, arities_with_variants);
     if (specs.empty()) {
@@ -346,18 +354,13 @@ class StressRunner {
       CsvRow r = row;
       r["layout"] = layout.text();
       try {
-        std::unique_ptr<CompiledLayout> compiled;
+        std::shared_ptr<const CompiledLayout> compiled;
         r["layout_ms"] =
             fmt::format("{:.4f}", time_ms([&] { compiled = compile_layout(layout, bvh, *ctx.triangles); }));
         r["isa"] = compiled->isa();
         r["mem_bytes"] = std::to_string(compiled->bytes());
-        const ErrorMetrics m = put_trace(r, ctx, [&](std::span<const Ray> rays, std::span<Hit> hits) {
-          compiled->trace_closest(rays, hits);
-        });
-        const TraceCounts counts = compiled->count_closest(c.rays);
-        const double n = static_cast<double>(std::max<uint64_t>(1, counts.rays));
-        r["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / n);
-        r["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / n);
+        TraceCell cell = our_cell({}, label, compiled, ctx.rays, 0);
+        const ErrorMetrics m = put_trace(r, cell, ctx);
         log_ << fmt::format("  {} {}: {} Mrays/s; {}\n", info->name, r["layout"], r["trace_mrays_median"],
                             metrics_summary(m));
         if (ctx.guaranteed && layout.variant == KernelVariant{} && (m.false_misses || m.leaks))
@@ -406,26 +409,21 @@ class StressRunner {
     row["isa"] = "embree:" + embree_isa(*embree.device);
     row["mem_bytes"] = std::to_string(embree.scene->bytes());
     // Rays Embree's kernels reject: they are reported as misses without being traced.
-    std::vector<Ray> valid_rays;
-    std::vector<std::size_t> valid_index;
+    RaySet accepted{"stress", RayKind::kRandom, false, {}};
+    std::vector<std::size_t> accepted_index;
     for (std::size_t i = 0; i < ctx.c->rays.size(); ++i)
       if (embree_accepts(ctx.c->rays[i])) {
-        valid_rays.push_back(ctx.c->rays[i]);
-        valid_index.push_back(i);
+        accepted.rays.push_back(ctx.c->rays[i]);
+        accepted_index.push_back(i);
       }
-    const std::size_t rejected = ctx.c->rays.size() - valid_rays.size();
+    const std::size_t rejected = ctx.c->rays.size() - accepted.rays.size();
     if (rejected)
       row["notes"] =
           fmt::format("{} rays beyond Embree's valid range (|org|, |dir| <= {:g}) counted as misses",
                       rejected, kEmbreeLargeFloat);
-    std::vector<Hit> valid_hits(valid_rays.size());
     try {
-      const ErrorMetrics m = put_trace(row, ctx, [&](std::span<const Ray>, std::span<Hit> hits) {
-        if (rejected == 0) return embree_intersect1(*embree.scene, valid_rays, hits);
-        embree_intersect1(*embree.scene, valid_rays, valid_hits);
-        std::fill(hits.begin(), hits.end(), Hit{});
-        for (std::size_t k = 0; k < valid_index.size(); ++k) hits[valid_index[k]] = valid_hits[k];
-      });
+      TraceCell cell = embree_cell({}, label, *embree.scene, kEmbreeLayouts[0], accepted, 0, *built.value);
+      const ErrorMetrics m = put_trace(row, cell, ctx, &accepted_index);
       log_ << fmt::format("  embree {}: {} Mrays/s; {}\n", robust ? "robust" : "default",
                           row["trace_mrays_median"], metrics_summary(m));
     } catch (const Error& e) {

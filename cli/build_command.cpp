@@ -37,7 +37,7 @@ struct Candidate {
   }
 };
 
-std::vector<Candidate> resolve(const BuildCommandOptions& options) {
+std::vector<Candidate> candidates_of(const BuildCommandOptions& options) {
   std::vector<Candidate> out;
   for (const BuilderRun& run : options.builders) {
     Candidate c;
@@ -45,10 +45,13 @@ std::vector<Candidate> resolve(const BuildCommandOptions& options) {
     if (run.is_embree()) {
       c.embree_quality = parse_embree_quality(run.params.front().second);
     } else {
-      c.info = &find_builder(run.name);
-      ParamOverrides all = options.params;
-      all.insert(all.end(), run.params.begin(), run.params.end());
-      c.params = resolve_params(c.info->name, c.info->params, all);
+      // --param applies to every builder run, before the run's own parameters.
+      BuilderRun with_globals = run;
+      with_globals.params = options.params;
+      with_globals.params.insert(with_globals.params.end(), run.params.begin(), run.params.end());
+      sahbench::resolve(with_globals);
+      c.info = with_globals.info;
+      c.params = with_globals.values;
     }
     out.push_back(std::move(c));
   }
@@ -62,7 +65,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
   if (options.builders.empty()) throw Error("no builder given (--builder NAME)");
   for (int t : options.threads)
     if (t < 1) throw Error("--threads: " + std::to_string(t) + " is not a thread count");
-  std::vector<Candidate> candidates = resolve(options);
+  std::vector<Candidate> candidates = candidates_of(options);
 
   Scene scene;
   const double load_ms = time_ms([&] { scene = load_scene(options.scene); });

@@ -122,13 +122,14 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
       options.height > kMaxImageSide)
     throw Error(fmt::format("image size {}x{}: each side must be in 1..{}", options.width, options.height,
                             kMaxImageSide));
-  const BuilderRun spec = parse_builder_run(options.builder);
+  BuilderRun spec = parse_builder_run(options.builder);
   if (spec.is_embree())
     throw Error("--builder '" + options.builder +
                 "': Embree's own BVH cannot be traversed with counters here; "
                 "embree_bvh builds Embree's tree in our format");
-  const BuilderInfo& info = find_builder(spec.name);
-  const ParamSet params = resolve_params(info.name, info.params, spec.params);
+  resolve(spec);
+  const BuilderInfo& info = *spec.info;
+  const ParamSet& params = spec.values;
   const LayoutSpec layout_spec = parse_layout_spec(options.layout);
 
   if (options.eye.empty() != options.target.empty())

@@ -65,9 +65,13 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
 void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
   const std::vector<Ray> rays = read_rays(options.rays);
   const Scene scene = load_scene(options.scene);
-  const BuilderRun spec = parse_builder_run(options.builder);
-  const BuilderInfo& info = find_builder(spec.name);
-  const ParamSet params = resolve_params(info.name, info.params, spec.params);
+  BuilderRun spec = parse_builder_run(options.builder);
+  if (spec.is_embree())
+    throw Error("--builder '" + options.builder +
+                "': trace runs our kernels on our trees; embree_bvh builds Embree's tree in our format");
+  resolve(spec);
+  const BuilderInfo& info = *spec.info;
+  const ParamSet& params = spec.values;
   const Bvh bvh = info.build(BuildInput::from_triangles(scene.triangles), params);
   const auto layout = compile_layout(options.layout, bvh, scene.triangles);
   std::vector<Hit> hits(rays.size());

@@ -263,11 +263,9 @@ void read_builders(const Source& src, const toml::table& root, ExperimentConfig&
       if (run.is_embree()) {
         resolved += run.params.front().second;
       } else {
-        const BuilderInfo& info = find_builder(run.name);
         try {
-          const ParamSet params = resolve_params(info.name, info.params, run.params);
-          if (info.check) info.check(params);
-          resolved += params.to_string();
+          resolve(run);
+          resolved += run.values.to_string();
         } catch (const Error& e) {
           src.fail(*table, "builder run '" + run.label() + "': " + e.what());
         }
@@ -431,6 +429,13 @@ BuilderRun parse_builder_run(std::string_view text) {
   parse_embree_quality(quality);  // names the known qualities
   run.params = {{"quality", quality}};
   return run;
+}
+
+void resolve(BuilderRun& run) {
+  if (run.is_embree()) return;
+  run.info = &find_builder(run.name);
+  run.values = resolve_params(run.info->name, run.info->params, run.params);
+  if (run.info->check) run.info->check(run.values);
 }
 
 std::string BuilderRun::label() const {

@@ -92,6 +92,7 @@
 #include <vector>
 
 #include "builders/params.h"
+#include "builders/registry.h"
 #include "scenes/scene.h"
 #include "traversal/layout.h"
 
@@ -109,12 +110,22 @@ struct BuilderRun {
   /// shortest round-trip form, booleans as 1/0). For "embree" always exactly {"quality", low|medium|high},
   /// "medium" (Embree's default) when the config does not say.
   ParamOverrides params;
+  /// Our builder's registry entry and every one of its parameters' values, set by resolve(): once, where
+  /// the run is read. Null and empty for Embree, and before resolve().
+  const BuilderInfo* info = nullptr;
+  ParamSet values;
 
   bool is_embree() const { return name == "embree"; }
   /// "binned_sah[bins=8,max_leaf=4]" or "embree[quality=medium]"; the name alone without parameters.
   std::string label() const;
-  bool operator==(const BuilderRun&) const = default;
+  /// The same run: the same name and parameters as set (the resolved values follow from them).
+  bool operator==(const BuilderRun& o) const { return name == o.name && params == o.params; }
 };
+
+/// Resolves one of our builder runs against the registry: `info` and `values` (resolve_params, then the
+/// builder's own check). An unknown builder, parameter or value is an Error naming it; Embree's run is
+/// left as it is.
+void resolve(BuilderRun& run);
 
 /// A builder run as the command line writes it: "NAME" or "NAME:key=value,key=value", for one of our
 /// builders or Embree's own BVH ("embree:quality=high"; "embree_low", "embree_medium" and "embree_high"

@@ -55,12 +55,10 @@ void read_settings(const Source& r, const toml::table& root, StressConfig& c) {
     c.builders.clear();
     for (std::size_t i = 0; i < texts.size(); ++i) {
       try {
-        const BuilderRun spec = parse_builder_run(texts[i]);
+        BuilderRun spec = parse_builder_run(texts[i]);
         if (spec.is_embree()) throw Error("Embree's own BVH is run through stress.embree, not as a builder");
-        c.builders.push_back(spec);
-        const BuilderInfo& info = find_builder(spec.name);
-        const ParamSet params = resolve_params(info.name, info.params, spec.params);
-        if (info.check) info.check(params);
+        resolve(spec);
+        c.builders.push_back(std::move(spec));
       } catch (const Error& e) {
         r.fail(*list.get(i), "stress.builders: " + std::string(e.what()));
       }
@@ -160,6 +158,7 @@ std::vector<BuilderRun> all_builder_specs() {
     for (const uint32_t arity : layout_arities)
       if (arity != default_arity && arity != 2) out.push_back({b.name, {{"arity", std::to_string(arity)}}});
   }
+  for (BuilderRun& run : out) resolve(run);
   return out;
 }
 

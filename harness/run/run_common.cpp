@@ -64,8 +64,9 @@ ResolvedRun resolve_run(const BuilderRun& run, const std::vector<LayoutSpec>& la
     b.params_text = "quality=" + quality;
     return b;
   }
-  b.info = &find_builder(run.name);
-  b.params = resolve_params(b.info->name, b.info->params, run.params);
+  if (!run.info) throw Error("builder run '" + run.label() + "' was not resolved against the registry");
+  b.info = run.info;
+  b.params = run.values;
   b.params_text = b.params.to_string();
   b.arity = b.info->arity ? b.info->arity(b.params) : 2;
   const bool traceable = std::any_of(layouts.begin(), layouts.end(), [&](const LayoutSpec& l) {

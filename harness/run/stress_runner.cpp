@@ -294,8 +294,8 @@ class StressRunner {
   void run_builder(const CaseContext& ctx, const BuilderRun& spec,
                    std::set<uint32_t>& arities_with_variants) {
     const StressCase& c = *ctx.c;
-    const BuilderInfo* info = &find_builder(spec.name);
-    const ParamSet params = resolve_params(info->name, info->params, spec.params);
+    const BuilderInfo* info = spec.info;
+    const ParamSet params = spec.values;
     CsvRow row = base_row(ctx);
     row["builder"] = info->name;
     row["builder_params"] = params.to_string();

@@ -295,6 +295,23 @@ TEST(HarnessTrace, OutputMatchesBruteForceLineByLine) {
   EXPECT_EQ(rows[3].at("hit"), "0");
 }
 
+TEST(HarnessTrace, EmbreeOrAnUnknownBuilderIsAnErrorNamingIt) {
+  const auto dir = temp_dir();
+  const auto rays_path = dir / "one_ray.txt", out_path = dir / "one_hit.csv";
+  std::ofstream(rays_path) << "0 0 5 0 0 -1\n";
+  std::ostringstream log;
+  for (const char* builder : {"embree", "embree_high", "no_such_builder", "binned_sah:bins=0"}) {
+    try {
+      run_trace_command({"proc:sphere:tris=200", builder, "bvh2", rays_path, out_path}, log);
+      ADD_FAILURE() << builder << " was accepted";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      const std::string named = std::string(builder).starts_with("binned") ? "bins" : builder;
+      EXPECT_NE(what.find(named), std::string::npos) << what;
+    }
+  }
+}
+
 TEST(HarnessTrace, MalformedRayFilesNameTheLine) {
   const auto path = temp_dir() / "bad_rays.txt";
   std::ofstream(path) << "0 0 0 1 0 0\n0 0 zero 1 0 0\n";

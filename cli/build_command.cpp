@@ -14,48 +14,30 @@
 #include "core/error.h"
 #include "core/validate.h"
 #include "harness/embree/embree_scene.h"
+#include "harness/run/cell_pipeline.h"
 #include "harness/run/environment.h"
+#include "harness/run/round_order.h"
 #include "harness/run/timing.h"
 #include "scenes/load.h"
 
 namespace sahbench {
 namespace {
 
-// One builder of the run, resolved, with its samples for the current thread count.
-struct Candidate {
-  BuilderRun run;
-  const BuilderInfo* info = nullptr;  // ours; null for Embree
-  ParamSet params;
-  std::optional<EmbreeQuality> embree_quality;
-  std::vector<double> samples_ms;
-  Bvh last_tree;
-  int64_t embree_bytes = 0;
-
-  std::string label() const { return info ? run.name : "embree_" + to_string(*embree_quality); }
-  std::string params_text() const {
-    return info ? params.to_string() : "quality=" + to_string(*embree_quality);
-  }
-};
-
-std::vector<Candidate> candidates_of(const BuildCommandOptions& options) {
-  std::vector<Candidate> out;
-  for (const BuilderRun& run : options.builders) {
-    Candidate c;
-    c.run = run;
-    if (run.is_embree()) {
-      c.embree_quality = parse_embree_quality(run.params.front().second);
-    } else {
-      // --param applies to every builder run, before the run's own parameters.
-      BuilderRun with_globals = run;
-      with_globals.params = options.params;
-      with_globals.params.insert(with_globals.params.end(), run.params.begin(), run.params.end());
-      sahbench::resolve(with_globals);
-      c.info = with_globals.info;
-      c.params = with_globals.values;
-    }
-    out.push_back(std::move(c));
+// The builder runs of the command, resolved: --param applies to each of ours, before the run's own
+// parameters.
+std::vector<BuilderRun> resolved_runs(const BuildCommandOptions& options) {
+  std::vector<BuilderRun> out;
+  for (BuilderRun run : options.builders) {
+    if (!run.is_embree()) run.params.insert(run.params.begin(), options.params.begin(), options.params.end());
+    resolve(run);
+    out.push_back(std::move(run));
   }
   return out;
+}
+
+// "embree_medium" for Embree's run, the builder's name for ours.
+std::string short_label(const BuilderRun& run) {
+  return run.is_embree() ? "embree_" + to_string(run.quality) : run.name;
 }
 
 }  // namespace
@@ -65,7 +47,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
   if (options.builders.empty()) throw Error("no builder given (--builder NAME)");
   for (int t : options.threads)
     if (t < 1) throw Error("--threads: " + std::to_string(t) + " is not a thread count");
-  std::vector<Candidate> candidates = candidates_of(options);
+  const std::vector<BuilderRun> runs = resolved_runs(options);
 
   Scene scene;
   const double load_ms = time_ms([&] { scene = load_scene(options.scene); });
@@ -90,55 +72,71 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
   for (int threads : options.threads) {
     const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                                     static_cast<std::size_t>(threads));
-    std::unique_ptr<EmbreeDevice> device;
-    for (auto& c : candidates) c.samples_ms.clear();
-
-    auto build_once = [&](Candidate& c) -> double {
-      if (c.embree_quality) {
-        if (!device) device = std::make_unique<EmbreeDevice>(threads);
-        EmbreeScene built(*device, scene.triangles, *c.embree_quality);
-        c.embree_bytes = built.bytes();
-        return built.commit_ms();
-      }
-      return time_ms([&] {
-        const BuildInput input = BuildInput::from_triangles(scene.triangles);
-        c.last_tree = c.info->build(input, c.params);
-      });
+    // Every run a tree source of the cell pipeline, timed in the same interleaved, shuffled rounds.
+    struct Job {
+      std::shared_ptr<Bvh> tree;            // ours
+      std::shared_ptr<EmbreeBuild> embree;  // Embree's
+      TreeSource source;
     };
-    for (int w = 0; w < options.warmup; ++w)
-      for (auto& c : candidates) build_once(c);
+    std::vector<Job> jobs(runs.size());
+    std::vector<TreeSource*> sources;
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      Job& job = jobs[i];
+      if (runs[i].is_embree()) {
+        job.embree = std::make_shared<EmbreeBuild>(threads);
+        job.source = embree_build(runs[i].label(), job.embree, scene.triangles, runs[i].quality);
+      } else {
+        job.tree = std::make_shared<Bvh>();
+        job.source = our_build(runs[i].label(), *runs[i].info, runs[i].values, scene.triangles, job.tree);
+      }
+      sources.push_back(&job.source);
+    }
+    Repetitions reps;
+    reps.build = options.reps;
+    reps.build_warmup = options.warmup;
     // On a terminal the progress line is rewritten in place; in a log file each repetition gets a line.
     const bool terminal = isatty(STDERR_FILENO) != 0;
-    for (int rep = 0; rep < options.reps; ++rep) {
-      for (auto& c : candidates) c.samples_ms.push_back(build_once(c));
-      log << (terminal ? "\r" : "") << "threads " << threads << ": rep " << rep + 1 << " of " << options.reps
-          << (terminal ? "" : "\n") << std::flush;
-    }
+    std::size_t made = 0;
+    time_sources(sources, reps, order_seed(0, scene.name, threads, "build"), [&] {
+      if (made++ % sources.size() != 0) return;
+      log << (terminal ? "\r" : "") << "threads " << threads << ": rep " << made / sources.size() + 1
+          << " of " << options.reps << (terminal ? "" : "\n") << std::flush;
+    });
     if (terminal) log << "\r" << std::string(40, ' ') << "\r" << std::flush;
 
     std::optional<double> embree_medium_ms;
-    for (const auto& c : candidates)
-      if (c.embree_quality == EmbreeQuality::kMedium) embree_medium_ms = summarize(c.samples_ms).median;
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      if (runs[i].is_embree() && runs[i].quality == EmbreeQuality::kMedium)
+        embree_medium_ms = jobs[i].source.time().median;
 
-    for (const auto& c : candidates) {
-      const TimingSummary t = summarize(c.samples_ms);
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+      const BuilderRun& run = runs[i];
+      const TimingSummary t = jobs[i].source.time();
       const std::string ratio = embree_medium_ms ? fmt::format("{:.2f}", t.median / *embree_medium_ms) : "-";
       const std::string spread = fmt::format("[{:.2f}, {:.2f}]", t.min, t.max);
-      if (c.embree_quality) {
+      if (run.is_embree()) {
         fmt::print(out,
                    "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
-                   threads, c.label(), c.params_text(), t.median, spread, ratio, "-", "-", "-", "-", "-",
-                   c.embree_bytes, "-");
+                   threads, short_label(run), run.params_text(), t.median, spread, ratio, "-", "-", "-", "-",
+                   "-", jobs[i].embree->scene->bytes(), "-");
         continue;
       }
-      const BvhStats s = compute_stats(c.last_tree, scene.triangles.size(), sah_cost_of(c.params));
-      const ValidationReport report = validate(c.last_tree, std::span<const Triangle>(scene.triangles));
-      if (!report.ok()) exit_code = 1;
+      // The statistics of a valid tree only: compute_stats walks nodes[] unchecked.
+      const CheckedTree tree = check_tree(*jobs[i].tree, scene.triangles, run.values);
+      if (!tree.ok()) {
+        exit_code = 1;
+        fmt::print(out,
+                   "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
+                   threads, short_label(run), run.params_text(), t.median, spread, ratio, "-", "-", "-", "-",
+                   "-", "-", "INVALID");
+        log << short_label(run) << ": invalid tree:\n" << tree.report.summary();
+        continue;
+      }
+      const BvhStats& s = tree.stats;
       fmt::print(out,
                  "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6.2f} {:>9.3f} {:>12} {}\n",
-                 threads, c.label(), c.params_text(), t.median, spread, ratio, s.nodes, s.leaves, s.max_depth,
-                 s.mean_leaf_size, s.sah_cost, s.bytes, report.ok() ? "ok" : "INVALID");
-      if (!report.ok()) log << c.label() << ": invalid tree:\n" << report.summary();
+                 threads, short_label(run), run.params_text(), t.median, spread, ratio, s.nodes, s.leaves,
+                 s.max_depth, s.mean_leaf_size, s.sah_cost, s.bytes, "ok");
     }
   }
   return exit_code;

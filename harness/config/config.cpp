@@ -259,17 +259,21 @@ void read_builders(const Source& src, const toml::table& root, ExperimentConfig&
   std::map<std::string, std::pair<std::string, uint32_t>> seen;
   for (const toml::table* table : read_table_array(src, *node, "builder")) {
     for (auto& run : read_builder(src, *table, animation)) {
-      std::string resolved = run.name + ":";
-      if (run.is_embree()) {
-        resolved += run.params.front().second;
-      } else {
-        try {
-          resolve(run);
-          resolved += run.values.to_string();
-        } catch (const Error& e) {
-          src.fail(*table, "builder run '" + run.label() + "': " + e.what());
-        }
+      try {
+        resolve(run);
+      } catch (const Error& e) {
+        src.fail(*table, "builder run '" + run.label() + "': " + e.what());
       }
+      const bool traced = run.is_embree() ||
+                          std::any_of(config.layouts.begin(), config.layouts.end(), [&](const LayoutSpec& l) {
+                            return find_layout(l.name).arity == run.arity;
+                          });
+      if (!traced)
+        src.fail(*table,
+                 "builder '" + run.label() + "' builds " + std::to_string(run.arity) +
+                     "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench "
+                     "list`)");
+      const std::string resolved = run.name + ":" + run.params_text();
       const auto [it, inserted] = seen.emplace(resolved, std::pair{run.label(), Source::line_of(*table)});
       if (!inserted)
         src.fail(*table, "builder run '" + run.label() + "' has the same parameter values as '" +
@@ -432,10 +436,22 @@ BuilderRun parse_builder_run(std::string_view text) {
 }
 
 void resolve(BuilderRun& run) {
-  if (run.is_embree()) return;
+  if (run.is_embree()) {
+    for (const auto& [key, value] : run.params)
+      if (key == "quality") run.quality = parse_embree_quality(value);
+    return;
+  }
   run.info = &find_builder(run.name);
   run.values = resolve_params(run.info->name, run.info->params, run.params);
   if (run.info->check) run.info->check(run.values);
+  run.arity = run.info->arity ? run.info->arity(run.values) : 2;
+}
+
+std::string BuilderRun::params_text() const {
+  if (!is_embree()) return values.to_string();
+  for (const auto& [key, value] : params)
+    if (key == "quality") return "quality=" + value;
+  return "quality=medium";
 }
 
 std::string BuilderRun::label() const {

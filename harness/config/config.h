@@ -93,6 +93,7 @@
 
 #include "builders/params.h"
 #include "builders/registry.h"
+#include "harness/embree/embree_scene.h"
 #include "scenes/scene.h"
 #include "traversal/layout.h"
 
@@ -114,17 +115,23 @@ struct BuilderRun {
   /// the run is read. Null and empty for Embree, and before resolve().
   const BuilderInfo* info = nullptr;
   ParamSet values;
+  /// Also set by resolve(): ours, the arity of its trees (traced only with layouts of that arity);
+  /// Embree's, its build quality.
+  uint32_t arity = 2;
+  EmbreeQuality quality = EmbreeQuality::kMedium;
 
   bool is_embree() const { return name == "embree"; }
+  /// The CSV's builder_params column: our resolved values (ParamSet::to_string), or "quality=Q".
+  std::string params_text() const;
   /// "binned_sah[bins=8,max_leaf=4]" or "embree[quality=medium]"; the name alone without parameters.
   std::string label() const;
   /// The same run: the same name and parameters as set (the resolved values follow from them).
   bool operator==(const BuilderRun& o) const { return name == o.name && params == o.params; }
 };
 
-/// Resolves one of our builder runs against the registry: `info` and `values` (resolve_params, then the
-/// builder's own check). An unknown builder, parameter or value is an Error naming it; Embree's run is
-/// left as it is.
+/// Resolves a builder run: ours against the registry (`info`, `values` by resolve_params, then the
+/// builder's own check, and `arity`), Embree's to its `quality`. An unknown builder, parameter or value
+/// is an Error naming it.
 void resolve(BuilderRun& run);
 
 /// A builder run as the command line writes it: "NAME" or "NAME:key=value,key=value", for one of our

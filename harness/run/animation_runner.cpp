@@ -47,10 +47,13 @@ enum class Variant {
   kEmbreeRefit,    // Embree's refit of its first-frame build
 };
 
-struct AnimatedBuilder : ResolvedRun {
+// A builder run of the config as an animation runs it: rebuilt on every frame, or refitted.
+struct AnimatedBuilder {
+  const BuilderRun* run = nullptr;  // into the config
   Variant variant = Variant::kRebuild;
   std::string name;   // the CSV builder column: "binned_sah", "refit(binned_sah)", "embree"
   std::string label;  // for the log: the config's label, "refit(...)" around it for refits
+  std::string params_text() const { return run->params_text(); }
 };
 
 // Each of our builder runs becomes a rebuild and a refit; Embree runs stay one (refit by quality).
@@ -58,10 +61,10 @@ std::vector<AnimatedBuilder> expand_builders(const ExperimentConfig& cfg) {
   std::vector<AnimatedBuilder> out;
   for (const auto& run : cfg.builders) {
     AnimatedBuilder b;
-    static_cast<ResolvedRun&>(b) = resolve_run(run, cfg.layouts);
+    b.run = &run;
     b.label = run.label();
-    if (b.is_embree()) {
-      b.variant = b.quality == EmbreeQuality::kRefit ? Variant::kEmbreeRefit : Variant::kEmbreeRebuild;
+    if (run.is_embree()) {
+      b.variant = run.quality == EmbreeQuality::kRefit ? Variant::kEmbreeRefit : Variant::kEmbreeRebuild;
       b.name = "embree";
       out.push_back(std::move(b));
       continue;
@@ -118,7 +121,7 @@ class AnimationRunner {
     // As a static run: scenes checked and the lock taken before the CSV is touched.
     const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
     std::vector<std::string> builder_runs;
-    for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text);
+    for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text());
     OpenRun open = open_run(cfg_, options_, output_, animation_columns(), scenes, builder_runs, env_, log_);
     id_ = open.id;
     finished_ = std::move(open.finished);
@@ -137,13 +140,13 @@ class AnimationRunner {
 
  private:
   std::vector<CellLayout> layouts_for(const AnimatedBuilder& b) const {
-    return sahbench::layouts_for(b, cfg_.layouts, embree_layouts_);
+    return sahbench::layouts_for(*b.run, cfg_.layouts, embree_layouts_);
   }
 
   bool wanted(const std::string& scene, const AnimatedBuilder& b, const std::string& layout, int threads,
               const std::string& ray_set, uint32_t frame) const {
     const std::string key =
-        cell_key(scene, b.name, b.params_text, layout, threads, ray_set, static_cast<int>(frame));
+        cell_key(scene, b.name, b.params_text(), layout, threads, ray_set, static_cast<int>(frame));
     if (finished_.count(key)) return false;
     return options_.only.empty() || key.find(options_.only) != std::string::npos;
   }
@@ -201,7 +204,8 @@ class AnimationRunner {
     std::map<std::size_t, RefitState> refits;
     for (std::size_t i = 0; i < builders_.size(); ++i)
       if (builders_[i].variant == Variant::kRefit)
-        refits[i].tree = builders_[i].info->build(BuildInput::from_triangles(first), builders_[i].params);
+        refits[i].tree =
+            builders_[i].run->info->build(BuildInput::from_triangles(first), builders_[i].run->values);
 
     for (uint32_t f = 0; f < times.size(); ++f) {
       if (pending[f] == 0) continue;
@@ -234,7 +238,7 @@ class AnimationRunner {
   }
 
   CsvRow base_row(const FrameData& frame, const AnimatedBuilder& b, int threads) const {
-    CsvRow row = common_row(id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
+    CsvRow row = common_row(id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text(), threads);
     row["frame_time"] = fmt::format("{:.6g}", frame.time);
     return row;
   }
@@ -270,7 +274,7 @@ class AnimationRunner {
     switch (b.variant) {
       case Variant::kRebuild:
         job.tree = std::make_shared<Bvh>();
-        job.source = our_build(b.label, *b.info, b.params, triangles, job.tree);
+        job.source = our_build(b.label, *b.run->info, b.run->values, triangles, job.tree);
         break;
       case Variant::kRefit:
         job.refit = refit;
@@ -278,7 +282,7 @@ class AnimationRunner {
         break;
       case Variant::kEmbreeRebuild:
         job.embree = std::make_shared<EmbreeBuild>(threads);
-        job.source = embree_build(b.label, job.embree, triangles, b.quality);
+        job.source = embree_build(b.label, job.embree, triangles, b.run->quality);
         break;
       case Variant::kEmbreeRefit:
         job.embree = std::make_shared<EmbreeBuild>(threads);
@@ -333,7 +337,7 @@ class AnimationRunner {
 
   CsvRow base_row(const FrameData& frame, const FrameJob& job, int threads, const std::string& layout) const {
     const AnimatedBuilder& b = *job.builder;
-    CsvRow row = common_row(id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text, threads);
+    CsvRow row = common_row(id_, env_, cfg_, frame.scene, frame.index, b.name, b.params_text(), threads);
     row["frame_time"] = fmt::format("{:.6g}", frame.time);
     row["layout"] = layout;
     put_timing(row, "build_ms", job.source.time());
@@ -371,7 +375,7 @@ class AnimationRunner {
     const AnimatedBuilder& b = *job.builder;
     const Scene& scene = frame.scene;
     const Bvh& bvh = job.refit ? job.refit->tree : *job.tree;
-    const CheckedTree checked = check_tree(bvh, scene.triangles, b.params);
+    const CheckedTree checked = check_tree(bvh, scene.triangles, b.run->values);
     if (!checked.ok()) {
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {} frame {}:\n{}", b.label, scene.name, frame.index,
@@ -487,14 +491,14 @@ class AnimationRunner {
         std::string line = fmt::format("  frame {:>3} t={:<8}", frame, frame_times.at(key).at(frame));
         for (const auto& b : builders_) {
           if (b.variant != Variant::kRefit && b.variant != Variant::kEmbreeRefit) continue;
-          const auto refit_cell = cells.find(b.name + "|" + b.params_text);
+          const auto refit_cell = cells.find(b.name + "|" + b.params_text());
           if (refit_cell == cells.end() || !refit_cell->second.build_ms) continue;
           const Cell& r = refit_cell->second;
           if (b.variant == Variant::kEmbreeRefit) {
             line += fmt::format(" | embree refit {:.3f}", *r.build_ms);
             continue;
           }
-          const auto rebuild_cell = cells.find(b.info->name + "|" + b.params_text);
+          const auto rebuild_cell = cells.find(b.run->name + "|" + b.params_text());
           const Cell* k =
               rebuild_cell != cells.end() && rebuild_cell->second.build_ms ? &rebuild_cell->second : nullptr;
           line += " | " + b.label;

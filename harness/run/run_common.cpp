@@ -54,31 +54,7 @@ std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream
   return out;
 }
 
-ResolvedRun resolve_run(const BuilderRun& run, const std::vector<LayoutSpec>& layouts) {
-  ResolvedRun b;
-  if (run.is_embree()) {
-    std::string quality = "medium";
-    for (const auto& [k, v] : run.params)
-      if (k == "quality") quality = v;
-    b.quality = parse_embree_quality(quality);
-    b.params_text = "quality=" + quality;
-    return b;
-  }
-  if (!run.info) throw Error("builder run '" + run.label() + "' was not resolved against the registry");
-  b.info = run.info;
-  b.params = run.values;
-  b.params_text = b.params.to_string();
-  b.arity = b.info->arity ? b.info->arity(b.params) : 2;
-  const bool traceable = std::any_of(layouts.begin(), layouts.end(), [&](const LayoutSpec& l) {
-    return find_layout(l.name).arity == b.arity;
-  });
-  if (!traceable)
-    throw Error("builder '" + run.label() + "' builds " + std::to_string(b.arity) +
-                "-wide trees, but experiment.layouts has no layout for that arity (see `sahbench list`)");
-  return b;
-}
-
-std::vector<CellLayout> layouts_for(const ResolvedRun& b, const std::vector<LayoutSpec>& configured,
+std::vector<CellLayout> layouts_for(const BuilderRun& b, const std::vector<LayoutSpec>& configured,
                                     std::span<const EmbreeLayout> embree) {
   std::vector<CellLayout> out;
   if (b.is_embree()) {

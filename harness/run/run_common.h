@@ -39,22 +39,6 @@ std::string format_duration(double seconds);
 /// the loader's Error; a missing optional one is skipped with a line on `log`.
 std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream& log);
 
-/// One [[builder]] run resolved against the registry: one of our builders with its parameters, or
-/// Embree's own BVH at a build quality.
-struct ResolvedRun {
-  const BuilderInfo* info = nullptr;  // ours; null for Embree
-  ParamSet params;                    // ours
-  uint32_t arity = 2;                 // ours: of its trees; traced only with layouts of that arity
-  EmbreeQuality quality = EmbreeQuality::kMedium;
-  std::string params_text;  // the CSV builder_params column
-  bool is_embree() const { return info == nullptr; }
-};
-
-/// Resolves `run`: Embree's quality ("medium" where the run does not say), or our builder and its
-/// parameters. Our builder must build trees of an arity that one of `layouts` traces; else an Error
-/// names the builder run and the arity.
-ResolvedRun resolve_run(const BuilderRun& run, const std::vector<LayoutSpec>& layouts);
-
 /// A layout a cell is traced with: one of ours, with its spec as the config parsed it, or one of Embree's.
 struct CellLayout {
   std::string name;                  ///< the CSV's layout column: LayoutSpec::text() or Embree's name
@@ -63,7 +47,7 @@ struct CellLayout {
 
 /// The layouts that trace `b`'s trees: every one of `embree` for Embree, else those of `configured`
 /// (which must outlive the result) with the arity of `b`'s trees.
-std::vector<CellLayout> layouts_for(const ResolvedRun& b, const std::vector<LayoutSpec>& configured,
+std::vector<CellLayout> layouts_for(const BuilderRun& b, const std::vector<LayoutSpec>& configured,
                                     std::span<const EmbreeLayout> embree);
 
 /// "camera eye (x, y, z) target (x, y, z) up (x, y, z) fov F": the view of a [[camera]], for `notes`.

@@ -39,17 +39,6 @@
 namespace sahbench {
 namespace {
 
-// One builder run of the config, resolved against the registry.
-struct ResolvedBuilder : ResolvedRun {
-  BuilderRun run;
-};
-
-std::vector<ResolvedBuilder> resolve_builders(const ExperimentConfig& cfg) {
-  std::vector<ResolvedBuilder> out;
-  for (const auto& run : cfg.builders) out.push_back({resolve_run(run, cfg.layouts), run});
-  return out;
-}
-
 class ExperimentRunner {
  public:
   ExperimentRunner(const ExperimentConfig& cfg, const RunOptions& options, std::ostream& log)
@@ -57,7 +46,6 @@ class ExperimentRunner {
         options_(options),
         log_(log),
         env_(current_environment()),
-        builders_(resolve_builders(cfg)),
         output_(options.output ? *options.output : cfg.output),
         continue_with_(resume_command(options)) {}
 
@@ -66,7 +54,7 @@ class ExperimentRunner {
     // checks the header and removes a row cut off by a crash before anything reads the file.
     const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
     std::vector<std::string> builder_runs;
-    for (const auto& b : builders_) builder_runs.push_back(b.run.name + " " + b.params_text);
+    for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text());
     OpenRun open = open_run(cfg_, options_, output_, result_columns(), scenes, builder_runs, env_, log_);
     id_ = open.id;
     const std::set<std::string>& finished = open.finished;
@@ -100,7 +88,7 @@ class ExperimentRunner {
   }
 
  private:
-  std::vector<CellLayout> layouts_for(const ResolvedBuilder& b) const {
+  std::vector<CellLayout> layouts_for(const BuilderRun& b) const {
     return sahbench::layouts_for(b, cfg_.layouts, supported_embree_layouts_);
   }
 
@@ -112,7 +100,7 @@ class ExperimentRunner {
         for (int threads : cfg_.threads)
           for (const auto& rs : cfg_.ray_sets) {
             const std::string key =
-                cell_key(scene, b.run.name, b.params_text, layout.name, threads, rs.name, 0);
+                cell_key(scene, b.name, b.params_text(), layout.name, threads, rs.name, 0);
             if (finished.count(key)) continue;
             if (!options_.only.empty() && key.find(options_.only) == std::string::npos) continue;
             out.insert(key);
@@ -161,7 +149,7 @@ class ExperimentRunner {
       const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
                                       static_cast<std::size_t>(threads));
       Group group{scene, threads, generated.sets, pending};
-      std::vector<const ResolvedBuilder*> runs;
+      std::vector<const BuilderRun*> runs;
       for (const auto& b : builders_)
         if (group.any_wanted(b, layouts_for(b))) runs.push_back(&b);
       // Interleaved: every builder run's builds in turns, then every cell's traces in turns. Otherwise one
@@ -169,7 +157,7 @@ class ExperimentRunner {
       if (cfg_.reps.interleave) {
         measure(group, runs, references, csv, progress);
       } else {
-        for (const ResolvedBuilder* b : runs) measure(group, {b}, references, csv, progress);
+        for (const BuilderRun* b : runs) measure(group, {b}, references, csv, progress);
       }
     }
   }
@@ -181,10 +169,10 @@ class ExperimentRunner {
     const std::vector<RaySet>& sets;
     const std::set<std::string>& pending;
 
-    bool wanted(const ResolvedBuilder& b, const std::string& layout, const RaySet& rs) const {
-      return pending.count(cell_key(scene.name, b.run.name, b.params_text, layout, threads, rs.name, 0)) > 0;
+    bool wanted(const BuilderRun& b, const std::string& layout, const RaySet& rs) const {
+      return pending.count(cell_key(scene.name, b.name, b.params_text(), layout, threads, rs.name, 0)) > 0;
     }
-    bool any_wanted(const ResolvedBuilder& b, const std::vector<CellLayout>& layouts) const {
+    bool any_wanted(const BuilderRun& b, const std::vector<CellLayout>& layouts) const {
       for (const auto& layout : layouts)
         for (const auto& rs : sets)
           if (wanted(b, layout.name, rs)) return true;
@@ -194,31 +182,31 @@ class ExperimentRunner {
 
   // One builder run's tree source: a tree of ours or an Embree scene, made afresh in every round.
   struct BuildJob {
-    const ResolvedBuilder* builder = nullptr;
+    const BuilderRun* builder = nullptr;
     std::shared_ptr<Bvh> tree;            // ours
     std::shared_ptr<EmbreeBuild> embree;  // Embree's
     TreeSource source;
   };
 
-  static BuildJob make_job(const ResolvedBuilder& b, const Scene& scene, int threads) {
+  static BuildJob make_job(const BuilderRun& b, const Scene& scene, int threads) {
     BuildJob job;
     job.builder = &b;
     if (b.is_embree()) {
       job.embree = std::make_shared<EmbreeBuild>(threads);
-      job.source = embree_build(b.run.label(), job.embree, scene.triangles, b.quality);
+      job.source = embree_build(b.label(), job.embree, scene.triangles, b.quality);
     } else {
       job.tree = std::make_shared<Bvh>();
-      job.source = our_build(b.run.label(), *b.info, b.params, scene.triangles, job.tree);
+      job.source = our_build(b.label(), *b.info, b.values, scene.triangles, job.tree);
     }
     return job;
   }
 
   // Times the builds of `runs` (time_sources), then queues every wanted cell of them, times their traces
   // (time_cells) and writes their rows.
-  void measure(const Group& group, const std::vector<const ResolvedBuilder*>& runs,
+  void measure(const Group& group, const std::vector<const BuilderRun*>& runs,
                const std::vector<Reference>& references, CsvWriter& csv, Progress& progress) {
     std::vector<BuildJob> jobs;
-    for (const ResolvedBuilder* b : runs) jobs.push_back(make_job(*b, group.scene, group.threads));
+    for (const BuilderRun* b : runs) jobs.push_back(make_job(*b, group.scene, group.threads));
     std::vector<TreeSource*> sources;
     for (auto& job : jobs) sources.push_back(&job.source);
     const auto interrupt = [&] { check_interrupt(progress); };
@@ -247,32 +235,31 @@ class ExperimentRunner {
     }
   }
 
-  CsvRow base_row(const Group& group, const ResolvedBuilder& b, const std::string& layout,
+  CsvRow base_row(const Group& group, const BuilderRun& b, const std::string& layout,
                   const TimingSummary& build_t) const {
-    CsvRow row = common_row(id_, env_, cfg_, group.scene, 0, b.run.name, b.params_text, group.threads);
+    CsvRow row = common_row(id_, env_, cfg_, group.scene, 0, b.name, b.params_text(), group.threads);
     row["layout"] = layout;
     put_timing(row, "build_ms", build_t);
     return row;
   }
 
-  std::string label(const Group& group, const ResolvedBuilder& b, const std::string& layout,
+  std::string label(const Group& group, const BuilderRun& b, const std::string& layout,
                     const RaySet& rs) const {
-    return fmt::format("{} {} {} t={} {}", group.scene.name, b.run.label(), layout, group.threads, rs.name);
+    return fmt::format("{} {} {} t={} {}", group.scene.name, b.label(), layout, group.threads, rs.name);
   }
 
   // Checks the built tree of one of our builder runs, then compiles it and queues a cell per wanted
   // layout and ray set. An invalid tree's cells are written at once, untraced and without statistics.
   void queue_ours(const Group& group, const BuildJob& job, CsvWriter& csv, Progress& progress,
                   std::vector<TraceCell>& cells) {
-    const ResolvedBuilder& b = *job.builder;
+    const BuilderRun& b = *job.builder;
     const Scene& scene = group.scene;
     const Bvh& bvh = *job.tree;
     const TimingSummary build_t = job.source.time();
-    const CheckedTree checked = check_tree(bvh, scene.triangles, b.params);
+    const CheckedTree checked = check_tree(bvh, scene.triangles, b.values);
     if (!checked.ok()) {
       exit_code_ = 1;
-      log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.run.label(), scene.name,
-                          checked.report.summary());
+      log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.label(), scene.name, checked.report.summary());
       for (const CellLayout& layout : layouts_for(b))
         for (const auto& rs : group.sets) {
           if (!group.wanted(b, layout.name, rs)) continue;
@@ -308,7 +295,7 @@ class ExperimentRunner {
 
   // Queues a cell per supported Embree layout and wanted ray set of an Embree build.
   void queue_embree(const Group& group, const BuildJob& job, std::vector<TraceCell>& cells) {
-    const ResolvedBuilder& b = *job.builder;
+    const BuilderRun& b = *job.builder;
     const TimingSummary build_t = job.source.time();
     const EmbreeBuild& embree = *job.embree;
     for (const auto& layout : supported_embree_layouts_) {
@@ -328,7 +315,7 @@ class ExperimentRunner {
   const RunOptions& options_;
   std::ostream& log_;
   Environment env_;
-  std::vector<ResolvedBuilder> builders_;
+  const std::vector<BuilderRun>& builders_ = cfg_.builders;
   std::vector<EmbreeLayout> supported_embree_layouts_;
   std::filesystem::path output_;
   std::string continue_with_;  // the command that resumes this run, for the interrupt message

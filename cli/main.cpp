@@ -3,6 +3,7 @@
 // stopped by SIGINT or SIGTERM (its finished rows kept).
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdlib>
 #include <iostream>
 
@@ -10,6 +11,7 @@
 #include "cli/build_command.h"
 #include "cli/image_command.h"
 #include "cli/list_command.h"
+#include "cli/suggest.h"
 #include "cli/trace_command.h"
 #include "core/error.h"
 #include "harness/config/config.h"
@@ -136,7 +138,21 @@ int main(int argc, char** argv) {
       "list", "Builders and their parameters, procedural scene kinds, shared scenes found");
   auto* list_scenes_cmd = app.add_subcommand("list-scenes", "Names of the shared scenes found, one per line");
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; every usage mistake exits 2, as any other bad input does (CLI11's own
+    // codes, 106 and up, differ by mistake and are promised nowhere).
+    if (app.exit(e) == 0) return 0;
+    std::vector<std::string> names;
+    for (const CLI::App* sub : app.get_subcommands({})) names.push_back(sub->get_name());
+    if (argc > 1 && argv[1][0] != '-' && std::find(names.begin(), names.end(), argv[1]) == names.end()) {
+      const auto near = closest_name(argv[1], names);
+      std::cerr << "sahbench: '" << argv[1] << "' is not a subcommand"
+                << (near ? "; did you mean '" + *near + "'?" : " (see sahbench --help)") << "\n";
+    }
+    return 2;
+  }
   try {
     if (*build_cmd) {
       for (const auto& p : params) build.params.push_back(parse_override(p));

@@ -24,7 +24,10 @@ struct TraceCommandOptions {
   std::filesystem::path out;
 };
 
-/// Reads a ray file; a malformed line is an error naming the file, line and token.
+/// Reads a ray file: one ray per line, `ox oy oz dx dy dz [tmin tmax]`, separated by spaces, tabs or commas;
+/// `#` starts a comment, and a first line of column names is a header. A malformed line, a number outside
+/// float range, a zero direction, a directory or a file without rays is an Error naming the file, line and
+/// token.
 std::vector<Ray> read_rays(const std::filesystem::path& path);
 
 void run_trace_command(const TraceCommandOptions& options, std::ostream& log);

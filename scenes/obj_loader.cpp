@@ -2,17 +2,83 @@
 
 #include <tiny_obj_loader.h>
 
-#include <fstream>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "core/error.h"
+#include "core/text_file.h"
 #include "scenes/triangle_filter.h"
 
 namespace sahbench {
 
 namespace {
 
+// What tinyobjloader cannot tell us. It reads a coordinate it cannot parse ("nan", "inf", "banana",
+// "1e39") as 0 and a face index beyond int as a wrapped one, so that a broken vertex became a valid one at
+// the origin. This pass reads the same `v` and `f` lines strictly: a coordinate that is not a finite
+// float marks its vertex, and a face corner whose index is not an int marks that corner, so the filter
+// counts them (non_finite, bad_index) instead of keeping a triangle nobody wrote.
+struct StrictScan {
+  std::vector<uint8_t> vertex_ok;               // per `v` line
+  std::vector<std::vector<uint8_t>> corner_ok;  // per `f` line, per corner
+};
+
+bool finite_float(std::string_view token) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  float value = 0.0f;
+  const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  return ec == std::errc{} && end == token.data() + token.size() && std::isfinite(value);
+}
+
+bool int_index(std::string_view corner) {
+  const std::string_view index = corner.substr(0, corner.find('/'));
+  int value = 0;
+  const auto [end, ec] = std::from_chars(index.data(), index.data() + index.size(), value);
+  return ec == std::errc{} && end == index.data() + index.size();
+}
+
+std::vector<std::string_view> split_words(std::string_view line) {
+  std::vector<std::string_view> words;
+  while (true) {
+    const auto start = line.find_first_not_of(" \t\r");
+    if (start == std::string_view::npos) break;
+    line.remove_prefix(start);
+    const auto end = line.find_first_of(" \t\r");
+    words.push_back(line.substr(0, end));
+    if (end == std::string_view::npos) break;
+    line.remove_prefix(end);
+  }
+  return words;
+}
+
+StrictScan strict_scan(std::string_view text) {
+  StrictScan scan;
+  while (!text.empty()) {
+    const auto newline = text.find('\n');
+    std::string_view line = text.substr(0, newline);
+    text = newline == std::string_view::npos ? std::string_view{} : text.substr(newline + 1);
+    line = line.substr(0, line.find('#'));
+    const std::vector<std::string_view> words = split_words(line);
+    if (words.empty()) continue;
+    if (words.front() == "v") {
+      bool ok = words.size() >= 4;
+      for (std::size_t i = 1; ok && i < 4; ++i) ok = finite_float(words[i]);
+      scan.vertex_ok.push_back(ok ? 1 : 0);
+    } else if (words.front() == "f") {
+      std::vector<uint8_t>& corners = scan.corner_ok.emplace_back();
+      for (std::size_t i = 1; i < words.size(); ++i) corners.push_back(int_index(words[i]) ? 1 : 0);
+    }
+  }
+  return scan;
+}
+
 struct ObjState {
+  const StrictScan* scan = nullptr;
+  std::size_t faces_seen = 0;
   std::vector<Vec3> vertices;
   // Triangles as resolved vertex indices; resolved to positions at the end because an OBJ face may
   // name a vertex defined later in the file.
@@ -22,15 +88,27 @@ struct ObjState {
 
 void on_vertex(void* user, tinyobj::real_t x, tinyobj::real_t y, tinyobj::real_t z, tinyobj::real_t /*w*/) {
   auto& state = *static_cast<ObjState*>(user);
-  state.vertices.push_back({to_float(x), to_float(y), to_float(z)});
+  const std::size_t k = state.vertices.size();
+  const bool ok = k < state.scan->vertex_ok.size() && state.scan->vertex_ok[k];
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  state.vertices.push_back(ok ? Vec3{to_float(x), to_float(y), to_float(z)} : Vec3{kNaN, kNaN, kNaN});
 }
 
 void on_face(void* user, tinyobj::index_t* indices, int count) {
   auto& state = *static_cast<ObjState*>(user);
+  const std::size_t face = state.faces_seen++;
+  const std::vector<uint8_t>* corner_ok =
+      face < state.scan->corner_ok.size() &&
+              state.scan->corner_ok[face].size() == static_cast<std::size_t>(count)
+          ? &state.scan->corner_ok[face]
+          : nullptr;
   // OBJ indices are 1-based; negative ones count back from the last vertex read so far; 0 is invalid
   // (tinyobjloader also passes 0 for an index it could not parse). -1 marks a bad index here.
   const auto defined = static_cast<int64_t>(state.vertices.size());
-  auto resolve = [&](int raw) -> int64_t {
+  auto resolve = [&](int corner) -> int64_t {
+    // A corner this pass and tinyobjloader do not read alike is refused rather than guessed.
+    if (!corner_ok || !(*corner_ok)[static_cast<std::size_t>(corner)]) return -1;
+    const int raw = indices[corner].vertex_index;
     if (raw > 0) return raw - 1;
     if (raw < 0 && defined + raw >= 0) return defined + raw;
     return -1;
@@ -39,21 +117,23 @@ void on_face(void* user, tinyobj::index_t* indices, int count) {
     ++state.degenerate_polygons;
     return;
   }
-  const int64_t first = resolve(indices[0].vertex_index);
+  const int64_t first = resolve(0);
   for (int i = 1; i + 1 < count; ++i) {
     state.corners.push_back(first);
-    state.corners.push_back(resolve(indices[i].vertex_index));
-    state.corners.push_back(resolve(indices[i + 1].vertex_index));
+    state.corners.push_back(resolve(i));
+    state.corners.push_back(resolve(i + 1));
   }
 }
 
 }  // namespace
 
 Scene load_obj(const std::filesystem::path& path) {
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw Error(path.string() + ": cannot open file");
+  const std::string text = read_text_file(path, "OBJ scene");
+  const StrictScan scan = strict_scan(text);
+  std::istringstream stream(text);
 
   ObjState state;
+  state.scan = &scan;
   tinyobj::callback_t callbacks;
   callbacks.vertex_cb = on_vertex;
   callbacks.index_cb = on_face;
@@ -61,7 +141,6 @@ Scene load_obj(const std::filesystem::path& path) {
   // No MaterialReader: tinyobjloader then skips `mtllib` lines entirely.
   if (!tinyobj::LoadObjWithCallback(stream, callbacks, &state, nullptr, &warn, &err))
     throw Error(path.string() + ": " + (err.empty() ? "cannot parse OBJ" : err));
-  if (stream.bad()) throw Error(path.string() + ": read error");
 
   Scene scene;
   scene.source = path.string();

@@ -10,6 +10,7 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
+#include "core/text_file.h"
 #include "harness/config/toml_file.h"
 #include "harness/embree/embree_scene.h"
 #include "scenes/camera.h"
@@ -475,7 +476,7 @@ std::string to_string(ReferencePolicy policy) {
 }
 
 ExperimentConfig load_experiment_config(const std::filesystem::path& path) {
-  return parse_experiment_config(read_config_text(path, "experiment config"), path.string());
+  return parse_experiment_config(read_text_file(path, "experiment config"), path.string());
 }
 
 ExperimentConfig parse_experiment_config(std::string_view toml_text, const std::string& source_name) {

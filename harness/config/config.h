@@ -114,7 +114,7 @@ struct BuilderRun {
   /// Our builder's registry entry and every one of its parameters' values, set by resolve(): once, where
   /// the run is read. Null and empty for Embree, and before resolve().
   const BuilderInfo* info = nullptr;
-  ParamSet values;
+  ParamSet values{};
   /// Also set by resolve(): ours, the arity of its trees (traced only with layouts of that arity);
   /// Embree's, its build quality.
   uint32_t arity = 2;

@@ -10,6 +10,7 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
+#include "core/text_file.h"
 #include "harness/config/config.h"
 #include "harness/config/toml_file.h"
 #include "traversal/layout.h"
@@ -178,7 +179,7 @@ std::vector<LayoutSpec> all_layout_variants() {
 }
 
 StressConfig load_stress_config(const std::filesystem::path& path) {
-  return parse_stress_config(read_config_text(path, "stress config"), path.string());
+  return parse_stress_config(read_text_file(path, "stress config"), path.string());
 }
 
 StressConfig parse_stress_config(std::string_view toml_text, const std::string& source_name) {

@@ -8,6 +8,7 @@
 #include <iterator>
 
 #include "core/error.h"
+#include "core/text_file.h"
 #include "harness/report/ratio_stats.h"
 
 namespace sahbench {
@@ -95,9 +96,7 @@ const std::string& ResultFile::field(std::size_t i, const std::string& column) c
 
 ResultFile read_result_file(const std::filesystem::path& path) {
   ResultFile file{path, read_csv(path), {}};
-  std::ifstream in(path);
-  file.lines =
-      record_lines(std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()));
+  file.lines = record_lines(read_text_file(path, "result CSV"));
   // Both read the same text by the same rules; a difference is a bug here, not bad input.
   if (file.lines.size() != file.rows.size())
     throw std::logic_error(fmt::format("{}: {} rows read, but {} found by line", path.string(),

@@ -4,6 +4,7 @@
 #include <iterator>
 
 #include "core/error.h"
+#include "core/text_file.h"
 
 namespace sahbench {
 namespace {
@@ -116,11 +117,9 @@ std::string csv_escape(const std::string& field) {
 
 CsvWriter::CsvWriter(std::filesystem::path path, std::vector<std::string> columns)
     : path_(std::move(path)), columns_(std::move(columns)) {
+  require_file_path(path_, "result CSV");
   std::string text;
-  if (std::filesystem::exists(path_)) {
-    std::ifstream in(path_);
-    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
+  if (std::filesystem::exists(path_)) text = read_text_file(path_, "result CSV");
   // A run killed mid-write leaves a partial last line: cut the file at its last complete line.
   if (!text.empty() && text.back() != '\n') {
     const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
@@ -164,9 +163,7 @@ void CsvWriter::append(const CsvRow& row) {
 }
 
 std::vector<CsvRow> read_csv(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path.string() + ": cannot open");
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string text = read_text_file(path, "result CSV");
   std::size_t pos = 0, line = 1;
   std::vector<std::string> header, fields;
   std::vector<CsvRow> rows;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <ctime>
 #include <ostream>
+#include <thread>
 
 #include "core/error.h"
 #include "harness/embree/embree_scene.h"
@@ -103,6 +104,14 @@ CsvRow common_row(const RunIdentity& id, const Environment& env, const Experimen
 OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const std::filesystem::path& output,
                  const std::vector<std::string>& columns, const std::vector<std::string>& scenes,
                  const std::vector<std::string>& builder_runs, const Environment& env, std::ostream& log) {
+  // More threads than the machine has measure oversubscription, not the builder: allowed, but said.
+  const unsigned hardware = std::thread::hardware_concurrency();
+  for (const int threads : cfg.threads)
+    if (hardware > 0 && static_cast<unsigned>(threads) > hardware)
+      log << fmt::format(
+          "{}: warning: threads = {} is more than the {} hardware threads here; those cells measure "
+          "oversubscription\n",
+          cfg.path.string(), threads, hardware);
   OpenRun run;
   run.lock = std::make_unique<OutputLock>(output);
   run.csv = std::make_unique<CsvWriter>(output, columns);

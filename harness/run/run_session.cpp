@@ -15,6 +15,7 @@
 #include <ostream>
 #include <random>
 
+#include "core/text_file.h"
 #include "harness/run/csv.h"
 #include "harness/run/result_row.h"
 #include "harness/run/run_common.h"
@@ -139,6 +140,7 @@ Fingerprint fingerprint_of(const ExperimentConfig& cfg, const std::vector<std::s
 }
 
 OutputLock::OutputLock(const std::filesystem::path& csv) : path_(csv.string() + ".lock") {
+  require_file_path(csv, "result CSV");
   if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path());
   fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0)

@@ -17,6 +17,7 @@
 #include "harness/run/environment.h"
 #include "harness/run/runner.h"
 #include "scenes/load.h"
+#include "tests/support/error_of.h"
 #include "traversal/brute_force.h"
 
 namespace sahbench {
@@ -167,6 +168,21 @@ TEST(HarnessRun, InvalidTreesAreReportedNotTraced) {
   }
 }
 
+TEST(HarnessRun, MoreThreadsThanTheMachineHasAreSaid) {
+  auto config = write_config("run_oversubscribed", "");
+  std::string text;
+  {
+    std::ifstream in(config);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  text.replace(text.find("threads = [1, 2]"), 16, "threads = [1, 100000]");
+  std::ofstream(config) << text;
+  std::ostringstream log;
+  // --only matching nothing stops the run before any cell, after the run is opened.
+  EXPECT_THROW(run_experiment({config, false, "no such cell", std::nullopt}, log), Error);
+  EXPECT_NE(log.str().find("warning: threads = 100000 is more than the"), std::string::npos) << log.str();
+}
+
 TEST(HarnessRun, MissingRequiredSceneFailsBeforeAnyCell) {
   const auto dir = temp_dir();
   const auto path = dir / "missing_scene.toml", csv = dir / "missing_scene.csv";
@@ -312,6 +328,21 @@ TEST(HarnessTrace, EmbreeOrAnUnknownBuilderIsAnErrorNamingIt) {
   }
 }
 
+TEST(HarnessTrace, RayFilesTakeHeadersCommentsAndPlusSigns) {
+  const auto path = temp_dir() / "friendly_rays.txt";
+  std::ofstream(path) << "ox oy oz dx dy dz tmin tmax\n"
+                      << "+1 0 0 -1 0 0 0 inf  # towards the origin\n"
+                      << "0, 0, 5, 0, 0, -1\n";
+  const auto rays = read_rays(path);
+  ASSERT_EQ(rays.size(), 2u);
+  EXPECT_EQ(rays[0].org.x, 1.0f);
+  EXPECT_EQ(rays[0].dir.x, -1.0f);
+  EXPECT_EQ(rays[1].org.z, 5.0f);
+  // A line of words after the first data line is an error, not a second header.
+  std::ofstream(path) << "0 0 5 0 0 -1\nox oy oz dx dy dz\n";
+  EXPECT_NE(test::error_of([&] { read_rays(path); }).find("friendly_rays.txt:2"), std::string::npos);
+}
+
 TEST(HarnessTrace, MalformedRayFilesNameTheLine) {
   const auto path = temp_dir() / "bad_rays.txt";
   std::ofstream(path) << "0 0 0 1 0 0\n0 0 zero 1 0 0\n";
@@ -323,6 +354,19 @@ TEST(HarnessTrace, MalformedRayFilesNameTheLine) {
   }
   std::ofstream(path) << "0 0 0 1 0\n";
   EXPECT_THROW(read_rays(path), Error);
+  // Numbers beyond a float are numbers, and said to be out of range.
+  std::ofstream(path) << "0 0 0 1e39 0 1\n";
+  EXPECT_NE(test::error_of([&] { read_rays(path); }).find("'1e39' is outside the range of a float"),
+            std::string::npos);
+  std::ofstream(path) << "0 0 0 1e-50 0 1\n";
+  EXPECT_NE(test::error_of([&] { read_rays(path); }).find("outside the range"), std::string::npos);
+  // A NUL byte is shown, not a cut in the message.
+  std::ofstream(path) << "0 0 0 1" << '\0' << "x 0 1\n";
+  EXPECT_NE(test::error_of([&] { read_rays(path); }).find("'1\\x00x' is not a number"), std::string::npos);
+  // A file of comments only, or a directory, has no rays.
+  std::ofstream(path) << "# nothing here\n\n";
+  EXPECT_NE(test::error_of([&] { read_rays(path); }).find("no rays"), std::string::npos);
+  EXPECT_NE(test::error_of([&] { read_rays(temp_dir()); }).find("is a directory"), std::string::npos);
   std::ofstream(path) << "0 0 0 0 0 0\n";
   EXPECT_THROW(read_rays(path), Error);
   EXPECT_THROW(read_rays(temp_dir() / "missing.txt"), Error);

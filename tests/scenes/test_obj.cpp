@@ -54,6 +54,24 @@ TEST(SceneObj, InvalidTrianglesAreCounted) {
   EXPECT_EQ(scene.removed.zero_area, 3u);
 }
 
+// tinyobjloader reads what it cannot parse as 0 and wraps indices beyond int: each such vertex must be
+// counted non-finite and each such index bad, never kept as a triangle at the origin.
+TEST(SceneObj, UnreadableValuesAreCountedNotReadAsZero) {
+  TempDir dir;
+  const std::string text =
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+      "v nan 0 0\nv inf 0 0\nv 1 1 banana\nv 1e39 0 0\nv 0 0\n"  // vertices 4..8
+      "f 1 2 3\n"                                                // valid
+      "f 1 2 4\nf 1 2 5\nf 1 2 6\nf 1 2 7\nf 1 2 8\n"            // non-finite
+      "f 1 2 99999999999999999999\n"                             // beyond int64
+      "f 1 2 4294967299\n"                                       // 2^32 + 3: wrapped, it was 3
+      "f 1/1 2/1 3x/1\n";                                        // not an index
+  const Scene scene = load_obj(dir.write("unreadable.obj", text));
+  EXPECT_EQ(scene.triangles.size(), 1u);
+  EXPECT_EQ(scene.removed.non_finite, 5u);
+  EXPECT_EQ(scene.removed.bad_index, 3u);
+}
+
 TEST(SceneObj, HugeCoordinateIsNonFinite) {
   TempDir dir;
   const Scene scene = load_obj(dir.write("big.obj", "v 0 0 0\nv 1 0 0\nv 0 1e300 0\nf 1 2 3\n"));
@@ -94,7 +112,7 @@ TEST(SceneObj, MissingFile) {
   TempDir dir;
   const auto path = dir.path() / "absent.obj";
   const std::string msg = error_message([&] { load_obj(path); });
-  EXPECT_NE(msg.find(path.string() + ": cannot open file"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(path.string() + ": cannot open the OBJ scene: no such file"), std::string::npos) << msg;
   // Through load_scene, a missing path is named too.
   const std::string msg2 = error_message([&] { load_scene(path.string()); });
   EXPECT_NE(msg2.find(path.string() + ": no such file"), std::string::npos) << msg2;

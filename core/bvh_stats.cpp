@@ -5,15 +5,28 @@
 #include <vector>
 
 namespace sahbench {
+namespace {
+
+// Aabb::half_area in double: a scene with coordinates near 1e38 has float extents and products that
+// overflow to inf, and inf / inf made its SAH cost NaN.
+double half_area_in_double(const Aabb& box) {
+  if (box.is_empty()) return 0.0;
+  const double x = static_cast<double>(box.max.x) - box.min.x;
+  const double y = static_cast<double>(box.max.y) - box.min.y;
+  const double z = static_cast<double>(box.max.z) - box.min.z;
+  return x * y + y * z + z * x;
+}
+
+}  // namespace
 
 double sah_cost(const Bvh& bvh, const SahCost& cost) {
   if (bvh.nodes.empty()) return 0.0;
-  const double root_area = bvh.root().bounds.half_area();
+  const double root_area = half_area_in_double(bvh.root().bounds);
   // A flat or point-sized scene has no area to weigh by; every node then counts fully.
   const bool degenerate = !(root_area > 0.0);
   double total = 0.0;
   for (const Node& node : bvh.nodes) {
-    const double weight = degenerate ? 1.0 : node.bounds.half_area() / root_area;
+    const double weight = degenerate ? 1.0 : half_area_in_double(node.bounds) / root_area;
     total += weight * (node.is_leaf() ? cost.leaf_cost(node.prim_count) : cost.c_trav);
   }
   return total;

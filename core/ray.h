@@ -26,6 +26,14 @@ inline bool traceable(const Ray& ray) {
          finite(ray.dir.y) && finite(ray.dir.z) && ray.tmin == ray.tmin && ray.tmax == ray.tmax;
 }
 
+/// The far end of `ray` that every kernel and reference tests a hit against: tmax, but at most the largest
+/// finite float. A hit's t is a float, so a crossing beyond it (t overflows to inf for a direction so short
+/// that 1e-40 is its length) is no hit, whatever tmax says.
+inline float far_limit(const Ray& ray) {
+  constexpr float kLargest = std::numeric_limits<float>::max();
+  return ray.tmax > kLargest ? kLargest : ray.tmax;
+}
+
 inline constexpr uint32_t kInvalidPrim = 0xFFFFFFFFu;
 
 /// Closest-hit result. `prim` is the scene triangle index, or kInvalidPrim for a miss. (u, v) are the

@@ -9,7 +9,7 @@ Hit brute_force_closest(std::span<const Triangle> triangles, const Ray& ray) {
   if (!traceable(ray)) return {};
   const TriangleTest test(ray);
   Hit best;
-  float best_t = ray.tmax;
+  float best_t = far_limit(ray);
   for (std::size_t i = 0; i < triangles.size(); ++i) {
     float t, u, v;
     if (!test.intersect(triangles[i], ray.tmin, best_t, t, u, v)) continue;
@@ -27,7 +27,7 @@ bool brute_force_any(std::span<const Triangle> triangles, const Ray& ray) {
   const TriangleTest test(ray);
   for (const Triangle& tri : triangles) {
     float t, u, v;
-    if (test.intersect(tri, ray.tmin, ray.tmax, t, u, v)) return true;
+    if (test.intersect(tri, ray.tmin, far_limit(ray), t, u, v)) return true;
   }
   return false;
 }

@@ -103,11 +103,12 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
   StackEntry stack[kStackCapacity];
   uint32_t size = 0;
   float t_entry;
-  if (!box_test.intersect(bvh.nodes[0].bounds, ray.tmin, ray.tmax, t_entry)) return {};
+  const float tmax = far_limit(ray);
+  if (!box_test.intersect(bvh.nodes[0].bounds, ray.tmin, tmax, t_entry)) return {};
   stack[size++] = {0, t_entry};
 
   Hit best;
-  float best_t = ray.tmax;
+  float best_t = tmax;
   const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
   while (size > 0) {
     const StackEntry entry = stack[--size];

@@ -41,7 +41,7 @@ Box box_of(const Triangle& t) {
 // leaves the interval unchanged, like traversal/ray_box.h, and an infinite distance is not widened.
 class ConservativeCull {
  public:
-  explicit ConservativeCull(const Ray& ray) : tmin_(ray.tmin), tmax_(ray.tmax) {
+  explicit ConservativeCull(const Ray& ray) : tmin_(ray.tmin), tmax_(far_limit(ray)) {
     for (int axis = 0; axis < 3; ++axis) {
       org_[axis] = ray.org[static_cast<std::size_t>(axis)];
       inv_[axis] = 1.0 / static_cast<double>(ray.dir[static_cast<std::size_t>(axis)]);
@@ -165,8 +165,9 @@ ExactHit ExactReference::closest(const Ray& ray) const {
   const Point org = to_point(ray.org);
   const Vector dir(ray.dir.x, ray.dir.y, ray.dir.z);
   const Point q = org + dir;
-  const bool has_min = std::isfinite(ray.tmin), has_max = std::isfinite(ray.tmax);
-  const Number tmin(has_min ? ray.tmin : 0.0f), tmax(has_max ? ray.tmax : 0.0f);
+  // tmax at most the largest float (far_limit): a crossing beyond it has no float t.
+  const bool has_min = std::isfinite(ray.tmin), has_max = true;
+  const Number tmin(has_min ? ray.tmin : 0.0f), tmax(far_limit(ray));
 
   std::optional<Number> best;
   std::vector<uint32_t> best_groups;

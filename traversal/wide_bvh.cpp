@@ -118,7 +118,7 @@ inline IntOrder set_up(const Ray& ray, WideRay& r) {
     r.far_plane[axis] = 2 * axis + (1u - negative);
   }
   r.tmin = ray.tmin;
-  r.tmax = ray.tmax;
+  r.tmax = far_limit(ray);
   // An untraceable ray (core/ray.h) gets an empty interval, which no box test can widen, NaN or not.
   if (!traceable(ray)) r.tmin = 1.0f, r.tmax = 0.0f;
   // box=fma's inv_dir is finite and non-zero (FmaRayBox::safe_direction); org_inv overflows only for

@@ -74,7 +74,7 @@ void set_ray(RTCRay& out, const Ray& ray) {
   out.dir_y = ray.dir.y;
   out.dir_z = ray.dir.z;
   out.time = 0.0f;
-  out.tfar = ray.tmax;
+  out.tfar = far_limit(ray);  // the question every kernel of ours answers: no hit at an infinite t
   out.mask = kAllMask;
   out.id = 0;
   out.flags = 0;
@@ -129,7 +129,7 @@ void fill_packet(PacketRay& packet, int (&valid)[W], const sahbench::Ray* rays, 
     packet.dir_y[lane] = ray.dir.y;
     packet.dir_z[lane] = ray.dir.z;
     packet.time[lane] = 0.0f;
-    packet.tfar[lane] = on ? ray.tmax : -std::numeric_limits<float>::infinity();
+    packet.tfar[lane] = on ? far_limit(ray) : -std::numeric_limits<float>::infinity();
     packet.mask[lane] = kAllMask;
     packet.id[lane] = 0;
     packet.flags[lane] = 0;

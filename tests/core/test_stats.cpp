@@ -34,6 +34,16 @@ TEST(CoreStats, ConstantsChangeTheCost) {
   EXPECT_DOUBLE_EQ(sah_cost(two_leaf_tree(), {2.0f, 4.0f}), 2.0 + 0.25 * 4 * 3);
 }
 
+// The same tree scaled to coordinates near 1e38: float areas overflow (2e38 squared), the cost must not.
+TEST(CoreStats, SahCostIsFiniteAtTheEdgeOfFloatRange) {
+  Bvh bvh = two_leaf_tree();
+  for (Node& n : bvh.nodes) {
+    n.bounds.min = n.bounds.min * 1.5e38f;
+    n.bounds.max = n.bounds.max * 1.5e38f;
+  }
+  EXPECT_DOUBLE_EQ(compute_stats(bvh, 3, {1.0f, 1.0f}).sah_cost, 1.0 + 0.5 + 0.25);
+}
+
 TEST(CoreStats, EmptyTree) {
   const BvhStats s = compute_stats(Bvh{}, 0, {});
   EXPECT_EQ(s.nodes, 0u);

@@ -91,6 +91,27 @@ TEST(HarnessEmbreeScene, EmptySceneMissesEverything) {
   for (const Hit& h : hits) EXPECT_FALSE(h.found());
 }
 
+// Embree is asked what our kernels are: a hit only at a finite t (far_limit), in 1-ray and packet calls.
+TEST(HarnessEmbreeTrace, NoHitAtAnInfiniteT) {
+  EmbreeDevice device(1);
+  const std::vector<Triangle> tri = {{{-1, -1, 0}, {3, -1, 0}, {-1, 3, 0}}};
+  const EmbreeScene scene(device, tri, EmbreeQuality::kMedium);
+  Ray overflow;
+  overflow.org = {0.2f, 0.2f, 5.0f};
+  overflow.dir = {0.0f, 0.0f, -1e-40f};
+  const std::vector<Ray> rays(3, overflow);
+  std::vector<Hit> hits(rays.size());
+  std::vector<uint8_t> occluded(rays.size(), 1);
+  embree_intersect1(scene, rays, hits);
+  embree_occluded1(scene, rays, occluded);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    EXPECT_FALSE(hits[i].found()) << hits[i].t;
+    EXPECT_EQ(occluded[i], 0);
+  }
+  embree_intersect_packets(scene, rays, hits, 8);
+  for (const Hit& h : hits) EXPECT_FALSE(h.found()) << h.t;
+}
+
 TEST(HarnessEmbreeScene, ThreadCountZeroMeansEmbreeDefault) {
   EXPECT_NO_THROW(EmbreeDevice(0));
   EXPECT_THROW(EmbreeDevice(-1), Error);

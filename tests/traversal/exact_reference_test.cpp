@@ -94,6 +94,9 @@ TEST(TravExactReference, IntervalIsClosedAndTminEqualTmaxHitsOnlyAtThatDistance)
       exact(tri, make_ray(org, dir, std::nextafter(2.0f, 0.0f), std::nextafter(2.0f, 0.0f))).found());
   EXPECT_TRUE(exact(tri, make_ray(org, dir, 0.0f, 2.0f)).found());
   EXPECT_TRUE(exact(tri, make_ray(org, dir, 2.0f, kInf)).found());
+  // A crossing beyond the largest float (t = 2e40) has no float t: no hit, even with tmax = inf.
+  EXPECT_FALSE(exact(tri, make_ray(org, {0, 0, -1e-40f})).found());
+  EXPECT_TRUE(exact(tri, make_ray(org, {0, 0, -1e-30f})).found());
   // Behind the origin: t = -2 < tmin.
   EXPECT_FALSE(exact(tri, make_ray(org, {0, 0, 1})).found());
   // A ray starting on the surface hits it at t = 0.

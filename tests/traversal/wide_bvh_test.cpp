@@ -414,7 +414,8 @@ TEST(WideBvh, NanPlanesAreStoredAsInfinitiesThatTestTheSame) {
     float t0 = 0.0f;
     for (uint32_t i = 0; i < bvh.root().child_count; ++i) {
       float t = 0.0f;
-      mask |= static_cast<uint32_t>(test.intersect(bvh.nodes[slot + i].bounds, ray.tmin, ray.tmax, t)) << i;
+      mask |= static_cast<uint32_t>(test.intersect(bvh.nodes[slot + i].bounds, ray.tmin, far_limit(ray), t))
+              << i;
       if (i == 0) t0 = t;
     }
     return static_cast<double>(mask + t0);  // summed in float, as the loop sums them

@@ -98,9 +98,10 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
     const bool terminal = isatty(STDERR_FILENO) != 0;
     std::size_t made = 0;
     time_sources(sources, reps, order_seed(0, scene.name, threads, "build"), [&] {
-      if (made++ % sources.size() != 0) return;
-      log << (terminal ? "\r" : "") << "threads " << threads << ": rep " << made / sources.size() + 1
-          << " of " << options.reps << (terminal ? "" : "\n") << std::flush;
+      const std::size_t k = made++;
+      if (k % sources.size() != 0) return;
+      log << (terminal ? "\r" : "") << "threads " << threads << ": rep " << k / sources.size() + 1 << " of "
+          << options.reps << (terminal ? "" : "\n") << std::flush;
     });
     if (terminal) log << "\r" << std::string(40, ' ') << "\r" << std::flush;
 

@@ -33,7 +33,10 @@ std::string printable(std::string_view token) {
 
 float parse_float(std::string_view token, const std::string& where) {
   // from_chars takes no leading '+'; a number written with one is still a number.
-  const std::string_view digits = token.size() > 1 && token.front() == '+' ? token.substr(1) : token;
+  const bool plus =
+      token.size() > 1 && token.front() == '+' &&
+      (std::isdigit(static_cast<unsigned char>(token[1])) || token[1] == '.' || token[1] == 'i');
+  const std::string_view digits = plus ? token.substr(1) : token;
   if (digits == "inf") return std::numeric_limits<float>::infinity();
   if (token == "-inf") return -std::numeric_limits<float>::infinity();
   float value = 0.0f;
@@ -48,7 +51,10 @@ float parse_float(std::string_view token, const std::string& where) {
 
 // Whether `token` reads as a word rather than a number: a header line's column name.
 bool is_word(std::string_view token) {
-  return !token.empty() && std::isalpha(static_cast<unsigned char>(token.front())) && token != "inf";
+  if (token.empty() || !std::isalpha(static_cast<unsigned char>(token.front()))) return false;
+  std::string lower(token);
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return lower != "inf" && lower != "infinity" && lower != "nan";
 }
 
 }  // namespace
@@ -57,7 +63,7 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
   std::istringstream in(read_text_file(path, "ray file"));
   std::vector<Ray> rays;
   std::string line;
-  bool seen_data = false;
+  bool first = true;  // the first non-empty line, which may be a header
   for (std::size_t number = 1; std::getline(in, line); ++number) {
     const std::string where = path.string() + ":" + std::to_string(number);
     std::vector<std::string_view> tokens;
@@ -72,8 +78,9 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
     }
     if (tokens.empty()) continue;
     // A first line of column names ("ox oy oz dx dy dz") is a header, not data.
-    if (!seen_data && std::all_of(tokens.begin(), tokens.end(), is_word)) continue;
-    seen_data = true;
+    const bool header = first && std::all_of(tokens.begin(), tokens.end(), is_word);
+    first = false;
+    if (header) continue;
     if (tokens.size() != 6 && tokens.size() != 8)
       throw Error(where + ": expected 6 or 8 numbers (ox oy oz dx dy dz [tmin tmax]), found " +
                   std::to_string(tokens.size()));

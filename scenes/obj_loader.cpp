@@ -27,15 +27,19 @@ struct StrictScan {
   std::vector<std::vector<uint8_t>> corner_ok;  // per `f` line, per corner
 };
 
+// A coordinate as a float: any number up to FLT_MAX in magnitude (parsed in double, so that 1e-50 is
+// the 0 a float holds, not out of range), and no NaN or infinity.
 bool finite_float(std::string_view token) {
   if (!token.empty() && token.front() == '+') token.remove_prefix(1);
-  float value = 0.0f;
+  double value = 0.0;
   const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-  return ec == std::errc{} && end == token.data() + token.size() && std::isfinite(value);
+  return ec == std::errc{} && end == token.data() + token.size() &&
+         std::abs(value) <= std::numeric_limits<float>::max();
 }
 
 bool int_index(std::string_view corner) {
-  const std::string_view index = corner.substr(0, corner.find('/'));
+  std::string_view index = corner.substr(0, corner.find('/'));
+  if (!index.empty() && index.front() == '+') index.remove_prefix(1);
   int value = 0;
   const auto [end, ec] = std::from_chars(index.data(), index.data() + index.size(), value);
   return ec == std::errc{} && end == index.data() + index.size();
@@ -55,22 +59,33 @@ std::vector<std::string_view> split_words(std::string_view line) {
   return words;
 }
 
+// The lines as tinyobjloader's LoadObjWithCallback reads them (tiny_obj_loader.h, safeGetline and its
+// line loop), so that the n-th flag here is the n-th callback there: lines end at \n, \r\n or a lone
+// \r and at a NUL; a line whose first non-blank is '#' is a comment, and only there; `v` and `f` are
+// keywords only when a space or tab follows; a face line without corners makes no callback.
 StrictScan strict_scan(std::string_view text) {
   StrictScan scan;
+  auto blank = [](char c) { return c == ' ' || c == '\t'; };
   while (!text.empty()) {
-    const auto newline = text.find('\n');
-    std::string_view line = text.substr(0, newline);
-    text = newline == std::string_view::npos ? std::string_view{} : text.substr(newline + 1);
-    line = line.substr(0, line.find('#'));
-    const std::vector<std::string_view> words = split_words(line);
-    if (words.empty()) continue;
-    if (words.front() == "v") {
-      bool ok = words.size() >= 4;
-      for (std::size_t i = 1; ok && i < 4; ++i) ok = finite_float(words[i]);
+    const auto end = text.find_first_of("\r\n");
+    std::string_view line = text.substr(0, end);
+    if (end == std::string_view::npos)
+      text = {};
+    else
+      text.remove_prefix(end + (text[end] == '\r' && end + 1 < text.size() && text[end + 1] == '\n' ? 2 : 1));
+    line = line.substr(0, line.find('\0'));
+    while (!line.empty() && blank(line.front())) line.remove_prefix(1);
+    if (line.size() < 2 || !blank(line[1])) continue;
+    if (line.front() == 'v') {
+      const std::vector<std::string_view> words = split_words(line.substr(2));
+      bool ok = words.size() >= 3;
+      for (std::size_t i = 0; ok && i < 3; ++i) ok = finite_float(words[i]);
       scan.vertex_ok.push_back(ok ? 1 : 0);
-    } else if (words.front() == "f") {
+    } else if (line.front() == 'f') {
+      const std::vector<std::string_view> words = split_words(line.substr(2));
+      if (words.empty()) continue;
       std::vector<uint8_t>& corners = scan.corner_ok.emplace_back();
-      for (std::size_t i = 1; i < words.size(); ++i) corners.push_back(int_index(words[i]) ? 1 : 0);
+      for (const std::string_view word : words) corners.push_back(int_index(word) ? 1 : 0);
     }
   }
   return scan;

@@ -448,6 +448,15 @@ void resolve(BuilderRun& run) {
   run.arity = run.info->arity ? run.info->arity(run.values) : 2;
 }
 
+void require_resolved(const BuilderRun& run) {
+  const bool quality_named =
+      std::any_of(run.params.begin(), run.params.end(), [](const auto& kv) { return kv.first == "quality"; });
+  const bool resolved = run.is_embree()
+                            ? !quality_named || run.params_text() == "quality=" + to_string(run.quality)
+                            : run.info != nullptr;
+  if (!resolved) throw Error("builder run '" + run.label() + "' was not resolved against the registry");
+}
+
 std::string BuilderRun::params_text() const {
   if (!is_embree()) return values.to_string();
   for (const auto& [key, value] : params)

@@ -134,6 +134,10 @@ struct BuilderRun {
 /// is an Error naming it.
 void resolve(BuilderRun& run);
 
+/// An Error naming the run unless it went through resolve(): a config built in code rather than read
+/// must resolve its runs before a runner sees them.
+void require_resolved(const BuilderRun& run);
+
 /// A builder run as the command line writes it: "NAME" or "NAME:key=value,key=value", for one of our
 /// builders or Embree's own BVH ("embree:quality=high"; "embree_low", "embree_medium" and "embree_high"
 /// are short for the three qualities). Embree's run always has exactly its quality (medium by default),

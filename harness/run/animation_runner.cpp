@@ -312,6 +312,19 @@ class AnimationRunner {
       jobs.push_back(
           make_job(frame, builders_[i], threads, refit == refits.end() ? nullptr : &refit->second, first));
     }
+    // Interleaved: every job of the frame in turns. Otherwise one job at a time, so that one tree is in
+    // memory at a time and its rows are written at once (Repetitions::interleave).
+    if (cfg_.reps.interleave) {
+      measure(frame, threads, jobs, csv);
+    } else {
+      for (FrameJob& job : jobs) {
+        measure(frame, threads, {&job, 1}, csv);
+        job = FrameJob{};  // its tree or Embree scene freed before the next is built
+      }
+    }
+  }
+
+  void measure(const FrameData& frame, int threads, std::span<FrameJob> jobs, CsvWriter& csv) {
     std::vector<TreeSource*> sources;
     for (auto& job : jobs) sources.push_back(&job.source);
     const std::string group = fmt::format("{} frame {}", frame.scene.name, frame.index);
@@ -330,8 +343,8 @@ class AnimationRunner {
       finish_cell(cell, frame.references[cell.set_index], frame.diagonal);
       append(
           csv, cell.row,
-          fmt::format("{}: {} {} ms, {} Mrays/s, {} mismatches", cell.label, cell.row["builder"],
-                      cell.row["build_ms_median"], cell.row["trace_mrays_median"], cell.row["mismatches"]));
+          fmt::format("{}: build_ms {}, {} Mrays/s, {} mismatches", cell.label, cell.row["build_ms_median"],
+                      cell.row["trace_mrays_median"], cell.row["mismatches"]));
     }
   }
 
@@ -546,6 +559,7 @@ std::vector<std::string> animation_columns() {
 
 int run_animation_experiment(const ExperimentConfig& cfg, const RunOptions& options, std::ostream& log) {
   if (!cfg.animation) throw Error(cfg.path.string() + ": not an animation experiment (no [animation] table)");
+  for (const BuilderRun& run : cfg.builders) require_resolved(run);
   return AnimationRunner(cfg, options, log).run();
 }
 

@@ -81,8 +81,8 @@ TreeSource embree_refit(std::string label, std::shared_ptr<EmbreeBuild> embree,
 /// Times `sources` as every experiment does: `reps.build_warmup` untimed makes of each, then
 /// `reps.build` rounds. Interleaved (reps.interleave), each round makes every source once, in the
 /// round's own shuffle of `seed` (round_order.h), so that a slow spell of the machine falls on all of
-/// them alike; otherwise each source's rounds run back to back. `before_each` runs before every timed
-/// make (an interrupt check).
+/// them alike; otherwise each source's warm-ups and rounds run back to back. `before_each` runs before every
+/// timed make (an interrupt check).
 void time_sources(std::span<TreeSource* const> sources, const Repetitions& reps, uint64_t seed,
                   const std::function<void()>& before_each);
 

@@ -331,6 +331,7 @@ class ExperimentRunner {
 int run_experiment(const RunOptions& options, std::ostream& log) {
   const ExperimentConfig cfg = load_experiment_config(options.config);
   if (cfg.animation) return run_animation_experiment(cfg, options, log);
+  for (const BuilderRun& run : cfg.builders) require_resolved(run);
   return ExperimentRunner(cfg, options, log).run();
 }
 

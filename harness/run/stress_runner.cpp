@@ -456,6 +456,7 @@ StressSummary run_stress(const StressOptions& options, std::ostream& log) {
 }
 
 StressSummary run_stress(const StressConfig& config, const StressOptions& options, std::ostream& log) {
+  for (const BuilderRun& run : config.builders) require_resolved(run);
   return StressRunner(config, options, log).run();
 }
 

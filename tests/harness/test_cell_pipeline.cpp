@@ -76,11 +76,12 @@ TEST(CellPipeline, SourcesRunBackToBackWithoutInterleaving) {
   std::vector<TreeSource*> ptrs;
   for (auto& s : sources) ptrs.push_back(&s);
   Repetitions reps;
-  reps.build_warmup = 0;
+  reps.build_warmup = 1;
   reps.build = 2;
   reps.interleave = false;
   time_sources(ptrs, reps, 7, [] {});
-  EXPECT_EQ(rec.order, (std::vector<int>{0, 0, 1, 1, 2, 2}));
+  // Each source's warm-up right before its own timed makes.
+  EXPECT_EQ(rec.order, (std::vector<int>{0, 0, 0, 1, 1, 1, 2, 2, 2}));
 }
 
 TEST(CellPipeline, ABrokenTreeIsRefusedBeforeItsStatistics) {

@@ -127,6 +127,20 @@ count = 99
                                       "sweep_sah", "embree[quality=high]"}));
 }
 
+// A run built in code reaches no runner unresolved: resolve() sets what the runners read.
+TEST(HarnessConfigParse, UnresolvedBuilderRunsAreRefused) {
+  BuilderRun ours{"binned_sah", {{"bins", "8"}}};
+  EXPECT_THROW(require_resolved(ours), Error);
+  resolve(ours);
+  EXPECT_NO_THROW(require_resolved(ours));
+  EXPECT_EQ(ours.values.get_uint("bins"), 8u);
+  BuilderRun embree = parse_builder_run("embree_high");
+  EXPECT_THROW(require_resolved(embree), Error);  // it would build at the default quality
+  resolve(embree);
+  EXPECT_NO_THROW(require_resolved(embree));
+  EXPECT_EQ(embree.quality, EmbreeQuality::kHigh);
+}
+
 TEST(HarnessConfigParse, ReferencePolicies) {
   const std::pair<std::string, ReferencePolicy> cases[] = {{"auto", ReferencePolicy::kAuto},
                                                            {"embree", ReferencePolicy::kEmbree},

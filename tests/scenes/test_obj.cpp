@@ -72,6 +72,25 @@ TEST(SceneObj, UnreadableValuesAreCountedNotReadAsZero) {
   EXPECT_EQ(scene.removed.bad_index, 3u);
 }
 
+// The strict pass must count lines as tinyobjloader does, or its flags land on the wrong vertex: bare
+// keywords, a lone CR as line end, a '#' after a face, a tiny coordinate and '+' signs.
+TEST(SceneObj, StrictPassReadsLinesAsTinyObjLoaderDoes) {
+  TempDir dir;
+  const std::string text =
+      "v\nf\nf \n"                       // no callbacks
+      "v 0 0 0\rv 1 0 0\rv 0 1 1e-50\r"  // classic Mac line ends
+      "v nan 0 0\r\n"                    // vertex 4, non-finite
+      "f 1 2 3 # a comment tinyobjloader reads as corners\n"
+      "f +1 +2 +3\n"
+      "f 1 2 4\n";
+  const Scene scene = load_obj(dir.write("lexing.obj", text));
+  EXPECT_EQ(scene.removed.non_finite, 1u);
+  // The first face has 10 corners for both readers: its fan keeps 1-2-3 and counts 7 bad triangles.
+  EXPECT_EQ(scene.removed.bad_index, 7u);
+  EXPECT_EQ(scene.triangles.size(), 2u);
+  EXPECT_EQ(scene.triangles[0], (Triangle{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}));
+}
+
 TEST(SceneObj, HugeCoordinateIsNonFinite) {
   TempDir dir;
   const Scene scene = load_obj(dir.write("big.obj", "v 0 0 0\nv 1 0 0\nv 0 1e300 0\nf 1 2 3\n"));

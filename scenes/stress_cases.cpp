@@ -247,6 +247,34 @@ void make_cube_grid(CaseBuilder& b, const StressCaseSpec& s) {
   closed_mesh_rays(b, m, static_cast<float>(s.scale));
 }
 
+// Axis-parallel rays (+-0 in the other components) through thin triangles far along them: each ray
+// starts at `offset` on its axis (0 on the others) and crosses, at a distance of 1 to 1e6 beyond
+// max(1, |offset| 2^-20) (so that the crossing is a float apart from the origin), a triangle reaching
+// only `scale` across the axis, tilted along it. The crossing is strictly inside, so every ray must hit.
+// Narrower than 1e-18 times the distance, such a triangle's box was missed by a reciprocal clamped to
+// 1e18, and origins beyond 3.4e20 made org * 1e18 overflow (ray_box.h: FmaRayBox's domain).
+void make_axis_thin(CaseBuilder& b, const StressCaseSpec& s) {
+  const auto width = static_cast<float>(s.scale);
+  const double base = std::max(1.0, std::abs(s.offset) * 0x1p-20);
+  for (uint32_t r = 0; r < b.ray_count(); ++r) {
+    SplitMix64 rng = b.rng(r);
+    Vec3 dir = axis_direction(rng);
+    const auto axis = static_cast<std::size_t>(dir.x != 0.0f ? 0 : dir.y != 0.0f ? 1 : 2);
+    const std::size_t u = (axis + 1) % 3, v = (axis + 2) % 3;
+    Vec3 org{0.0f, 0.0f, 0.0f};
+    org[axis] = static_cast<float>(s.offset);
+    const float along =
+        org[axis] + dir[axis] * static_cast<float>(base * std::pow(10.0, rng.uniform(0.0, 6.0)));
+    const float tilt = along + dir[axis] * static_cast<float>(base);
+    Triangle t;
+    t.v0[axis] = along, t.v0[u] = -width, t.v0[v] = -width;
+    t.v1[axis] = tilt, t.v1[u] = width, t.v1[v] = -width;
+    t.v2[axis] = along, t.v2[u] = 0.0f, t.v2[v] = width;
+    b.add(t);
+    b.ray(org, dir, true);
+  }
+}
+
 // Unit cubes [2i, 2i+1] x [2j, 2j+1] x [2k, 2k+1] (12 triangles each), and rays whose origins lie on
 // their face planes, edges and corners, or in the gaps, with axis-parallel directions (+-0 elsewhere)
 // and directions lying in a coordinate plane: rays in the planes of leaf and node box faces.
@@ -675,6 +703,12 @@ const std::vector<KindEntry>& kinds() {
         true,
         {}},
        make_axis_rays},
+      {{"axis_thin",
+        "one triangle per ray reaching `scale` across an axis-parallel ray from `offset` on its "
+        "axis, 1 to 1e6 units along it; every ray must hit",
+        true,
+        {"scale", "offset"}},
+       make_axis_thin},
       {{"grazing",
         "a square at z = 0 and size/2 rotated squares; rays nearly parallel to them, in their "
         "plane, and just above it",

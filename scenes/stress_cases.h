@@ -27,8 +27,11 @@ struct StressCaseSpec {
   uint64_t seed = 1;
   uint64_t size = 1000;  ///< about this many triangles (each kind says how it rounds)
   uint32_t rays = 2000;
-  double scale = 1.0;   ///< sphere, cube_grid, surface_origin: radius or half-size of the mesh
-  double offset = 0.0;  ///< sphere, cube_grid: the mesh's centre is (offset, offset, offset)
+  /// sphere, cube_grid, surface_origin: radius or half-size of the mesh; axis_thin: the triangles' reach
+  double scale = 1.0;
+  /// sphere, cube_grid: the mesh's centre is (offset, offset, offset); axis_thin: the rays' origin on
+  /// their axis
+  double offset = 0.0;
   double aspect = 1e4;  ///< needles: length / width
   double outer = 1e6;   ///< tiny_in_huge: half-size of the enclosing cube
 

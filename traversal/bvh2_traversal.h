@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <span>
+#include <type_traits>
 
 #include "core/bvh.h"
 #include "core/ray.h"
@@ -43,18 +44,18 @@ struct TraversalCounters {
 /// - Wide trees (arity above 2): kStored. Their builders store first the children likeliest to hold an
 ///   occluder per unit of cost (builders/child_order.h), and storage order costs no sort or search on
 ///   the way to the next node. Going first to the nearest child (ties to the earlier) and then in
-///   storage order (kNearestStored, the default until stop 20) traced the shadow rays of the 1M terrain
+///   storage order (kNearestStored) traced the shadow rays of the 1M terrain
 ///   1-8% faster, the bunny's 4-5% faster and the dragon's within 2%, and Sponza's, seen from inside its
 ///   atrium (configs/wide.toml's camera), 17% slower: 0.77 of Embree against 0.92, with about as many
 ///   nodes and triangles per ray (`bvh8:tri=mtn,box=fma`, wide_collapse with min_leaf 4; two A/Bs of 3
-///   interleaved rounds and 3 runs of wide.toml; notes of issue 4, stop 20). The shadow rays of an
+///   interleaved rounds and 3 runs of wide.toml). The shadow rays of an
 ///   interior start on a floor or wall whose box is the nearest, and their occluders are far. Storage
 ///   order's worst case is the smaller, hence the default. (From outside Sponza, before the configs had
 ///   a camera, the nearest first had looked no worse there.)
 ///   Nearest first only where the ray starts in none of the children was worse than both on all but
 ///   Sponza (0.82).
 /// - Binary trees: kNearest. Storage order cost their shadow rays 10 to 16% (measured against Embree in
-///   one run; notes of issue 4).
+///   one run).
 /// The layout option anyhit=nearest|stored|nearest_stored overrides it.
 inline AnyHitOrder resolve_any_hit_order(const Bvh& bvh, AnyHitOrder order = AnyHitOrder::kAuto) {
   if (order != AnyHitOrder::kAuto) return order;
@@ -94,6 +95,11 @@ struct StackEntry {
 template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
 Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
              [[maybe_unused]] TraversalCounters* counters, AnyHitOrder order) {
+  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
+    // A ray outside box=fma's domain takes the robust box test (ray_box.h: FmaRayBox).
+    if (!FmaRayBox::takes(ray)) [[unlikely]]
+      return traverse<TriangleTest, RobustRayBox, kAnyHit, kCount>(bvh, triangles, ray, counters, order);
+  }
   if constexpr (kCount) ++counters->rays;
   if (bvh.nodes.empty() || !traceable(ray)) return {};
   const BoxTest box_test(ray);

@@ -67,9 +67,9 @@ KernelIsa best_kernel_isa(KernelIsa widest = KernelIsa::kAuto);
 /// The wide kernels use 128- and 256-bit vectors only, so their AVX-512 build is the same code in EVEX
 /// encodings, with 32 vector registers and mask registers for the compares. On an Intel Xeon (family 6,
 /// model 207) it traced 0-8% faster than the AVX2 build in every scene, ray set and thread count of
-/// configs/wide.toml's four scenes (medians of 4 interleaved runs, 24 cells, none below 0.997; notes of
-/// issue 4). On an AMD EPYC (Zen 4) an earlier version of the kernels traced 0-5% slower with it. isa=avx2
-/// and isa=avx512 select either.
+/// configs/wide.toml's four scenes (medians of 4 interleaved runs, 24 cells, none below 0.997). On an AMD
+/// EPYC (Zen 4) an earlier version of the kernels traced 0-5% slower with it. isa=avx2 and isa=avx512 select
+/// either.
 KernelIsa preferred_kernel_isa();
 
 }  // namespace sahbench

@@ -120,28 +120,31 @@ class FastRayBox {
 /// distance one fused multiply-subtract, with org * rdir computed once per ray. One operation per plane
 /// instead of two, and a shorter dependency chain, which is what the wide kernels gain from it; the
 /// scalar kernels call std::fma, which is exact on any CPU but slower where fma is not an instruction.
-/// Like FastRayBox it can miss a box the ray grazes. The reciprocal is kept finite, as Embree's
-/// rcp_safe keeps it: a direction component below 1e-18 in magnitude counts as +-1e-18 (sign kept, so
-/// -0 is negative), so a zero component gives distances of +-1e18 times the plane offset instead of
-/// the inf and NaN that org * inf would make of every plane. A tiny component can so put a slab's
-/// distances nearer than they are; it only matters for rays that run within 1e-18 of parallel to an
-/// axis, for which all distances are astronomically far.
+/// Like FastRayBox it can miss a box the ray grazes, and org * rdir adds an absolute error of up to
+/// 2^-24 |org / dir| on each axis: far from the world's origin, a ray grazing a box within that distance
+/// may miss it (the stress suite's far cases measure it).
+///
+/// Its domain is the rays whose reciprocal and org * rdir are finite: every direction component a
+/// normal float (|d| >= 2^-126, zero excluded) and no org * rdir overflowing. Outside it the form cannot
+/// be written without clamping the reciprocal, as Embree's rcp_safe does (|d| below 1e-18 taken as
+/// 1e-18), which misses every box narrower than 1e-18 t around an axis-parallel ray and overflows for
+/// origins beyond 3.4e20. So every box=fma kernel traces a ray outside the domain with RobustRayBox
+/// (bvh2_traversal.h, wide_kernels.inl): axis-parallel rays pay for the robust test and get its answers.
 class FmaRayBox {
  public:
-  /// The smallest direction component magnitude taken as it is (Embree's min_rcp_input).
-  static constexpr float kMinDirection = 1e-18f;
-
-  /// The direction component the test takes the reciprocal of: shared with the wide kernels' ray set-up
-  /// (wide_bvh.cpp), so that both compute the same distances.
-  static float safe_direction(float d) {
-    return std::abs(d) < kMinDirection ? std::copysign(kMinDirection, d) : d;
+  /// Whether `ray` is in the domain of this test; the others take RobustRayBox.
+  static bool takes(const Ray& ray) {
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const float d = ray.dir[axis];
+      if (!(std::abs(d) >= std::numeric_limits<float>::min())) return false;
+      if (!(std::abs(ray.org[axis] * (1.0f / d)) < std::numeric_limits<float>::infinity())) return false;
+    }
+    return true;
   }
 
+  /// `ray` must be one the test takes().
   explicit FmaRayBox(const Ray& ray) : setup_(ray) {
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      setup_.inv_dir[axis] = 1.0f / safe_direction(ray.dir[axis]);
-      org_inv_[axis] = ray.org[axis] * setup_.inv_dir[axis];
-    }
+    for (std::size_t axis = 0; axis < 3; ++axis) org_inv_[axis] = ray.org[axis] * setup_.inv_dir[axis];
   }
 
   bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry) const {

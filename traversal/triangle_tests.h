@@ -8,6 +8,7 @@
 // to v1 and v2: p = (1-u-v)*v0 + u*v1 + v*v2 (core/ray.h). Front and back faces are both hit (no
 // culling); a triangle seen edge-on (determinant 0) is missed. On a miss the outputs are unspecified.
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -95,6 +96,42 @@ inline bool watertight_in_double(float ax, float ay, float az, float bx, float b
   return true;
 }
 
+/// The distance along the ray to the plane of (v0, v1, v2), t = n . (v0 - org) / n . dir with
+/// n = (v1 - v0) x (v2 - v0), computed in double from the float inputs and rounded once; NaN where the
+/// ray is parallel to the plane in double too.
+///
+/// The watertight test's own distance is a weighted mean of the sheared vertices' z (Woop et al. 2013,
+/// section 3), and the sheared vertices are translated to the ray's origin and sheared in float, each
+/// rounded to the ulps of its magnitude. On a thin triangle the barycentric weights amplify those
+/// roundings by the aspect ratio: a 1000:1 needle at coordinates of 100 came out 15,000 ulps from the
+/// exact t. In double, v0 - org and the edges are exact differences of floats whose exponents are within
+/// 29 of each other, the cross product's products are exact, and what is left is a few units of 2^-53
+/// times the aspect ratio over the cosine between ray and normal: far below a float ulp unless the ray
+/// grazes the plane, so the rounded t is within one ulp of the exact distance. The watertight tests
+/// keep their float edge functions for the hit decision (they are what makes them watertight) and run
+/// this once per hit, not per test.
+inline double plane_distance_in_double(Vec3 v0, Vec3 v1, Vec3 v2, Vec3 org, Vec3 dir) {
+  const double e1x = static_cast<double>(v1.x) - v0.x, e1y = static_cast<double>(v1.y) - v0.y,
+               e1z = static_cast<double>(v1.z) - v0.z;
+  const double e2x = static_cast<double>(v2.x) - v0.x, e2y = static_cast<double>(v2.y) - v0.y,
+               e2z = static_cast<double>(v2.z) - v0.z;
+  const double nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+  const double cx = static_cast<double>(v0.x) - org.x, cy = static_cast<double>(v0.y) - org.y,
+               cz = static_cast<double>(v0.z) - org.z;
+  return (nx * cx + ny * cy + nz * cz) / (nx * dir.x + ny * dir.y + nz * dir.z);
+}
+
+/// A watertight hit's distance: plane_distance_in_double where it is finite, else the test's own
+/// `t_float` (a plane too steep for double, or edges whose product left double's range). Returns false
+/// when the refined distance falls outside [tmin, tmax]: the contract holds on the returned t.
+inline bool refine_watertight_t(Vec3 v0, Vec3 v1, Vec3 v2, Vec3 org, Vec3 dir, float tmin, float tmax,
+                                float& t) {
+  const double distance = plane_distance_in_double(v0, v1, v2, org, dir);
+  const float refined = static_cast<float>(distance);
+  if (std::abs(refined) < std::numeric_limits<float>::infinity()) t = refined;
+  return t >= tmin && t <= tmax;
+}
+
 /// Watertight ray/triangle intersection of Woop, Benthin and Wald 2013, "Watertight Ray/Triangle
 /// Intersection" (JCGT 2(1)). The ray is turned into the +z axis by a permutation and a shear computed
 /// once per ray (section 3); the vertices are transformed by the same float operations for every
@@ -111,9 +148,17 @@ inline bool watertight_in_double(float ax, float ay, float az, float bx, float b
 class WatertightTriangleTest {
  public:
   /// `ray.dir` must not be the zero vector.
-  explicit WatertightTriangleTest(const Ray& ray) : org_(ray.org), shear_(watertight_shear(ray.dir)) {}
+  explicit WatertightTriangleTest(const Ray& ray)
+      : org_(ray.org), dir_(ray.dir), shear_(watertight_shear(ray.dir)) {}
 
+  /// The watertight decision, with a hit's distance refined (refine_watertight_t).
   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
+    return decide(tri, tmin, tmax, t, u, v) &&
+           refine_watertight_t(tri.v0, tri.v1, tri.v2, org_, dir_, tmin, tmax, t);
+  }
+
+ private:
+  bool decide(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
     // Vertices relative to the origin, then sheared so the ray is the +z axis through (0, 0).
     const detail::Components a = detail::components(tri.v0 - org_);
     const detail::Components b = detail::components(tri.v1 - org_);
@@ -154,8 +199,8 @@ class WatertightTriangleTest {
     return true;
   }
 
- private:
   Vec3 org_;
+  Vec3 dir_;
   WatertightShear shear_;
 };
 
@@ -212,6 +257,64 @@ inline Vec3 stored_normal(Vec3 edge1, Vec3 edge2) {
   return cross(edge1, edge2);
 }
 
+/// The float range of MollerTrumboreNormalTest. Its products reach |c| |e|^2, |d| |e|^2 and |d| |c| |e|
+/// (c = v0 - org), and a triangle's normal |e|^2: with coordinates beyond about 1e12 they overflow, and
+/// with edges below about 1e-19 the normal underflows to zero, and the float test misses what it should
+/// hit (a triangle at the 1e30 scale had an infinite normal). So the test runs in float when the ray's
+/// origin components are within 2^40 and its direction's largest component within [2^-40, 2^40]
+/// (mtn_ray_in_range), and the triangle's v0, edge and normal components are within 2^40 and its
+/// normal's largest component at least 2^-60 (mtn_triangle_in_range): then every product stays below
+/// 2^125, and a determinant below float's smallest normal means a ray within 2^-26 rad of the plane.
+/// Otherwise it runs in double (mtn_in_double), where no product of floats overflows or underflows.
+inline constexpr float kMtnMaxMagnitude = 0x1p40f;
+inline constexpr float kMtnMinDirection = 0x1p-40f;
+inline constexpr float kMtnMinNormal = 0x1p-60f;
+
+inline bool mtn_ray_in_range(Vec3 org, Vec3 dir) {
+  const float largest = std::max({std::abs(dir.x), std::abs(dir.y), std::abs(dir.z)});
+  return std::abs(org.x) <= kMtnMaxMagnitude && std::abs(org.y) <= kMtnMaxMagnitude &&
+         std::abs(org.z) <= kMtnMaxMagnitude && largest >= kMtnMinDirection && largest <= kMtnMaxMagnitude;
+}
+
+/// `v0`, the edges and the normal as MollerTrumboreNormalTest computes them (stored_normal).
+inline bool mtn_triangle_in_range(Vec3 v0, Vec3 e1, Vec3 e2, Vec3 n) {
+  float largest = 0.0f, largest_normal = 0.0f;
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    largest =
+        std::max({largest, std::abs(v0[axis]), std::abs(e1[axis]), std::abs(e2[axis]), std::abs(n[axis])});
+    largest_normal = std::max(largest_normal, std::abs(n[axis]));
+  }
+  // Written so that a NaN is out of range.
+  return largest <= kMtnMaxMagnitude && largest_normal >= kMtnMinNormal;
+}
+
+/// MollerTrumboreNormalTest in double, from the float v0 and edges: the normal, c, r and the dot products
+/// in double, then the same decisions (u >= 0, v >= 0, u + v <= det, t in [tmin, tmax] times det), and t,
+/// u and v divided in double and rounded once. Used where the float test is out of range, by the scalar
+/// test and by the SIMD kernels' lanes (wide_kernels.inl repeats it, as it does watertight_in_double).
+inline bool mtn_in_double(Vec3 v0, Vec3 e1, Vec3 e2, Vec3 org, Vec3 dir, float tmin, float tmax, float& t,
+                          float& u, float& v) {
+  const double ax = e1.x, ay = e1.y, az = e1.z, bx = e2.x, by = e2.y, bz = e2.z;
+  const double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+  const double cx = static_cast<double>(v0.x) - org.x, cy = static_cast<double>(v0.y) - org.y,
+               cz = static_cast<double>(v0.z) - org.z;
+  const double dx = dir.x, dy = dir.y, dz = dir.z;
+  const double rx = dy * cz - dz * cy, ry = dz * cx - dx * cz, rz = dx * cy - dy * cx;
+  const double det = dx * nx + dy * ny + dz * nz;
+  if (det == 0.0 || !(det - det == 0.0)) return false;  // parallel, or NaN
+  const double sign = det < 0.0 ? -1.0 : 1.0;
+  const double abs_det = det * sign;
+  const double su = -(bx * rx + by * ry + bz * rz) * sign;
+  const double sv = (ax * rx + ay * ry + az * rz) * sign;
+  if (!(su >= 0.0 && sv >= 0.0 && su + sv <= abs_det)) return false;
+  const double st = (cx * nx + cy * ny + cz * nz) * sign;
+  if (!(st >= abs_det * tmin && st <= abs_det * tmax)) return false;
+  t = static_cast<float>(st / abs_det);
+  u = static_cast<float>(su / abs_det);
+  v = static_cast<float>(sv / abs_det);
+  return t >= tmin && t <= tmax;
+}
+
 /// Möller–Trumbore in the form Embree's Triangle4 intersector uses (Embree 3,
 /// kernels/geometry/triangle_intersector_moeller.h; Wald et al. 2014, "Embree: A Kernel Framework for
 /// Efficient CPU Ray Tracing"): the same Cramer's rule as MollerTrumboreTest, rearranged around the
@@ -229,13 +332,16 @@ inline Vec3 stored_normal(Vec3 edge1, Vec3 edge2) {
 /// without FMA hardware std::fma is exact but slow. The stored normal is a plain (unfused) cross product.
 class MollerTrumboreNormalTest {
  public:
-  explicit MollerTrumboreNormalTest(const Ray& ray) : org_(ray.org), dir_(ray.dir) {}
+  explicit MollerTrumboreNormalTest(const Ray& ray)
+      : org_(ray.org), dir_(ray.dir), ray_in_range_(mtn_ray_in_range(ray.org, ray.dir)) {}
 
   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
     // v0, the edges and the normal: what the wide layouts store.
     const Vec3 edge1 = tri.v1 - tri.v0;
     const Vec3 edge2 = tri.v2 - tri.v0;
     const Vec3 normal = stored_normal(edge1, edge2);
+    if (!ray_in_range_ || !mtn_triangle_in_range(tri.v0, edge1, edge2, normal)) [[unlikely]]
+      return mtn_in_double(tri.v0, edge1, edge2, org_, dir_, tmin, tmax, t, u, v);
     const Vec3 c = tri.v0 - org_;
     const Vec3 d = dir_;
     const Vec3 r{std::fma(d.y, c.z, -(d.z * c.y)), std::fma(d.z, c.x, -(d.x * c.z)),
@@ -267,6 +373,7 @@ class MollerTrumboreNormalTest {
 
   Vec3 org_;
   Vec3 dir_;
+  bool ray_in_range_;
 };
 
 }  // namespace sahbench

@@ -63,9 +63,12 @@ void set_lane(TriangleBlock& block, uint32_t lane, const Triangle& t, BlockForm 
     block.v2[axis][lane] = edges ? e2[axis] : t.v2[axis];
   }
   if (form != BlockForm::kEdgesNormals) return;
+  auto& normal_block = reinterpret_cast<NormalBlock&>(block);
   const Vec3 n = stored_normal(e1, e2);
-  for (uint32_t axis = 0; axis < 3; ++axis)
-    reinterpret_cast<NormalBlock&>(block).normal[axis][lane] = n[axis];
+  for (uint32_t axis = 0; axis < 3; ++axis) normal_block.normal[axis][lane] = n[axis];
+  const bool in_double = block.prim[lane] != kInvalidPrim && !mtn_triangle_in_range(t.v0, e1, e2, n);
+  normal_block.in_double =
+      (normal_block.in_double & ~(1u << lane)) | (static_cast<uint32_t>(in_double) << lane);
 }
 
 // Writes the triangles of `refs` into consecutive blocks of `form` starting at `first`.
@@ -75,13 +78,16 @@ void fill_blocks(std::span<const uint32_t> refs, std::span<const Triangle> trian
   const Triangle unused{{nan, nan, nan}, {nan, nan, nan}, {nan, nan, nan}};
   for (std::size_t i = 0; i < refs.size(); i += kBlockWidth, first += block_units(form)) {
     auto& block = *reinterpret_cast<TriangleBlock*>(first);
+    if (form == BlockForm::kEdgesNormals) {
+      auto& normal_block = reinterpret_cast<NormalBlock&>(block);
+      normal_block.in_double = 0;
+      for (uint32_t& u : normal_block.unused) u = 0;
+    }
     for (uint32_t lane = 0; lane < kBlockWidth; ++lane) {
       const bool used = i + lane < refs.size();
       block.prim[lane] = used ? refs[i + lane] : kInvalidPrim;
       set_lane(block, lane, used ? triangles[refs[i + lane]] : unused, form);
     }
-    if (form == BlockForm::kEdgesNormals)
-      for (uint32_t& u : reinterpret_cast<NormalBlock&>(block).unused) u = 0;
   }
 }
 
@@ -110,8 +116,8 @@ inline IntOrder set_up(const Ray& ray, WideRay& r) {
   for (uint32_t axis = 0; axis < 3; ++axis) {
     r.org[axis] = ray.org[axis];
     r.dir[axis] = ray.dir[axis];
-    // 1 / +-0 = +-inf, as in ray_box.h; FmaRayBox's reciprocal stays finite.
-    r.inv_dir[axis] = 1.0f / (kFma ? FmaRayBox::safe_direction(ray.dir[axis]) : ray.dir[axis]);
+    // 1 / +-0 = +-inf, as in ray_box.h.
+    r.inv_dir[axis] = 1.0f / ray.dir[axis];
     r.org_inv[axis] = ray.org[axis] * r.inv_dir[axis];
     const uint32_t negative = std::signbit(ray.dir[axis]) ? 1u : 0u;
     r.near_plane[axis] = 2 * axis + negative;
@@ -121,11 +127,13 @@ inline IntOrder set_up(const Ray& ray, WideRay& r) {
   r.tmax = far_limit(ray);
   // An untraceable ray (core/ray.h) gets an empty interval, which no box test can widen, NaN or not.
   if (!traceable(ray)) r.tmin = 1.0f, r.tmax = 0.0f;
-  // box=fma's inv_dir is finite and non-zero (FmaRayBox::safe_direction); org_inv overflows only for
-  // origins beyond 1e20 or so. Each axis in one unsigned compare of |org_inv|'s bits: in [2^-100, inf),
-  // or not, and then either below 2^-100 (guarded) or not finite (the float path).
+  // A ray outside box=fma's domain takes the robust box test (FmaRayBox::takes), and no integer path.
+  r.robust_box = kFma && !FmaRayBox::takes(ray);
+  r.mtn_in_double = !mtn_ray_in_range(ray.org, ray.dir);
+  // In the domain, box=fma's inv_dir and org_inv are finite and inv_dir non-zero. Each axis in one
+  // unsigned compare of |org_inv|'s bits: in [2^-100, inf), or not, and then below 2^-100 (guarded).
   IntOrder int_order = IntOrder::kNone;
-  if (kFma && !std::signbit(r.tmin) && !(r.tmax < 0.0f)) {
+  if (kFma && !r.robust_box && !std::signbit(r.tmin) && !(r.tmax < 0.0f)) {
     bool free = true, finite = true;
     for (uint32_t axis = 0; axis < 3; ++axis) {
       const uint32_t bits = std::bit_cast<uint32_t>(r.org_inv[axis]) & 0x7fffffffu;
@@ -157,16 +165,22 @@ inline IntOrder set_up(const Ray& ray, WideRay& r) {
 }
 
 template <bool kShear, bool kFma>
-IntOrder set_up_all(std::span<const Ray> rays, WideRay* out) {
-  IntOrder lowest = IntOrder::kFree;
-  for (std::size_t i = 0; i < rays.size(); ++i)
-    lowest = std::min(lowest, set_up<kShear, kFma>(rays[i], out[i]));
-  return lowest;
+WideRaysInfo set_up_all(std::span<const Ray> rays, WideRay* out) {
+  WideRaysInfo info{IntOrder::kFree, false};
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const IntOrder int_order = set_up<kShear, kFma>(rays[i], out[i]);
+    // A ray on the robust box test takes no integer path, so it does not lower the batch's.
+    if (out[i].robust_box)
+      info.robust_box = true;
+    else
+      info.int_order = std::min(info.int_order, int_order);
+  }
+  return info;
 }
 
 }  // namespace
 
-IntOrder make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box) {
+WideRaysInfo make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box) {
   const bool fma = box == BoxTestKind::kFma;
   if (shear) return fma ? set_up_all<true, true>(rays, out) : set_up_all<true, false>(rays, out);
   return fma ? set_up_all<false, true>(rays, out) : set_up_all<false, false>(rays, out);

@@ -18,7 +18,8 @@
 // unused lanes have prim = kInvalidPrim and NaN vertices, which no test can hit. In the edge form, which
 // the Möller–Trumbore layouts use, v1 and v2 hold the edges v1 - v0 and v2 - v0 instead (BlockForm).
 // NormalBlock (tri=mtn): a TriangleBlock in edge form + the normals e1 x e2 as [component][lane] floats
-// (48) + 16 unused bytes = 224 bytes per 4 triangles, as Embree's Triangle4 stores v0, e1, e2 and Ng.
+// (48) + a lane mask and 12 unused bytes = 224 bytes per 4 triangles, as Embree's Triangle4 stores v0,
+// e1, e2 and Ng.
 //
 // Nodes and blocks share one array, the arena, and a reference counts 32-byte units from its start.
 // Its order is depth first, as a recursive builder allocating from one pool lays out its tree (Embree's
@@ -26,7 +27,7 @@
 // slots, its child nodes side by side, and each child's part in turn. Nodes start on a 64-byte line.
 // A ray going down the tree so reads forward through memory, and a subtree's nodes and triangles share
 // pages. With nodes and blocks in two arrays the layouts traced 1-3% slower; the arena is also advised
-// for huge pages (core/huge_pages.h), which took 6-10% more on a 1M-triangle scene (issue 4's note).
+// for huge pages (core/huge_pages.h), which took 6-10% more on a 1M-triangle scene.
 //
 // This header and wide_kernels.inl are also compiled for each SIMD instruction set
 // (wide_kernels_*.cpp), so the types here are plain data: no functions a kernel might share with
@@ -80,17 +81,19 @@ struct alignas(16) TriangleBlock {
 static_assert(sizeof(TriangleBlock) == 160, "block format as documented");
 
 /// The block of BlockForm::kEdgesNormals: MollerTrumboreNormalTest reads the normal where the other
-/// Möller–Trumbore tests compute a second cross product. The 16 bytes at the end keep blocks whole
-/// arena units.
+/// Möller–Trumbore tests compute a second cross product. `in_double` has bit i set when lane i's triangle
+/// is outside the float test's range (triangle_tests.h: mtn_triangle_in_range), so that the kernels test
+/// it in double as the scalar test does; the rest of the last 16 bytes keeps blocks whole arena units.
 struct alignas(16) NormalBlock {
   TriangleBlock tri;  ///< in edge form
   float normal[3][kBlockWidth];
-  uint32_t unused[kBlockWidth];
+  uint32_t in_double;
+  uint32_t unused[kBlockWidth - 1];
 };
 static_assert(sizeof(NormalBlock) == 224, "block format as documented");
 
 /// A ray as the wide kernels read it, set up once per ray outside the kernels (wide_bvh.cpp): origin,
-/// direction, reciprocal direction (the box test's: FmaRayBox keeps it finite) and origin times it, the
+/// direction, reciprocal direction and origin times it, the
 /// near and far plane index per axis (chosen by the sign bit, so -0 counts as negative, as in
 /// ray_box.h), and the watertight test's shear (triangle_tests.h).
 ///
@@ -98,7 +101,8 @@ static_assert(sizeof(NormalBlock) == 224, "block format as documented");
 /// ray's slab distances, and compare them, on the floats' bits as integers (wide_kernels.inl: kInt),
 /// which order as the floats do when no distance is negative zero and the interval starts at +0 or later.
 /// - kFree: tmin is +0 or positive, tmax is not negative, and |org_inv| is in [2^-100, inf) on each axis
-///   (inv_dir is finite and non-zero by FmaRayBox::safe_direction): no slab distance is -0 or NaN.
+///   (inv_dir is finite and non-zero for the rays box=fma takes, FmaRayBox::takes): no slab distance is
+///   -0 or NaN.
 /// - kGuarded: the same but for some |org_inv| below 2^-100 (an origin on or near a coordinate plane):
 ///   a distance below 2^-150 in magnitude may round to -0, and the kernels test the nodes where it does
 ///   again on the float path.
@@ -119,6 +123,19 @@ struct WideRay {
   /// box=fma only: whether the AVX2 and AVX-512 kernels may order this ray's slab distances by their
   /// bits as integers (IntOrder).
   IntOrder int_order;
+  /// box=fma only: the ray is outside the fma test's domain (FmaRayBox::takes) and takes the robust box
+  /// test, as the binary kernels do.
+  bool robust_box;
+  /// tri=mtn: the ray is outside the float test's range (triangle_tests.h: mtn_ray_in_range), and every
+  /// lane is tested in double.
+  bool mtn_in_double;
+};
+
+/// What the kernels need to know of a batch of set-up rays: the lowest of their WideRay::int_order, and
+/// whether any takes the robust box test.
+struct WideRaysInfo {
+  IntOrder int_order;
+  bool robust_box;
 };
 
 /// `shear`: also the watertight test's shear; the Möller–Trumbore kernels do not read it, and leaving it
@@ -126,8 +143,7 @@ struct WideRay {
 WideRay make_wide_ray(const Ray& ray, bool shear = true, BoxTestKind box = BoxTestKind::kRobust);
 /// make_wide_ray for each of `rays`, into out[0, rays.size()): what the layouts call, with the choices
 /// made once per batch rather than once per ray.
-/// Returns the lowest of the rays' WideRay::int_order, as WideBatch::int_order wants it.
-IntOrder make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box);
+WideRaysInfo make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box);
 
 /// The arena's unit (wide_bvh.h): references to nodes and blocks count these from the arena's start.
 inline constexpr std::size_t kWideUnit = 32;
@@ -188,7 +204,8 @@ WideBvh<N> compile_wide(const Bvh& bvh, std::span<const Triangle> triangles,
 
 /// Refit: copies the new positions of `triangles` (same indices as at compile time) into the blocks and
 /// recomputes every child box bottom up, subtrees near the root in parallel. The topology is
-/// kept, so the tree may lose quality as the geometry moves (issue: refit against rebuild).
+/// kept, so the tree may lose quality as the geometry moves (configs/animation.toml measures refit against
+/// rebuild).
 template <uint32_t N>
 void refit_wide(WideBvh<N>& wide, std::span<const Triangle> triangles);
 
@@ -221,6 +238,8 @@ struct WideBatch {
   /// The lowest of the rays' WideRay::int_order (make_wide_rays' answer): the path the box=fma kernels
   /// take for the batch.
   IntOrder int_order = IntOrder::kNone;
+  /// box=fma: some rays take the robust box test (WideRay::robust_box).
+  bool robust_box = false;
 };
 
 using WideKernel = void (*)(const WideBatch&);

@@ -48,7 +48,7 @@ SAHBENCH_KERNEL_INLINE float plane_distance(float plane, const WideRay& r, uint3
 // (maxi, mini and an integer compare in its BVHNNodeIntersector1). An integer max or min takes one cycle
 // where a float one takes four, and the slab test is on the path from one node's address to the next:
 // 1-10% more rays/second in every cell of configs/wide.toml's scenes and ray sets, shadow rays 4-10%
-// (A/B against the float path, 4 interleaved rounds; issue 4's note, stop 19).
+// (A/B against the float path, 4 interleaved rounds).
 // The bits order as the floats do among non-negative floats (+0 and +inf included), and every negative
 // float orders below all of them. So the integer and float answers are the same, bit for bit, when
 // - tmin is +0 or positive (sign bit clear): then the maximum is non-negative, and a negative distance
@@ -56,20 +56,19 @@ SAHBENCH_KERNEL_INLINE float plane_distance(float plane, const WideRay& r, uint3
 // - no distance is -0 (the integer order puts it below every negative float) and none is NaN. The
 //   integer path computes each distance as fma(plane, inv, (-org_inv) + 0), which is fma(plane, inv,
 //   -org_inv) except that an exact zero sum is +0 (it is -0 only when both terms are -0); it is never
-//   NaN when inv is finite and non-zero (FmaRayBox::safe_direction makes it so, the CPU not flushing
-//   denormals to zero), org_inv is finite and no plane is NaN (wide_bvh.cpp stores NaN planes as
-//   infinities). tmax, the closest hit so far, may be -0: its sign bit is cleared.
+//   NaN when inv is finite and non-zero (so for every ray box=fma takes, FmaRayBox::takes, the CPU not
+//   flushing denormals to zero), org_inv is finite and no plane is NaN (wide_bvh.cpp stores NaN planes
+//   as infinities). tmax, the closest hit so far, may be -0: its sign bit is cleared.
 // Then a minimum with a negative distance in it is negative under both orders, and the compare fails
 // under both. One case is left: a negative distance below 2^-150 in magnitude rounds to -0 all the
 // same, and a far distance of -0 with an entry of +0 (the ray starting on the box's far face) is a
-// zero-length entry that the float compare takes and the integer one misses (a helper's review found
-// it). That takes |org_inv| below 2^-100 on the distance's axis (wide_bvh.cpp proves the bound), so the
-// ray set-up sorts the rays (WideRay::int_order): kFree rays cannot meet it; for kGuarded rays, whose
-// origin is on or near a coordinate plane, the kernel looks for a far minimum of -0 (INT_MIN, below
-// every other value) at each node and tests that node again on the float path. The check cost shadow
-// rays 0.5-3% where every ray took it (Sponza's most), hence the two kinds. A batch takes the lowest
-// kind of its rays (trace_batch): a negative tmin, or an origin so far out that org * inv overflows,
-// sends it to the float path.
+// zero-length entry that the float compare takes and the integer one misses. That takes |org_inv| below
+// 2^-100 on the distance's axis (wide_bvh.cpp proves the bound), so the ray set-up sorts the rays
+// (WideRay::int_order): kFree rays cannot meet it; for kGuarded rays, whose origin is on or near a coordinate
+// plane, the kernel looks for a far minimum of -0 (INT_MIN, below every other value) at each node and tests
+// that node again on the float path. The check cost shadow rays 0.5-3% where every ray took it (Sponza's
+// most), hence the two kinds. A batch takes the lowest kind of its rays (trace_batch): a negative tmin, or an
+// origin so far out that org * inv overflows, sends it to the float path.
 
 // Whether this instruction set has the integer path: the FMA sets (SSE has no fused multiply-add, and
 // the scalar kernels are the reference).
@@ -82,8 +81,8 @@ inline constexpr bool kHasIntOrder = false;
 // A ray's constants for the 8-wide integer path (AVX2, AVX-512), broadcast once per ray by trace_ray:
 // inv_dir and -org_inv + 0 on each axis. Made in the node test, the three negations and six broadcasts
 // stayed in the node loop (GCC 12 did not hoist them), and tracing was 0-2.5% slower than with them here.
-// Stored in the ray and broadcast from it in the loop, shadow rays were 0.6-2.7% slower than with neither
-// (stop 21, issue 4's note). The leaf test's direction and origin kept here as well traced shadow rays
+// Stored in the ray and broadcast from it in the loop, shadow rays were 0.6-2.7% slower than with neither.
+// The leaf test's direction and origin kept here as well traced shadow rays
 // 2-3% slower on AVX-512 (diffuse 0-2% faster), so the leaf tests broadcast theirs at each leaf. Empty in
 // the other builds, which take their constants from the ray.
 struct RaySlabs {
@@ -294,6 +293,32 @@ inline bool lane_in_double(float ax, float ay, float az, float bx, float by, flo
   return true;
 }
 
+// triangle_tests.h's plane_distance_in_double and refine_watertight_t, for the lanes of `mask` (a
+// watertight block test's hits): each hit's distance recomputed in double from the block's vertices and
+// the ray, the lane dropped where it falls outside [tmin, tmax]. The same operations in the same order,
+// so every instruction set returns the same t as the scalar test.
+inline uint32_t refine_lanes(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, uint32_t mask,
+                             float* t_out) {
+  for (uint32_t hits = mask; hits; hits &= hits - 1) {
+    const uint32_t i = static_cast<uint32_t>(__builtin_ctz(hits));
+    const double e1x = static_cast<double>(b.v1[0][i]) - b.v0[0][i],
+                 e1y = static_cast<double>(b.v1[1][i]) - b.v0[1][i],
+                 e1z = static_cast<double>(b.v1[2][i]) - b.v0[2][i];
+    const double e2x = static_cast<double>(b.v2[0][i]) - b.v0[0][i],
+                 e2y = static_cast<double>(b.v2[1][i]) - b.v0[1][i],
+                 e2z = static_cast<double>(b.v2[2][i]) - b.v0[2][i];
+    const double nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+    const double cx = static_cast<double>(b.v0[0][i]) - r.org[0],
+                 cy = static_cast<double>(b.v0[1][i]) - r.org[1],
+                 cz = static_cast<double>(b.v0[2][i]) - r.org[2];
+    const double distance = (nx * cx + ny * cy + nz * cz) / (nx * r.dir[0] + ny * r.dir[1] + nz * r.dir[2]);
+    const float refined = static_cast<float>(distance);
+    if (__builtin_fabsf(refined) < __builtin_inff()) t_out[i] = refined;
+    if (!(t_out[i] >= tmin && t_out[i] <= tmax)) mask &= ~(1u << i);
+  }
+  return mask;
+}
+
 // triangle_tests.h's watertight_float_ok and watertight_det_ok, for one lane.
 SAHBENCH_KERNEL_INLINE bool lane_float_ok(float e0, float e1, float e2) {
   constexpr float kInf = __builtin_inff();
@@ -317,10 +342,62 @@ SAHBENCH_KERNEL_INLINE float flip_sign(float x, uint32_t sign) {
   return __builtin_bit_cast(float, __builtin_bit_cast(uint32_t, x) ^ sign);
 }
 
+// triangle_tests.h's mtn_in_double for lane i of a block, for the lanes outside the float test's range
+// (NormalBlock::in_double, WideRay::mtn_in_double); repeated here as lane_in_double is.
+inline bool mtn_lane_in_double(const NormalBlock& b, uint32_t i, const WideRay& r, float tmin, float tmax,
+                               float& t_out, float& u_out, float& v_out) {
+  const TriangleBlock& e = b.tri;  // edge form
+  const double ax = e.v1[0][i], ay = e.v1[1][i], az = e.v1[2][i], bx = e.v2[0][i], by = e.v2[1][i],
+               bz = e.v2[2][i];
+  const double nx = ay * bz - az * by, ny = az * bx - ax * bz, nz = ax * by - ay * bx;
+  const double cx = static_cast<double>(e.v0[0][i]) - r.org[0],
+               cy = static_cast<double>(e.v0[1][i]) - r.org[1],
+               cz = static_cast<double>(e.v0[2][i]) - r.org[2];
+  const double dx = r.dir[0], dy = r.dir[1], dz = r.dir[2];
+  const double rx = dy * cz - dz * cy, ry = dz * cx - dx * cz, rz = dx * cy - dy * cx;
+  const double det = dx * nx + dy * ny + dz * nz;
+  if (det == 0.0 || !(det - det == 0.0)) return false;  // parallel, or NaN
+  const double sign = det < 0.0 ? -1.0 : 1.0;
+  const double abs_det = det * sign;
+  const double su = -(bx * rx + by * ry + bz * rz) * sign;
+  const double sv = (ax * rx + ay * ry + az * rz) * sign;
+  if (!(su >= 0.0 && sv >= 0.0 && su + sv <= abs_det)) return false;
+  const double st = (cx * nx + cy * ny + cz * nz) * sign;
+  if (!(st >= abs_det * tmin && st <= abs_det * tmax)) return false;
+  t_out = static_cast<float>(st / abs_det);
+  u_out = static_cast<float>(su / abs_det);
+  v_out = static_cast<float>(sv / abs_det);
+  return t_out >= tmin && t_out <= tmax;
+}
+
+// The lanes of `mask` (bits 0-3 block b[0], 4-7 b[1]) tested by mtn_lane_in_double: the hits of those
+// lanes in place of the float test's, whose other lanes `float_hits` keeps.
+inline uint32_t mtn_lanes_in_double(const NormalBlock* b, uint32_t mask, uint32_t float_hits,
+                                    const WideRay& r, float tmin, float tmax, float* t_out, float* u_out,
+                                    float* v_out) {
+  uint32_t hits = float_hits & ~mask;
+  for (; mask; mask &= mask - 1) {
+    const uint32_t i = static_cast<uint32_t>(__builtin_ctz(mask));
+    const NormalBlock& block = b[i / kBlockWidth];
+    const uint32_t lane = i % kBlockWidth;
+    if (block.tri.prim[lane] != kInvalidPrim &&
+        mtn_lane_in_double(block, lane, r, tmin, tmax, t_out[i], u_out[i], v_out[i]))
+      hits |= 1u << i;
+  }
+  return hits;
+}
+
+// The lanes of block b that the float test cannot answer: all when the ray is out of its range.
+SAHBENCH_KERNEL_INLINE uint32_t mtn_double_lanes(const NormalBlock& b, const WideRay& r) {
+  return r.mtn_in_double ? (1u << kBlockWidth) - 1 : b.in_double;
+}
+
 // One lane of MollerTrumboreNormalTest: the scalar kernels' test, and the SSE kernels' (SSE has no fused
 // multiply-add; fmaf is exact there, and slow). The same operations as triangle_tests.h, in the same order.
 SAHBENCH_KERNEL_INLINE bool mtn_lane(const NormalBlock& b, uint32_t i, const WideRay& r, float tmin,
                                      float tmax, float& t_out, float& u_out, float& v_out) {
+  if (mtn_double_lanes(b, r) >> i & 1u) [[unlikely]]
+    return mtn_lane_in_double(b, i, r, tmin, tmax, t_out, u_out, v_out);
   const TriangleBlock& e = b.tri;  // edge form
   const float cx = e.v0[0][i] - r.org[0], cy = e.v0[1][i] - r.org[1], cz = e.v0[2][i] - r.org[2];
   const float dx = r.dir[0], dy = r.dir[1], dz = r.dir[2];
@@ -403,7 +480,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
     v_out[i] = e2 * inv_det;
     mask |= 1u << i;
   }
-  return mask;
+  return refine_lanes(b, r, tmin, tmax, mask, t_out);
 }
 
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin,
@@ -520,7 +597,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
         mask |= 1u << i;
     }
   }
-  return mask;
+  return mask ? refine_lanes(b, r, tmin, tmax, mask, t_out) : 0u;
 }
 
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin,
@@ -714,7 +791,12 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const 
   auto load = [&](int part, int axis) __attribute__((always_inline)) {
     return _mm_load_ps(mtn_part(b, part)[axis]);
   };
-  return intersect_mtn_lanes<__m128, Ops128>(lanes_valid(b.tri), load, r, tmin, tmax, t_out, u_out, v_out);
+  const uint32_t hits =
+      intersect_mtn_lanes<__m128, Ops128>(lanes_valid(b.tri), load, r, tmin, tmax, t_out, u_out, v_out);
+  const uint32_t in_double = mtn_double_lanes(b, r);
+  if (in_double) [[unlikely]]
+    return mtn_lanes_in_double(&b, in_double, hits, r, tmin, tmax, t_out, u_out, v_out);
+  return hits;
 }
 
 // Two consecutive blocks, 8 lanes: bits 0-3 are the first block's lanes, 4-7 the second's.
@@ -724,8 +806,12 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, c
   auto load = [&](int part, int axis) __attribute__((always_inline)) {
     return load_pair(mtn_part(b[0], part)[axis], mtn_part(b[1], part)[axis]);
   };
-  return intersect_mtn_lanes<__m256, Ops256>(pair_lanes_valid(b[0].tri, b[1].tri), load, r, tmin, tmax, t_out,
-                                             u_out, v_out);
+  const uint32_t hits = intersect_mtn_lanes<__m256, Ops256>(pair_lanes_valid(b[0].tri, b[1].tri), load, r,
+                                                            tmin, tmax, t_out, u_out, v_out);
+  const uint32_t in_double = mtn_double_lanes(b[0], r) | mtn_double_lanes(b[1], r) << kBlockWidth;
+  if (in_double) [[unlikely]]
+    return mtn_lanes_in_double(b, in_double, hits, r, tmin, tmax, t_out, u_out, v_out);
+  return hits;
 }
 #endif
 
@@ -854,7 +940,7 @@ SAHBENCH_KERNEL_INLINE void prefetch_slot(const WideUnit* arena, uint32_t child,
 // an occlusion order (builders/child_order.h), kNearestStored the nearest first and then slot order.
 // Any hit does not fetch the children it pushes: a shadow ray often ends before it pops them, and
 // fetching them traced the shadow rays of Sponza 1%, of the bunny and the dragon 3% slower (two same-run
-// A/Bs, 6 and 8 rounds, t1 and t2; the terrain within noise; stop 21).
+// A/Bs, 6 and 8 rounds, t1 and t2; the terrain within noise).
 template <uint32_t N, AnyHitOrder kOrder>
 SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t mask, const float* t_entry,
                                               const WideUnit* arena, WideStackEntry* stack, uint32_t& size) {
@@ -1006,33 +1092,45 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
 // choice per ray, between two calls in the loop, traced the closest-hit rays up to 9% slower (the
 // bunny's primary rays), and a check of every ray here 3-5%, than no choice at all; the set-up has the
 // ray's values in registers.
+//
+// box=fma: the rays outside its domain (WideRay::robust_box) are skipped by the loop and traced after it
+// with the robust box test, so that the loop has one kernel inlined, as without them.
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount>
 void trace_batch(const WideBatch& batch) {
-  auto run = [&]<AnyHitOrder kOrder, IntOrder kInt>() {
+  auto run = [&]<BoxTestKind kRayBox, AnyHitOrder kOrder, IntOrder kInt>(bool robust_box) {
     for (std::size_t i = 0; i < batch.count; ++i) {
+      if constexpr (kBox == BoxTestKind::kFma) {
+        if (batch.rays[i].robust_box != robust_box) continue;
+      }
       if constexpr (kCount) ++batch.counts->rays;
-      const Hit hit = trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(batch.root_planes, batch.arena,
-                                                                              batch.rays[i], batch.counts);
+      const Hit hit = trace_ray<N, kTri, kRayBox, kAnyHit, kCount, kOrder, kInt>(
+          batch.root_planes, batch.arena, batch.rays[i], batch.counts);
       if constexpr (kAnyHit)
         batch.occluded[i] = hit.prim != kInvalidPrim;
       else
         batch.hits[i] = hit;
     }
   };
-  auto with_order = [&]<IntOrder kInt>() {
+  auto with_order = [&]<BoxTestKind kRayBox, IntOrder kInt>(bool robust_box) {
     if constexpr (kAnyHit) {
       if (batch.any_hit_order == AnyHitOrder::kStored)
-        return run.template operator()<AnyHitOrder::kStored, kInt>();
+        return run.template operator()<kRayBox, AnyHitOrder::kStored, kInt>(robust_box);
       if (batch.any_hit_order == AnyHitOrder::kNearestStored)
-        return run.template operator()<AnyHitOrder::kNearestStored, kInt>();
+        return run.template operator()<kRayBox, AnyHitOrder::kNearestStored, kInt>(robust_box);
     }
-    run.template operator()<AnyHitOrder::kNearest, kInt>();
+    run.template operator()<kRayBox, AnyHitOrder::kNearest, kInt>(robust_box);
   };
-  if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
-    if (batch.int_order == IntOrder::kFree) return with_order.template operator()<IntOrder::kFree>();
-    if (batch.int_order == IntOrder::kGuarded) return with_order.template operator()<IntOrder::kGuarded>();
+  if constexpr (kBox == BoxTestKind::kFma) {
+    if (batch.robust_box) [[unlikely]]
+      with_order.template operator()<BoxTestKind::kRobust, IntOrder::kNone>(true);
   }
-  with_order.template operator()<IntOrder::kNone>();
+  if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
+    if (batch.int_order == IntOrder::kFree)
+      return with_order.template operator()<kBox, IntOrder::kFree>(false);
+    if (batch.int_order == IntOrder::kGuarded)
+      return with_order.template operator()<kBox, IntOrder::kGuarded>(false);
+  }
+  with_order.template operator()<kBox, IntOrder::kNone>(false);
 }
 
 // The table of this instruction set's kernels: [width 4, 8][triangle test][box test][closest, any].
@@ -1079,25 +1177,31 @@ double node_test_loop(const void* nodes, std::size_t node_count, const WideRay* 
   const auto* typed = static_cast<const WideNode<N>*>(nodes);
   double sum = 0.0;
   alignas(32) float t_entry[N];
-  auto loop = [&]<IntOrder kInt>(const WideRay& ray) {
+  auto loop = [&]<BoxTestKind kRayBox, IntOrder kInt>(const WideRay& ray) {
     const RaySlabs slabs = ray_slabs(ray);
     for (std::size_t n = 0; n < node_count; ++n)
-      sum +=
-          intersect_children<N, kBox, kInt>(typed[n], ray, slabs, ray.tmin, ray.tmax, t_entry) + t_entry[0];
+      sum += intersect_children<N, kRayBox, kInt>(typed[n], ray, slabs, ray.tmin, ray.tmax, t_entry) +
+             t_entry[0];
   };
   for (std::size_t r = 0; r < ray_count; ++r) {
     // The kernels' choice of path (trace_batch), so that the tests compare the integer path as well.
-    if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
-      if (rays[r].int_order == IntOrder::kFree) {
-        loop.template operator()<IntOrder::kFree>(rays[r]);
-        continue;
-      }
-      if (rays[r].int_order == IntOrder::kGuarded) {
-        loop.template operator()<IntOrder::kGuarded>(rays[r]);
+    if constexpr (kBox == BoxTestKind::kFma) {
+      if (rays[r].robust_box) {
+        loop.template operator()<BoxTestKind::kRobust, IntOrder::kNone>(rays[r]);
         continue;
       }
     }
-    loop.template operator()<IntOrder::kNone>(rays[r]);
+    if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
+      if (rays[r].int_order == IntOrder::kFree) {
+        loop.template operator()<kBox, IntOrder::kFree>(rays[r]);
+        continue;
+      }
+      if (rays[r].int_order == IntOrder::kGuarded) {
+        loop.template operator()<kBox, IntOrder::kGuarded>(rays[r]);
+        continue;
+      }
+    }
+    loop.template operator()<kBox, IntOrder::kNone>(rays[r]);
   }
   return sum;
 }
@@ -1108,6 +1212,10 @@ template <uint32_t N, BoxTestKind kBox>
 uint32_t node_test_one(const void* node, const WideRay& ray, float* t_entry) {
   const auto& typed = *static_cast<const WideNode<N>*>(node);
   const RaySlabs slabs = ray_slabs(ray);
+  if constexpr (kBox == BoxTestKind::kFma) {
+    if (ray.robust_box)
+      return intersect_children<N, BoxTestKind::kRobust>(typed, ray, slabs, ray.tmin, ray.tmax, t_entry);
+  }
   if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
     if (ray.int_order == IntOrder::kFree)
       return intersect_children<N, kBox, IntOrder::kFree>(typed, ray, slabs, ray.tmin, ray.tmax, t_entry);

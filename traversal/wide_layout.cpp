@@ -74,9 +74,9 @@ class WideLayout final : public CompiledLayout {
       WideRay setup[kWideChunk];
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
-        const IntOrder int_order = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
+        const WideRaysInfo info = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, nullptr, nullptr, nullptr,
-                         any_hit_order_, int_order},
+                         any_hit_order_, info.int_order, info.robust_box},
                i);
       }
     });
@@ -91,10 +91,10 @@ class WideLayout final : public CompiledLayout {
       TraceCounts sum;
       for (std::size_t i = begin; i < end; i += kWideChunk) {
         const std::size_t n = std::min(kWideChunk, end - i);
-        const IntOrder int_order = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
+        const WideRaysInfo info = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
         WideCounts c;
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, hits.data(), occluded.data(), &c,
-                         any_hit_order_, int_order});
+                         any_hit_order_, info.int_order, info.robust_box});
         sum.rays += c.rays;
         sum.nodes_visited += c.inner_visits + c.leaf_visits;
         sum.prims_tested += c.prim_tests;

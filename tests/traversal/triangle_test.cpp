@@ -328,10 +328,10 @@ TEST(TravTriangleMollerTrumboreNormal, AsAccurateAsMollerTrumbore) {
   EXPECT_LT(quantile(error_mtn, 0.5), 1e-6);
 }
 
-// Like mt0 it has no epsilon: a triangle of edge 2^-11 is hit. It rejects an edge-on triangle (det == 0),
-// a line (normal 0), and a triangle so small that det is subnormal, where 1 / |det| would be infinite
-// (at edge 2^-66 it made a hit at t = inf); mt0 and the watertight test find that triangle's hit.
-TEST(TravTriangleMollerTrumboreNormal, RejectsEdgeOnAndSubnormalDeterminants) {
+// Like mt0 it has no epsilon: a triangle of edge 2^-11 is hit. It rejects an edge-on triangle (det == 0)
+// and a line (normal 0). A triangle so small that its float det would be subnormal (1 / |det| infinite:
+// at edge 2^-66 it made a hit at t = inf, and then a miss) is tested in double and hit.
+TEST(TravTriangleMollerTrumboreNormal, RejectsEdgeOnAndHitsTinyTrianglesInDouble) {
   float t, u, v;
   const float s = 0x1p-11f;
   const Triangle small{{0.0f, 0.0f, 1.0f}, {s, 0.0f, 1.0f}, {0.0f, s, 1.0f}};
@@ -343,10 +343,15 @@ TEST(TravTriangleMollerTrumboreNormal, RejectsEdgeOnAndSubnormalDeterminants) {
   const Triangle line{{0.0f, 0.0f, 1.0f}, {1.0f, 1.0f, 1.0f}, {2.0f, 2.0f, 1.0f}};
   EXPECT_FALSE(MollerTrumboreNormalTest(make_ray({0.5f, 0.5f, 0.0f}, {0.0f, 0.0f, 1.0f}))
                    .intersect(line, 0.0f, kInf, t, u, v));
-  const float tiny = 0x1p-66f;  // det = tiny^2 = 2^-132, below the smallest normal float 2^-126
+  // det = tiny^2 = 2^-132, below the smallest normal float 2^-126: the normal is below the float test's
+  // range (mtn_triangle_in_range), and the test in double hits it where the float one missed.
+  const float tiny = 0x1p-66f;
   const Triangle speck{{0.0f, 0.0f, 1.0f}, {tiny, 0.0f, 1.0f}, {0.0f, tiny, 1.0f}};
   const Ray at_speck = make_ray({tiny / 4, tiny / 4, 0.0f}, {0.0f, 0.0f, 1.0f});
-  EXPECT_FALSE(MollerTrumboreNormalTest(at_speck).intersect(speck, 0.0f, kInf, t, u, v));
+  EXPECT_TRUE(MollerTrumboreNormalTest(at_speck).intersect(speck, 0.0f, kInf, t, u, v));
+  EXPECT_FLOAT_EQ(t, 1.0f);
+  EXPECT_FLOAT_EQ(u, 0.25f);
+  EXPECT_FLOAT_EQ(v, 0.25f);
   EXPECT_TRUE(WatertightTriangleTest(at_speck).intersect(speck, 0.0f, kInf, t, u, v));
   EXPECT_FLOAT_EQ(t, 1.0f);
 }

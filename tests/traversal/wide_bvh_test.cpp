@@ -215,7 +215,14 @@ void check_node_tests() {
     double expected = 0.0;
     if (box == BoxTestKind::kRobust) expected = reference_node_sum<RobustRayBox>(nodes, rays);
     if (box == BoxTestKind::kFast) expected = reference_node_sum<FastRayBox>(nodes, rays);
-    if (box == BoxTestKind::kFma) expected = reference_node_sum<FmaRayBox>(nodes, rays);
+    if (box == BoxTestKind::kFma) {
+      // The rays box=fma does not take are tested with the robust box (FmaRayBox::takes).
+      std::vector<Ray> fma_rays, robust_rays;
+      for (const Ray& ray : rays) (FmaRayBox::takes(ray) ? fma_rays : robust_rays).push_back(ray);
+      ASSERT_FALSE(robust_rays.empty());
+      expected = reference_node_sum<FmaRayBox>(nodes, fma_rays) +
+                 reference_node_sum<RobustRayBox>(nodes, robust_rays);
+    }
     wide_rays.clear();
     for (const Ray& ray : rays) wide_rays.push_back(make_wide_ray(ray, false, box));
     for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
@@ -317,7 +324,9 @@ void check_node_tests_on_signed_zeros() {
           if (box == BoxTestKind::kFast)
             hit = FastRayBox(ray).intersect(slot, ray.tmin, ray.tmax, expected_t[i]);
           if (box == BoxTestKind::kFma)
-            hit = FmaRayBox(ray).intersect(slot, ray.tmin, ray.tmax, expected_t[i]);
+            hit = FmaRayBox::takes(ray)
+                      ? FmaRayBox(ray).intersect(slot, ray.tmin, ray.tmax, expected_t[i])
+                      : RobustRayBox(ray).intersect(slot, ray.tmin, ray.tmax, expected_t[i]);
           expected_mask |= static_cast<uint32_t>(hit) << i;
         }
         for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
@@ -362,13 +371,13 @@ TEST(WideBvh, RaySetUpSortsRaysForTheIntegerPathAtTheEdgesOfItsConditions) {
   EXPECT_EQ(kind({1, below, 1}, {1, 1, 1}), IntOrder::kGuarded);
   EXPECT_EQ(kind({1, 1, -0.0f}, {1, 1, 1}), IntOrder::kGuarded);
   EXPECT_EQ(kind({0, 0, 0}, {1, 1, 1}), IntOrder::kGuarded);
-  // A zero direction component: its reciprocal is +-1e18, so org * inv is far from 2^-100.
-  EXPECT_EQ(kind({1, 1, 1}, {0, 1, 1}), IntOrder::kFree);
+  // A zero direction component is outside box=fma's domain: the robust box test, no integer path.
+  EXPECT_EQ(kind({1, 1, 1}, {0, 1, 1}), IntOrder::kNone);
   EXPECT_EQ(kind({1, 1, 1}, {1, 1, 1}, -0.0f), IntOrder::kNone);
   EXPECT_EQ(kind({1, 1, 1}, {1, 1, 1}, -1.0f), IntOrder::kNone);
   EXPECT_EQ(kind({1, 1, 1}, {1, 1, 1}, 0.0f, -1.0f), IntOrder::kNone);
   EXPECT_EQ(kind({1, 1, 1}, {1, 1, 1}, 0.0f, -0.0f), IntOrder::kFree);
-  EXPECT_EQ(kind({1e30f, 1, 1}, {0, 1, 1}), IntOrder::kNone);  // org * 1e18 overflows
+  EXPECT_EQ(kind({1e30f, 1, 1}, {0, 1, 1}), IntOrder::kNone);
   EXPECT_EQ(kind({0, 1, 1}, {1, 1, 1}, -1.0f), IntOrder::kNone);
   // The other box tests never take the integer path.
   EXPECT_EQ(make_wide_ray(Ray{{1, 2, 3}, 0.0f, {1, 1, 1}}, false, BoxTestKind::kFast).int_order,
@@ -376,10 +385,38 @@ TEST(WideBvh, RaySetUpSortsRaysForTheIntegerPathAtTheEdgesOfItsConditions) {
   const std::vector<Ray> batch{Ray{{1, 2, 3}, 0.0f, {1, 1, 1}}, Ray{{0, 2, 3}, 0.0f, {1, 1, 1}},
                                Ray{{1, 2, 3}, -1.0f, {1, 1, 1}}};
   std::vector<WideRay> out(batch.size());
-  EXPECT_EQ(make_wide_rays(std::span(batch).first(1), out.data(), false, BoxTestKind::kFma), IntOrder::kFree);
-  EXPECT_EQ(make_wide_rays(std::span(batch).first(2), out.data(), false, BoxTestKind::kFma),
+  EXPECT_EQ(make_wide_rays(std::span(batch).first(1), out.data(), false, BoxTestKind::kFma).int_order,
+            IntOrder::kFree);
+  EXPECT_EQ(make_wide_rays(std::span(batch).first(2), out.data(), false, BoxTestKind::kFma).int_order,
             IntOrder::kGuarded);
-  EXPECT_EQ(make_wide_rays(batch, out.data(), false, BoxTestKind::kFma), IntOrder::kNone);
+  EXPECT_EQ(make_wide_rays(batch, out.data(), false, BoxTestKind::kFma).int_order, IntOrder::kNone);
+}
+
+// box=fma's domain (ray_box.h: FmaRayBox::takes) at both edges: direction components from the smallest
+// normal float up, and org * (1 / d) up to the largest float. The rays outside it are marked for the
+// robust box test and leave the batch's integer order as the others make it.
+TEST(WideBvh, RaySetUpSendsRaysOutsideTheFmaDomainToTheRobustBoxTest) {
+  auto robust = [](Vec3 org, Vec3 dir) {
+    const Ray ray{org, 0.0f, dir, std::numeric_limits<float>::infinity()};
+    const bool wide = make_wide_ray(ray, false, BoxTestKind::kFma).robust_box;
+    EXPECT_EQ(wide, !FmaRayBox::takes(ray));
+    return wide;
+  };
+  const float min = std::numeric_limits<float>::min(), below = std::nextafter(min, 0.0f);
+  EXPECT_FALSE(robust({1, 2, 3}, {1, -1, 0.5f}));
+  EXPECT_FALSE(robust({1, 2, 3}, {min, -min, 1}));
+  EXPECT_TRUE(robust({1, 2, 3}, {below, 1, 1}));
+  EXPECT_TRUE(robust({1, 2, 3}, {1, -0.0f, 1}));
+  EXPECT_TRUE(robust({1, 2, 3}, {1, 1, 0.0f}));
+  // org * (1 / d): 1.7e38 * 2 is finite, 1.8e38 * 2 is not.
+  EXPECT_FALSE(robust({1.7e38f, 2, 3}, {0.5f, 1, 1}));
+  EXPECT_TRUE(robust({1.8e38f, 2, 3}, {0.5f, 1, 1}));
+  EXPECT_FALSE(make_wide_ray(Ray{{1, 2, 3}, 0.0f, {0, 1, 1}}, false, BoxTestKind::kRobust).robust_box);
+  const std::vector<Ray> batch{Ray{{1, 2, 3}, 0.0f, {1, 1, 1}}, Ray{{1, 2, 3}, 0.0f, {0, 1, 1}}};
+  std::vector<WideRay> out(batch.size());
+  const WideRaysInfo info = make_wide_rays(batch, out.data(), false, BoxTestKind::kFma);
+  EXPECT_TRUE(info.robust_box);
+  EXPECT_EQ(info.int_order, IntOrder::kFree);
 }
 
 TEST(WideBvh, NodeTestsOfEveryIsaAgreeOnSignedZerosNegativeTminAndOverflowingOrigins) {
@@ -426,7 +463,9 @@ TEST(WideBvh, NanPlanesAreStoredAsInfinitiesThatTestTheSame) {
       double expected = 0.0;
       if (box == BoxTestKind::kRobust) expected = expected_sum.operator()<RobustRayBox>(ray);
       if (box == BoxTestKind::kFast) expected = expected_sum.operator()<FastRayBox>(ray);
-      if (box == BoxTestKind::kFma) expected = expected_sum.operator()<FmaRayBox>(ray);
+      if (box == BoxTestKind::kFma)
+        expected = FmaRayBox::takes(ray) ? expected_sum.operator()<FmaRayBox>(ray)
+                                         : expected_sum.operator()<RobustRayBox>(ray);
       const WideRay wide_ray = make_wide_ray(ray, false, box);
       for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
         if (!kernel_isa_available(isa)) continue;

@@ -12,6 +12,7 @@
 #include "builders/registry.h"
 #include "cli/trace_command.h"
 #include "core/error.h"
+#include "harness/report/compare.h"
 #include "harness/report/report.h"
 #include "harness/run/csv.h"
 #include "harness/run/environment.h"
@@ -66,6 +67,24 @@ TEST(HarnessRun, EveryCellWritesARowWithNoMismatchesAndResumeSkipsThem) {
     EXPECT_EQ(row.at("sah_c_trav"), "1");
   }
   EXPECT_NE(log.str().find("[32/32]"), std::string::npos) << log.str();
+
+  // Same input, same parameters: the same tree and traversal whatever the thread count (DESIGN.md), so
+  // every deterministic column of a 2-thread row equals its 1-thread twin's.
+  std::vector<std::string> deterministic = {"hit_fraction", "arity", "ray_count", "scene_triangles"};
+  for (const MetricRule& rule : deterministic_metrics()) deterministic.push_back(rule.column);
+  std::map<std::string, std::map<std::string, const CsvRow*>> by_threads;  // cell without threads -> threads
+  for (const auto& row : rows)
+    by_threads[row.at("scene") + "|" + row.at("builder") + "|" + row.at("builder_params") + "|" +
+               row.at("layout") + "|" + row.at("ray_set")][row.at("threads")] = &row;
+  ASSERT_EQ(by_threads.size(), 16u);
+  for (const auto& [cell, rows_of] : by_threads) {
+    ASSERT_EQ(rows_of.size(), 2u) << cell;
+    const CsvRow &one = *rows_of.at("1"), &two = *rows_of.at("2");
+    for (const std::string& column : deterministic) {
+      EXPECT_FALSE(one.at(column).empty()) << cell << " " << column;
+      EXPECT_EQ(one.at(column), two.at(column)) << cell << " " << column;
+    }
+  }
 
   // Resume: nothing left to do, nothing appended.
   std::ostringstream again;

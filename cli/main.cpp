@@ -78,15 +78,26 @@ int main(int argc, char** argv) {
   report_cmd->add_option("--output", report.output, "write the report to this file instead of stdout");
 
   TraceCommandOptions trace;
+  std::string trace_query = "closest";
   auto* trace_cmd =
       app.add_subcommand("trace", "Trace rays from a file on one builder's tree; one output line per ray");
   trace_cmd->add_option("--scene", trace.scene, "scene file, shared-scene name or procedural spec")
       ->required();
-  trace_cmd->add_option("--builder", trace.builder, "NAME or NAME:key=value,...")->capture_default_str();
-  trace_cmd->add_option("--layout", trace.layout, "layout")->capture_default_str();
+  trace_cmd
+      ->add_option("--builder", trace.builder,
+                   "NAME or NAME:key=value,...; embree:quality=low|medium|high for Embree's own BVH")
+      ->capture_default_str();
+  trace_cmd->add_option(
+      "--layout", trace.layout,
+      "layout spec (default bvh2); with --builder embree: embree_1 (default), embree_8 or embree_16");
+  trace_cmd->add_option("--query", trace_query, "closest | any (any: only the hit column is filled)")
+      ->capture_default_str();
   trace_cmd->add_option("--rays", trace.rays, "ray file: 'ox oy oz dx dy dz [tmin tmax]' per line")
       ->required();
-  trace_cmd->add_option("--out", trace.out, "output CSV: ray,hit,prim,t,u,v")->required();
+  trace_cmd
+      ->add_option("--out", trace.out,
+                   "output CSV: a '# builder=... layout=... isa=... query=...' line, then ray,hit,prim,t,u,v")
+      ->required();
 
   CompareOptions compare;
   std::string compare_json;
@@ -183,7 +194,10 @@ int main(int argc, char** argv) {
       if (!compare_json.empty()) compare.json = compare_json;
       return compare_results(compare, std::cout).regressions > 0 ? 1 : 0;
     }
-    if (*trace_cmd) run_trace_command(trace, std::cerr);
+    if (*trace_cmd) {
+      trace.query = parse_trace_query(trace_query);
+      run_trace_command(trace, std::cerr);
+    }
     if (*image_cmd) run_image_command(image, std::cerr);
     if (*image_diff_cmd) run_image_diff_command(image_diff, std::cerr);
     if (*list_cmd) print_catalogue(std::cout);

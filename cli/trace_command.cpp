@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cstdint>
 #include <fstream>
 #include <limits>
 #include <ostream>
@@ -14,6 +15,9 @@
 #include "core/error.h"
 #include "core/text_file.h"
 #include "harness/config/config.h"
+#include "harness/embree/embree_layouts.h"
+#include "harness/embree/embree_scene.h"
+#include "harness/embree/embree_trace.h"
 #include "scenes/load.h"
 #include "traversal/layout.h"
 
@@ -98,27 +102,97 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
   return rays;
 }
 
+TraceQuery parse_trace_query(std::string_view text) {
+  if (text == "closest") return TraceQuery::kClosest;
+  if (text == "any") return TraceQuery::kAny;
+  throw Error("--query '" + printable(text) + "': expected closest or any");
+}
+
+std::string_view to_string(TraceQuery query) {
+  return query == TraceQuery::kAny ? "any" : "closest";
+}
+
+namespace {
+
+// The answers of one trace, and what gave them: the builder with its resolved parameters, the layout and
+// the ISA its kernels ran with.
+struct TraceAnswers {
+  std::string builder, layout, isa;
+  std::vector<Hit> hits;          // closest-hit queries
+  std::vector<uint8_t> occluded;  // any-hit queries
+};
+
+TraceAnswers trace_ours(const BuilderRun& run, std::string_view layout_text, const Scene& scene,
+                        const std::vector<Ray>& rays, TraceQuery query) {
+  if (find_embree_layout(layout_text))
+    throw Error("--layout '" + std::string(layout_text) +
+                "' traces Embree's own BVH: use it with --builder embree");
+  const LayoutSpec spec = parse_layout_spec(layout_text);
+  const Bvh bvh = run.info->build(BuildInput::from_triangles(scene.triangles), run.values);
+  const auto layout = compile_layout(spec, bvh, scene.triangles);
+  TraceAnswers out{run.name + ":" + run.params_text(), spec.text(), layout->isa(), {}, {}};
+  if (query == TraceQuery::kAny) {
+    out.occluded.resize(rays.size());
+    layout->trace_any(rays, out.occluded);
+  } else {
+    out.hits.resize(rays.size());
+    layout->trace_closest(rays, out.hits);
+  }
+  return out;
+}
+
+TraceAnswers trace_embree(const BuilderRun& run, std::string_view layout_text, const Scene& scene,
+                          const std::vector<Ray>& rays, TraceQuery query) {
+  const EmbreeLayout* layout = find_embree_layout(layout_text);
+  if (!layout) {
+    std::string known;
+    for (const auto& l : kEmbreeLayouts) known += (known.empty() ? "" : ", ") + std::string(l.name);
+    throw Error("--layout '" + std::string(layout_text) + "': Embree's BVH is traced by Embree's layouts (" +
+                known + ")");
+  }
+  // No thread limit of its own: the device follows TBB's, as our kernels do.
+  EmbreeDevice device(0);
+  if (const auto why = embree_layout_unsupported(device, *layout))
+    throw Error("--layout '" + std::string(layout_text) + "': " + *why);
+  const EmbreeScene embree(device, scene.triangles, run.quality);
+  TraceAnswers out{run.name + ":" + run.params_text(), layout->name, "embree:" + embree_isa(device), {}, {}};
+  if (query == TraceQuery::kAny) {
+    out.occluded.resize(rays.size());
+    embree_trace_any(embree, *layout, rays, out.occluded);
+  } else {
+    out.hits.resize(rays.size());
+    embree_trace_closest(embree, *layout, rays, out.hits);
+  }
+  return out;
+}
+
+}  // namespace
+
 void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
   const std::vector<Ray> rays = read_rays(options.rays);
   const Scene scene = load_scene(options.scene);
-  BuilderRun spec = parse_builder_run(options.builder);
-  if (spec.is_embree())
-    throw Error("--builder '" + options.builder +
-                "': trace runs our kernels on our trees; embree_bvh builds Embree's tree in our format");
-  resolve(spec);
-  const BuilderInfo& info = *spec.info;
-  const ParamSet& params = spec.values;
-  const Bvh bvh = info.build(BuildInput::from_triangles(scene.triangles), params);
-  const auto layout = compile_layout(options.layout, bvh, scene.triangles);
-  std::vector<Hit> hits(rays.size());
-  layout->trace_closest(rays, hits);
+  BuilderRun run = parse_builder_run(options.builder);
+  resolve(run);
+  const std::string layout_text = !options.layout.empty() ? options.layout
+                                  : run.is_embree()       ? kEmbreeLayouts[0].name
+                                                          : "bvh2";
+  const TraceAnswers answers = run.is_embree() ? trace_embree(run, layout_text, scene, rays, options.query)
+                                               : trace_ours(run, layout_text, scene, rays, options.query);
+  const std::string what = fmt::format("builder={} layout={} isa={} query={}", answers.builder,
+                                       answers.layout, answers.isa, to_string(options.query));
 
   std::ofstream out(options.out);
   if (!out) throw Error(options.out.string() + ": cannot open for writing");
+  out << "# " << what << "\n";
   out << "ray,hit,prim,t,u,v\n";
   std::size_t found = 0;
-  for (std::size_t i = 0; i < hits.size(); ++i) {
-    const Hit& h = hits[i];
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (options.query == TraceQuery::kAny) {
+      found += answers.occluded[i] != 0;
+      out << i << (answers.occluded[i] != 0 ? ",1,,,,\n" : ",0,,,,\n");
+      continue;
+    }
+    const Hit& h = answers.hits[i];
     if (h.found()) {
       ++found;
       out << fmt::format("{},1,{},{:.9g},{:.9g},{:.9g}\n", i, h.prim, h.t, h.u, h.v);
@@ -127,9 +201,8 @@ void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
     }
   }
   if (!out) throw Error(options.out.string() + ": write failed");
-  log << fmt::format("{} rays, {} hits, {} on {} ({} triangles) -> {}\n", rays.size(), found,
-                     info.name + " " + params.to_string(), scene.name, scene.triangles.size(),
-                     options.out.string());
+  log << fmt::format("{}\n{} rays, {} hits on {} ({} triangles) -> {}\n", what, rays.size(), found,
+                     scene.name, scene.triangles.size(), options.out.string());
 }
 
 }  // namespace sahbench

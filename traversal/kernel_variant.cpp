@@ -116,6 +116,10 @@ std::optional<AnyHitOrder> parse_any_hit_order(std::string_view name) {
   return value_of(kAnyHitOrderNames, name);
 }
 
+bool cpu_supports_kernel_isa(KernelIsa isa) {
+  return cpu_supports(isa);
+}
+
 bool kernel_isa_available(KernelIsa isa) {
   if (isa == KernelIsa::kAuto) return false;
   return compiled_in(isa) && cpu_supports(isa);

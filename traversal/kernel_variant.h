@@ -58,6 +58,9 @@ std::optional<BoxTestKind> parse_box_test(std::string_view name);
 std::optional<KernelIsa> parse_kernel_isa(std::string_view name);
 std::optional<AnyHitOrder> parse_any_hit_order(std::string_view name);
 
+/// Whether the CPU (and OS) can run code for `isa`, whether or not this program compiled kernels for it:
+/// tells an ISA the CPU lacks from one the build left out. kScalar always; kAuto never.
+bool cpu_supports_kernel_isa(KernelIsa isa);
 /// Whether kernels for `isa` are compiled into this program and the CPU (and OS) can run them. kScalar
 /// is always available; kAuto is never (resolve it first).
 bool kernel_isa_available(KernelIsa isa);

@@ -183,18 +183,11 @@ TraceCell embree_cell(CsvRow row, std::string label, const EmbreeScene& scene, c
   TraceCell cell = new_cell(std::move(row), std::move(label), rs, set_index);
   const EmbreeScene* s = &scene;
   const RaySet* set = &rs;
-  const int width = layout.packet_width;
-  cell.trace = [s, set, width, hits = cell.hits, occluded = cell.occluded] {
-    if (width == 1) {
-      if (set->occlusion)
-        embree_occluded1(*s, set->rays, *occluded);
-      else
-        embree_intersect1(*s, set->rays, *hits);
-    } else if (set->occlusion) {
-      embree_occluded_packets(*s, set->rays, *occluded, width);
-    } else {
-      embree_intersect_packets(*s, set->rays, *hits, width);
-    }
+  cell.trace = [s, set, layout, hits = cell.hits, occluded = cell.occluded] {
+    if (set->occlusion)
+      embree_trace_any(*s, layout, set->rays, *occluded);
+    else
+      embree_trace_closest(*s, layout, set->rays, *hits);
   };
   cell.keep_alive = std::move(keep_alive);
   return cell;

@@ -169,6 +169,11 @@ std::vector<CsvRow> read_csv(const std::filesystem::path& path) {
   std::vector<CsvRow> rows;
   // Only complete lines: a trailing partial row is one being written or cut off by a crash.
   text.resize(text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1);
+  // Comment lines before the header ('#', as `sahbench trace` writes what answered) are not records.
+  while (pos < text.size() && text[pos] == '#') {
+    pos = text.find('\n', pos) + 1;
+    ++line;
+  }
   if (!next_record(text, pos, header, line, path)) return rows;
   while (true) {
     const std::size_t row_line = line;

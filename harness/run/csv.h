@@ -36,7 +36,8 @@ class CsvWriter {
   bool dropped_partial_row_ = false;
 };
 
-/// Reads a whole CSV file into rows keyed by header names. Malformed quoting or a row with the wrong
+/// Reads a whole CSV file into rows keyed by header names; lines starting with '#' before the header are
+/// comments and skipped. Malformed quoting or a row with the wrong
 /// number of fields is an error naming the file and line. A last line without its newline is a row
 /// being written (or cut off) and is left out.
 std::vector<CsvRow> read_csv(const std::filesystem::path& path);

@@ -18,6 +18,7 @@
 #include "scenes/scene_path.h"
 #include "tests/builders/builder_cases.h"
 #include "tests/support/hit_check.h"
+#include "tests/support/prerequisites.h"
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
 #include "traversal/bvh2_traversal.h"
@@ -142,12 +143,10 @@ TEST(Sbvh, SameTreeForAnyThreadCount) {
 TEST(Sbvh, SharedScenesSameHitsAsBinnedSah) {
   std::vector<std::string> names{"stanford_bunny"};
   if (!kSanitized) names.push_back("crytek_sponza");
+  test::Skips skips;
   for (const auto& name : names) {
     SCOPED_TRACE(name);
-    if (!find_scene_file(name)) {
-      std::cout << "[ skipped  ] shared scene '" << name << "' not found\n";
-      continue;
-    }
+    if (!skips.have_scene(name)) continue;
     const Scene scene = load_scene(name);
     const auto& tris = scene.triangles;
     const Bvh sbvh = build("sbvh", tris);
@@ -170,6 +169,7 @@ TEST(Sbvh, SharedScenesSameHitsAsBinnedSah) {
     }
     EXPECT_GT(hits, rays.size() / 20);
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 TEST(Sbvh, RejectsBadParametersAndMissingTriangles) {

@@ -16,6 +16,7 @@
 #include "harness/embree/embree_bvh_builder.h"
 #include "scenes/load.h"
 #include "tests/support/config_error.h"
+#include "tests/support/prerequisites.h"
 
 namespace sahbench {
 namespace {
@@ -618,8 +619,9 @@ TEST(HarnessConfigLoad, ShippedConfigsLoadAndViewSponzaFromInside) {
     }
   }
   EXPECT_GE(experiments, 6u);
-  // Inside the building, where the scene is present: within its box, under the roof.
-  if (eyes.empty() || !find_scene_file("crytek_sponza")) return;
+  ASSERT_FALSE(eyes.empty()) << "no shipped config measures crytek_sponza";
+  // Inside the building: within its box, under the roof.
+  SAHBENCH_REQUIRE_SHARED_SCENE("crytek_sponza");
   const Scene sponza = load_scene("crytek_sponza");
   Aabb box;
   for (const Triangle& t : sponza.triangles) box.extend(t.bounds());

@@ -15,6 +15,7 @@
 #include "core/refit.h"
 #include "tests/builders/builder_cases.h"
 #include "tests/support/hit_check.h"
+#include "tests/support/prerequisites.h"
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
 #include "traversal/bvh2_traversal.h"
@@ -37,8 +38,9 @@ std::vector<std::pair<std::string, ParamOverrides>> builders_for(uint32_t arity)
 
 // The specs a layout is tested with: its 4 triangle tests x 3 box tests, for SIMD layouts with the scalar
 // kernels and with every SIMD set available here (the SIMD sets share one source, so the variants are
-// crossed with the widest and the default variant with the others, to keep the suite quick).
-std::vector<std::string> specs_for(const LayoutInfo& layout) {
+// crossed with the widest and the default variant with the others, to keep the suite quick). The sets
+// left out for want of kernels go into `skips`.
+std::vector<std::string> specs_for(const LayoutInfo& layout, test::Skips& skips) {
   std::vector<std::string> out;
   auto add_variants = [&](const std::string& isa) {
     for (const char* tri : {"watertight", "mt", "mt0", "mtn"})
@@ -63,7 +65,7 @@ std::vector<std::string> specs_for(const LayoutInfo& layout) {
   // The other sets with the default variant, and with tri=mtn and box=fma, the two tests written with
   // FMA instructions (fmaf on SSE).
   for (KernelIsa isa : {KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
-    if (isa == best || !kernel_isa_available(isa)) continue;
+    if (isa == best || !skips.have_isa(isa)) continue;
     out.push_back(layout.name + ":isa=" + std::string(to_string(isa)));
     out.push_back(layout.name + ":tri=mtn,box=fma,isa=" + std::string(to_string(isa)));
   }
@@ -96,6 +98,7 @@ std::vector<Case> cases() {
 class LayoutVsReference : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBruteForce) {
+  test::Skips skips;
   const LayoutInfo& layout = find_layout(GetParam());
   for (const Case& scene : cases()) {
     SCOPED_TRACE(scene.name);
@@ -111,7 +114,7 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
       for (const auto& [builder, overrides] : builders_for(layout.arity)) {
         const BuilderInfo& info = find_builder(builder);
         const Bvh bvh = info.build(input, resolve_params(builder, info.params, overrides));
-        for (const std::string& text : specs_for(layout)) {
+        for (const std::string& text : specs_for(layout, skips)) {
           SCOPED_TRACE(builder + " " + text);
           const LayoutSpec spec = parse_layout_spec(text);
           const auto compiled = compile_layout(spec, bvh, scene.triangles);
@@ -184,6 +187,7 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
       }
     }
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 std::vector<std::string> layout_names() {
@@ -254,6 +258,7 @@ TEST(Layouts, RefitLayoutsMatchBruteForceOnDeformedGeometry) {
 // triangles of edge 1e15, lines (zero normal) and triangles seen edge-on; rays aim at specks and have
 // +0 and -0 components.
 TEST(Layouts, StoredNormalKernelsComputeTheScalarTestsHits) {
+  test::Skips skips;
   auto tris = test::random_triangles(1500, 31);
   std::vector<Ray> rays = test::random_rays(tris, 1500, 9);
   const float tiny = 0x1p-66f;
@@ -275,7 +280,7 @@ TEST(Layouts, StoredNormalKernelsComputeTheScalarTestsHits) {
     const Bvh bvh = info.build(BuildInput::from_triangles(tris),
                                resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
     for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
-      if (!kernel_isa_available(isa)) continue;
+      if (!skips.have_isa(isa)) continue;
       const std::string spec =
           "bvh" + std::to_string(arity) + ":tri=mtn,box=fast,isa=" + std::string(to_string(isa));
       SCOPED_TRACE(spec);
@@ -299,6 +304,7 @@ TEST(Layouts, StoredNormalKernelsComputeTheScalarTestsHits) {
     }
   }
   EXPECT_GT(found, rays.size());  // over all the layouts: most rays hit
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 // A layout refitted in place is the layout compiled afresh from the refitted tree: layouts depend only on
@@ -423,6 +429,7 @@ TEST(Layouts, EmptyTreeMissesEverything) {
 // may report the crossing (before, every one answered t = inf within tmax = inf). The same ray with a
 // direction of 1e-10 has its hit at t = 5e10, which all must find.
 TEST(Layouts, NoHitAtAnInfiniteT) {
+  test::Skips skips;
   const std::vector<Triangle> tris = {{{-1, -1, 0}, {3, -1, 0}, {-1, 3, 0}},
                                       {{5, 5, 1}, {6, 5, 1}, {5, 6, 1}}};
   Ray overflow;
@@ -440,7 +447,7 @@ TEST(Layouts, NoHitAtAnInfiniteT) {
     const BuilderInfo& builder = find_builder(builder_name);
     const Bvh bvh = builder.build(BuildInput::from_triangles(tris),
                                   resolve_params(builder.name, builder.params, overrides));
-    for (const std::string& spec : specs_for(layout)) {
+    for (const std::string& spec : specs_for(layout, skips)) {
       SCOPED_TRACE(spec);
       const auto compiled = compile_layout(spec, bvh, tris);
       std::vector<Hit> hits(rays.size());
@@ -456,6 +463,7 @@ TEST(Layouts, NoHitAtAnInfiniteT) {
       EXPECT_EQ(occluded[1], 1);
     }
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {

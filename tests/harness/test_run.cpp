@@ -2,8 +2,11 @@
 // without redoing cells, filters with --only, and the report and trace commands read and write what
 // they say.
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -12,13 +15,20 @@
 #include "builders/registry.h"
 #include "cli/trace_command.h"
 #include "core/error.h"
+#include "harness/embree/embree_layouts.h"
+#include "harness/embree/embree_scene.h"
+#include "harness/embree/embree_trace.h"
+#include "harness/report/compare.h"
 #include "harness/report/report.h"
 #include "harness/run/csv.h"
 #include "harness/run/environment.h"
 #include "harness/run/runner.h"
 #include "scenes/load.h"
 #include "tests/support/error_of.h"
+#include "tests/support/hit_check.h"
+#include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
+#include "traversal/kernel_variant.h"
 
 namespace sahbench {
 namespace {
@@ -66,6 +76,23 @@ TEST(HarnessRun, EveryCellWritesARowWithNoMismatchesAndResumeSkipsThem) {
     EXPECT_EQ(row.at("sah_c_trav"), "1");
   }
   EXPECT_NE(log.str().find("[32/32]"), std::string::npos) << log.str();
+  // Same input, same parameters: the same tree and traversal whatever the thread count (DESIGN.md), so
+  // every deterministic column of a 2-thread row equals its 1-thread twin's.
+  std::vector<std::string> deterministic = {"hit_fraction", "arity", "ray_count", "scene_triangles"};
+  for (const MetricRule& rule : deterministic_metrics()) deterministic.push_back(rule.column);
+  std::map<std::string, std::map<std::string, const CsvRow*>> by_threads;  // cell without threads -> threads
+  for (const auto& row : rows)
+    by_threads[row.at("scene") + "|" + row.at("builder") + "|" + row.at("builder_params") + "|" +
+               row.at("layout") + "|" + row.at("ray_set")][row.at("threads")] = &row;
+  ASSERT_EQ(by_threads.size(), 16u);
+  for (const auto& [cell, rows_of] : by_threads) {
+    ASSERT_EQ(rows_of.size(), 2u) << cell;
+    const CsvRow &one = *rows_of.at("1"), &two = *rows_of.at("2");
+    for (const std::string& column : deterministic) {
+      EXPECT_FALSE(one.at(column).empty()) << cell << " " << column;
+      EXPECT_EQ(one.at(column), two.at(column)) << cell << " " << column;
+    }
+  }
 
   // Resume: nothing left to do, nothing appended.
   std::ostringstream again;
@@ -311,21 +338,184 @@ TEST(HarnessTrace, OutputMatchesBruteForceLineByLine) {
   EXPECT_EQ(rows[3].at("hit"), "0");
 }
 
-TEST(HarnessTrace, EmbreeOrAnUnknownBuilderIsAnErrorNamingIt) {
+TEST(HarnessTrace, UnknownBuildersAndMismatchedLayoutsAreErrorsNamingThem) {
   const auto dir = temp_dir();
   const auto rays_path = dir / "one_ray.txt", out_path = dir / "one_hit.csv";
   std::ofstream(rays_path) << "0 0 5 0 0 -1\n";
   std::ostringstream log;
-  for (const char* builder : {"embree", "embree_high", "no_such_builder", "binned_sah:bins=0"}) {
-    try {
-      run_trace_command({"proc:sphere:tris=200", builder, "bvh2", rays_path, out_path}, log);
-      ADD_FAILURE() << builder << " was accepted";
-    } catch (const Error& e) {
-      const std::string what = e.what();
-      const std::string named = std::string(builder).starts_with("binned") ? "bins" : builder;
-      EXPECT_NE(what.find(named), std::string::npos) << what;
+  // {builder, layout, the text the error must name}
+  const std::vector<std::array<std::string, 3>> cases = {
+      {"no_such_builder", "bvh2", "no_such_builder"},
+      {"binned_sah:bins=0", "bvh2", "bins"},
+      {"embree:quality=best", "", "best"},
+      {"embree:bins=8", "", "bins"},
+      {"embree", "bvh2", "--layout 'bvh2'"},
+      {"binned_sah", "embree_1", "--layout 'embree_1'"},
+      {"binned_sah", "bvh3", "bvh3"},
+  };
+  for (const auto& [builder, layout, named] : cases) {
+    SCOPED_TRACE(builder + " " + layout);
+    const std::string what = test::error_of([&] {
+      run_trace_command({"proc:sphere:tris=200", builder, layout, rays_path, out_path}, log);
+    });
+    EXPECT_NE(what.find(named), std::string::npos) << what;
+  }
+}
+
+// A ray file of test::random_rays on `triangles` (hits, misses, bounded segments, +-0 components), written
+// with 9 significant digits so that read_rays gives back the same floats.
+std::vector<Ray> write_ray_file(const std::filesystem::path& path, const std::vector<Triangle>& triangles,
+                                std::size_t count) {
+  const auto rays = test::random_rays(triangles, count, 17);
+  std::ofstream out(path);
+  for (const Ray& r : rays)
+    out << fmt::format("{:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g}\n", r.org.x, r.org.y, r.org.z,
+                       r.dir.x, r.dir.y, r.dir.z, r.tmin, r.tmax);
+  return rays;
+}
+
+// The first line of a trace output: "# builder=... layout=... isa=... query=...".
+std::string first_line(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);
+  return line;
+}
+
+// Relative t difference up to which a hit on the reference's primitive agrees with it.
+constexpr float kTRoundingLimit = 1e-4f;
+
+struct TraceCheck {
+  std::size_t hits = 0, misses = 0, mismatches = 0;
+  std::string first_mismatch;
+};
+
+// Compares a trace output line by line with brute force (watertight): hit flags for any hit; for closest
+// hits the primitive and t (test::same_closest_hit) and that (u, v) are barycentrics.
+TraceCheck check_trace_output(const std::filesystem::path& out_path, const std::vector<Ray>& rays,
+                              const std::vector<Triangle>& tris, TraceQuery query) {
+  TraceCheck c;
+  const auto rows = read_csv(out_path);
+  EXPECT_EQ(rows.size(), rays.size());
+  for (std::size_t i = 0; i < std::min(rows.size(), rays.size()); ++i) {
+    const CsvRow& row = rows[i];
+    EXPECT_EQ(row.at("ray"), std::to_string(i));
+    const bool hit = row.at("hit") == "1";
+    hit ? ++c.hits : ++c.misses;
+    ::testing::AssertionResult same = ::testing::AssertionSuccess();
+    if (query == TraceQuery::kAny) {
+      // Only the flag: the any-hit kernels report no primitive or distance.
+      EXPECT_EQ(row.at("prim") + row.at("t") + row.at("u") + row.at("v"), "") << "ray " << i;
+      if (hit != brute_force_any(tris, rays[i])) same = ::testing::AssertionFailure() << "occlusion differs";
+    } else {
+      Hit got;
+      if (hit) {
+        got.prim = static_cast<uint32_t>(std::stoul(row.at("prim")));
+        got.t = std::stof(row.at("t"));
+        const float u = std::stof(row.at("u")), v = std::stof(row.at("v"));
+        EXPECT_TRUE(u >= -1e-4f && v >= -1e-4f && u + v <= 1.0f + 1e-4f)
+            << "ray " << i << ": " << u << " " << v;
+      } else {
+        EXPECT_EQ(row.at("prim") + row.at("t"), "") << "ray " << i;
+      }
+      const Hit ref = brute_force_closest(tris, rays[i]);
+      same = test::same_closest_hit(got, ref, tris, rays[i]);
+      // The same primitive at a t within Möller-Trumbore's rounding of the watertight one (grazing rays
+      // reach 1e-5 relative): Embree's default test, not a wrong answer.
+      if (!same && got.found() && got.prim == ref.prim && std::abs(got.t - ref.t) <= kTRoundingLimit * ref.t)
+        same = ::testing::AssertionSuccess();
+    }
+    if (!same && c.mismatches++ == 0) c.first_mismatch = "ray " + std::to_string(i) + ": " + same.message();
+  }
+  return c;
+}
+
+TEST(HarnessTrace, AnyHitMatchesBruteForceAndReportsOnlyTheFlag) {
+  const auto dir = temp_dir();
+  const std::string scene_spec = "proc:soup:tris=600";
+  const Scene scene = load_scene(scene_spec);
+  const auto rays_path = dir / "any_rays.txt", out_path = dir / "any_hits.csv";
+  const auto rays = write_ray_file(rays_path, scene.triangles, 1500);
+  for (const auto& [builder, layout] : std::vector<std::pair<std::string, std::string>>{
+           {"binned_sah", "bvh2"}, {"binned_sah", "bvh2_packed"}, {"wide_binned_sah:arity=8", "bvh8"}}) {
+    SCOPED_TRACE(builder + " " + layout);
+    std::ostringstream log;
+    run_trace_command({scene_spec, builder, layout, rays_path, out_path, TraceQuery::kAny}, log);
+    EXPECT_NE(first_line(out_path).find("query=any"), std::string::npos) << first_line(out_path);
+    const TraceCheck c = check_trace_output(out_path, rays, scene.triangles, TraceQuery::kAny);
+    EXPECT_EQ(c.mismatches, 0u) << c.first_mismatch;
+    EXPECT_GT(c.hits, rays.size() / 10);
+    EXPECT_GT(c.misses, rays.size() / 10);
+  }
+}
+
+// Every Embree layout this CPU runs, both queries, against brute force; one it cannot run is an error
+// naming the layout. Embree's default triangle test is not watertight, so a few disagreements on rays
+// through edges are rounding (test_embree.cpp's kDefaultModeMismatchLimit); more would be a wrong answer.
+TEST(HarnessTrace, EmbreeLayoutsMatchBruteForceOrAreRefusedByName) {
+  const auto dir = temp_dir();
+  const std::string scene_spec = "proc:soup:tris=600";
+  const Scene scene = load_scene(scene_spec);
+  const auto rays_path = dir / "embree_rays.txt", out_path = dir / "embree_hits.csv";
+  const auto rays = write_ray_file(rays_path, scene.triangles, 1500);
+  const EmbreeDevice device(1);
+  std::size_t traced = 0;
+  for (const EmbreeLayout& layout : kEmbreeLayouts) {
+    for (const TraceQuery query : {TraceQuery::kClosest, TraceQuery::kAny}) {
+      SCOPED_TRACE(std::string(layout.name) + " " + std::string(to_string(query)));
+      const TraceCommandOptions options{scene_spec, "embree:quality=high", layout.name, rays_path, out_path,
+                                        query};
+      std::ostringstream log;
+      if (const auto why = embree_layout_unsupported(device, layout)) {
+        const std::string what = test::error_of([&] { run_trace_command(options, log); });
+        EXPECT_NE(what.find(std::string("--layout '") + layout.name + "'"), std::string::npos) << what;
+        EXPECT_NE(what.find("packets"), std::string::npos) << what;
+        continue;
+      }
+      run_trace_command(options, log);
+      ++traced;
+      const std::string named = "# builder=embree:quality=high layout=" + std::string(layout.name) +
+                                " isa=embree:" + embree_isa(device) +
+                                " query=" + std::string(to_string(query));
+      EXPECT_EQ(first_line(out_path), named);
+      EXPECT_NE(log.str().find(named.substr(2)), std::string::npos) << log.str();
+      const TraceCheck c = check_trace_output(out_path, rays, scene.triangles, query);
+      EXPECT_LE(static_cast<double>(c.mismatches), 0.001 * static_cast<double>(rays.size()))
+          << c.first_mismatch;
+      EXPECT_GT(c.hits, rays.size() / 10);
+      EXPECT_GT(c.misses, rays.size() / 10);
     }
   }
+  EXPECT_GE(traced, 2u) << "embree_1 runs on every CPU";
+}
+
+TEST(HarnessTrace, OutputNamesBuilderLayoutAndIsaAndKeepsItsColumns) {
+  const auto dir = temp_dir();
+  const auto rays_path = dir / "named_rays.txt", out_path = dir / "named_hits.csv";
+  std::ofstream(rays_path) << "0 0 5 0 0 -1\n0 0 5 0 0 1\n";
+  std::ostringstream log;
+  run_trace_command({"proc:sphere:tris=200", "binned_sah:bins=8", "", rays_path, out_path}, log);
+  const BuilderInfo& info = find_builder("binned_sah");
+  const std::string params = resolve_params(info.name, info.params, {{"bins", "8"}}).to_string();
+  const std::string named = "builder=binned_sah:" + params + " layout=bvh2 isa=scalar query=closest";
+  EXPECT_EQ(first_line(out_path), "# " + named);
+  EXPECT_NE(log.str().find(named), std::string::npos) << log.str();
+  std::ifstream in(out_path);
+  std::string line;
+  std::getline(in, line);
+  std::getline(in, line);
+  EXPECT_EQ(line, "ray,hit,prim,t,u,v");
+  // A SIMD layout names the ISA its kernels ran with, which isa=auto resolves.
+  run_trace_command({"proc:sphere:tris=200", "wide_binned_sah:arity=4", "bvh4:tri=mtn,box=fma", rays_path,
+                     out_path, TraceQuery::kAny},
+                    log);
+  const std::string isa(to_string(preferred_kernel_isa()));
+  EXPECT_NE(first_line(out_path).find(" layout=bvh4:tri=mtn,box=fma isa=" + isa + " query=any"),
+            std::string::npos)
+      << first_line(out_path);
+  EXPECT_EQ(parse_trace_query("any"), TraceQuery::kAny);
+  EXPECT_NE(test::error_of([] { parse_trace_query("nearest"); }).find("--query 'nearest'"),
+            std::string::npos);
 }
 
 TEST(HarnessTrace, RayFilesTakeHeadersCommentsAndPlusSigns) {

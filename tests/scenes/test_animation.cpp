@@ -22,6 +22,7 @@
 #include "scenes/scene_path.h"
 #include "tests/scenes/gltf_bytes.h"
 #include "tests/scenes/temp_dir.h"
+#include "tests/support/prerequisites.h"
 
 namespace sahbench {
 namespace {
@@ -243,8 +244,8 @@ std::vector<std::array<std::array<double, 3>, 3>> skinned_triangles(const tinygl
 }
 
 TEST(AnimationGltf, CesiumManSkinningMatchesAnIndependentImplementation) {
+  SAHBENCH_REQUIRE_SHARED_SCENE("CesiumMan");
   const auto file = find_scene_file("CesiumMan");
-  if (!file) GTEST_SKIP() << "shared scene CesiumMan not found on the scene search path";
   const AnimatedScene animated = load_animated("CesiumMan");
   ASSERT_TRUE(animated.animated());
   EXPECT_DOUBLE_EQ(animated.start, 0.0);
@@ -432,10 +433,9 @@ TEST(AnimationGltf, MalformedAnimationsNameTheFileAndChannel) {
 // Shared scenes, the procedural wave, static scenes.
 
 TEST(AnimationShared, AnimatedSharedScenesLineUpWithTheStaticLoad) {
-  int found = 0;
+  test::Skips skips;
   for (const char* name : {"RiggedFigure", "CesiumMan", "BrainStem"}) {
-    if (!find_scene_file(name)) continue;
-    ++found;
+    if (!skips.have_scene(name)) continue;
     SCOPED_TRACE(name);
     // load_animated checks that its rest pose reproduces the static load triangle for triangle.
     const AnimatedScene animated = load_animated(name);
@@ -449,7 +449,7 @@ TEST(AnimationShared, AnimatedSharedScenesLineUpWithTheStaticLoad) {
     EXPECT_NE(a, b);
     for (const Triangle& t : b) ASSERT_TRUE(is_finite(t.v0) && is_finite(t.v1) && is_finite(t.v2));
   }
-  if (found == 0) GTEST_SKIP() << "no animated shared scene found on the scene search path";
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 TEST(AnimationWave, LoopsIsDeterministicAndStartsAtTheStaticScene) {

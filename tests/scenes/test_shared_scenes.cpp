@@ -1,3 +1,4 @@
+#include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -7,21 +8,13 @@
 #include "scenes/load.h"
 #include "scenes/scene_path.h"
 #include "tests/scenes/temp_dir.h"
+#include "tests/support/prerequisites.h"
 
 namespace sahbench {
 namespace {
 
 using test::error_message;
 using test::TempDir;
-
-std::string describe_search_path() {
-  std::string out;
-  for (const auto& p : scene_search_path_candidates()) {
-    out += ' ';
-    out += p.string();
-  }
-  return out;
-}
 
 // Triangle counts from shared/scenes/SOURCES.md (after node transforms: instances count once per use).
 struct SharedScene {
@@ -39,9 +32,8 @@ class SceneShared : public ::testing::TestWithParam<SharedScene> {};
 
 TEST_P(SceneShared, LoadsWithTheDocumentedCount) {
   const SharedScene& expected = GetParam();
+  SAHBENCH_REQUIRE_SHARED_SCENE(expected.name);
   const auto file = find_scene_file(expected.name);
-  if (!file)
-    GTEST_SKIP() << "shared scene '" << expected.name << "' not found; looked in:" << describe_search_path();
   const Scene scene = load_scene(expected.name);
   EXPECT_EQ(scene.name, expected.name);
   EXPECT_EQ(scene.animated, expected.animated) << "the scene's static/animated declaration";
@@ -62,18 +54,39 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(SceneSharedList, ListsEveryDocumentedScene) {
-  if (scene_search_path().empty()) GTEST_SKIP() << "no scene directory; looked in:" << describe_search_path();
+  test::Skips skips;
   const auto entries = list_shared_scenes();
   for (const char* name :
        {"cornell_box", "smallpine", "stanford_bunny", "FlightHelmet", "stanford_dragon_res2"}) {
     const auto it =
         std::find_if(entries.begin(), entries.end(), [&](const auto& e) { return e.name == name; });
-    if (!find_scene_file(name)) continue;
+    if (!skips.have_scene(name)) continue;
     ASSERT_NE(it, entries.end()) << name;
     EXPECT_EQ(it->path, *find_scene_file(name));
   }
   EXPECT_TRUE(std::is_sorted(entries.begin(), entries.end(),
                              [](const auto& a, const auto& b) { return a.name < b.name; }));
+  SAHBENCH_REPORT_SKIPS(skips);
+}
+
+// The helper every shared-scene test uses: a missing scene is a skip with its reason, and a failure
+// under CI=true, where the scenes are provided.
+TEST(ScenePrerequisites, MissingSceneIsASkipLocallyAndAFailureUnderCi) {
+  const char* old = std::getenv("CI");
+  const std::optional<std::string> saved = old ? std::optional<std::string>(old) : std::nullopt;
+  ::unsetenv("CI");
+  const auto why = test::missing_shared_scene("nothing_by_this_name_xyz");
+  ASSERT_TRUE(why.has_value());
+  EXPECT_NE(why->find("'nothing_by_this_name_xyz' not found"), std::string::npos) << *why;
+  ::setenv("CI", "true", 1);
+  EXPECT_NONFATAL_FAILURE(test::missing_shared_scene("nothing_by_this_name_xyz"), "CI=true");
+  test::Skips skips;
+  EXPECT_NONFATAL_FAILURE(skips.have_scene("nothing_by_this_name_xyz"), "nothing_by_this_name_xyz");
+  EXPECT_TRUE(skips.none_ran());
+  if (saved)
+    ::setenv("CI", saved->c_str(), 1);
+  else
+    ::unsetenv("CI");
 }
 
 // Sets SAHBENCH_SCENE_PATH for one test and restores it afterwards.

@@ -16,6 +16,7 @@
 #include "tests/traversal/median_builder.h"
 #include "traversal/brute_force.h"
 #include "traversal/bvh2_traversal.h"
+#include "traversal/triangle_tests.h"
 
 namespace sahbench {
 namespace {
@@ -138,6 +139,39 @@ TEST_F(TravWatertight, NoLeaksFromOutside) {
       }
   }
   leaks.expect_none("from outside");
+}
+
+// A ray that passes within rounding of the edge v1-v2 (edge function e0) shared by two triangles, where
+// the float products of e0 round to the same value: the float path sees e0 = 0 and leaves the decision to
+// watertight_in_double, whose exact sign must pick the one triangle on the ray's side. Along z through
+// the origin the shear is exact (sx = sy = 0, sz = 1), so the sheared x and y are the vertices' own and the
+// side is the exact orientation of the origin against the edge. A sign error in that path still hits one
+// triangle (the leak tests above cannot see it) but the wrong one.
+TEST(TravWatertightDoublePath, RayWithinRoundingOfASharedV1V2EdgeHitsTheTriangleOnItsSide) {
+  const Vec3 p{3.0f, 0.3f, 0.0f}, q{-5.0f, -0.5f, 0.0f};
+  // The case reaches the double path: the float products of e0 are equal, the exact ones are not.
+  ASSERT_EQ(q.x * p.y, q.y * p.x);
+  const double orientation = static_cast<double>(p.x) * q.y - static_cast<double>(p.y) * q.x;
+  ASSERT_NE(orientation, 0.0);
+  // The shared edge is v1-v2 of both, in opposite directions, and both wind the same way; the third
+  // vertices lie far on either side.
+  const std::vector<Triangle> mesh = {{{0.0f, 3.0f, 0.0f}, p, q}, {{0.0f, -3.0f, 0.0f}, q, p}};
+  // The origin lies left of p -> q (orientation > 0) as the second triangle's third vertex does.
+  const uint32_t expected = orientation > 0.0 ? 1 : 0;
+  const Bvh bvh = test::build_median_bvh(mesh);
+  for (const float dz : {1.0f, -1.0f}) {
+    SCOPED_TRACE(dz > 0.0f ? "from below" : "from above");
+    const Ray ray{{0.0f, 0.0f, -dz}, 0.0f, {0.0f, 0.0f, dz}, kInf};
+    for (uint32_t i = 0; i < mesh.size(); ++i) {
+      float t, u, v;
+      EXPECT_EQ(WatertightTriangleTest(ray).intersect(mesh[i], 0.0f, kInf, t, u, v), i == expected) << i;
+    }
+    const Hit brute = brute_force_closest(mesh, ray);
+    EXPECT_EQ(brute.prim, expected);
+    EXPECT_EQ(brute.t, 1.0f);
+    EXPECT_EQ(closest_hit(bvh, mesh, ray).prim, expected);
+    EXPECT_TRUE(any_hit(bvh, mesh, ray));
+  }
 }
 
 }  // namespace

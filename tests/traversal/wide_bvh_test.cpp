@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/huge_pages.h"
+#include "tests/support/prerequisites.h"
 #include "tests/support/test_scenes.h"
 #include "tests/traversal/median_builder.h"
 #include "traversal/ray_box.h"
@@ -199,6 +200,7 @@ double reference_node_sum(const std::vector<WideNode<N>>& nodes, const std::vect
 
 template <uint32_t N>
 void check_node_tests() {
+  test::Skips skips;
   const auto scene = test::random_triangles(2000, 11);
   const WideBvh<N> wide = compile_wide<N>(test::build_median_bvh(scene, N, 4), scene);
   // The root, its child nodes, theirs...: the first 64 nodes breadth first, boxes of every size.
@@ -226,13 +228,14 @@ void check_node_tests() {
     wide_rays.clear();
     for (const Ray& ray : rays) wide_rays.push_back(make_wide_ray(ray, false, box));
     for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
-      if (!kernel_isa_available(isa)) continue;
+      if (!skips.have_isa(isa)) continue;
       SCOPED_TRACE(std::string(to_string(isa)));
       const WideBenchLoops loops = find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box});
       ASSERT_NE(loops.nodes, nullptr);
       EXPECT_EQ(loops.nodes(nodes.data(), nodes.size(), wide_rays.data(), wide_rays.size()), expected);
     }
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 TEST(WideBvh, NodeTestsOfEveryIsaComputeTheScalarBoxTestsDistances) {
@@ -248,6 +251,7 @@ TEST(WideBvh, NodeTestsOfEveryIsaComputeTheScalarBoxTestsDistances) {
 // node against each ray alone: the hit mask and every slot's entry distance, against ray_box.h's.
 template <uint32_t N>
 void check_node_tests_on_signed_zeros() {
+  test::Skips skips;
   constexpr float kInf = std::numeric_limits<float>::infinity();
   constexpr float kDenormMin = std::numeric_limits<float>::denorm_min();
   std::mt19937 rng(5);
@@ -330,7 +334,7 @@ void check_node_tests_on_signed_zeros() {
           expected_mask |= static_cast<uint32_t>(hit) << i;
         }
         for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
-          if (!kernel_isa_available(isa)) continue;
+          if (!skips.have_isa(isa)) continue;
           alignas(32) float t[N];
           const uint32_t mask =
               find_wide_bench_loops(isa, N, {TriangleTestKind::kWatertight, box}).node(&node, wide_ray, t);
@@ -357,6 +361,7 @@ void check_node_tests_on_signed_zeros() {
   EXPECT_GT(kinds[static_cast<int>(IntOrder::kNone)], 20);
   EXPECT_GT(kinds[static_cast<int>(IntOrder::kGuarded)], 20);
   EXPECT_GT(kinds[static_cast<int>(IntOrder::kFree)], 20);
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 // The ray set-up's sorting for the integer path (wide_bvh.h: IntOrder), at the edges of each condition,
@@ -428,6 +433,7 @@ TEST(WideBvh, NodeTestsOfEveryIsaAgreeOnSignedZerosNegativeTminAndOverflowingOri
 // an infinity in place of each NaN, which every box test reads as no bound, as it reads the NaN; so the
 // layout's node test answers as ray_box.h does on the NaN box.
 TEST(WideBvh, NanPlanesAreStoredAsInfinitiesThatTestTheSame) {
+  test::Skips skips;
   constexpr float kNan = std::numeric_limits<float>::quiet_NaN(),
                   kInf = std::numeric_limits<float>::infinity();
   const auto scene = test::random_triangles(200, 13);
@@ -468,7 +474,7 @@ TEST(WideBvh, NanPlanesAreStoredAsInfinitiesThatTestTheSame) {
                                          : expected_sum.operator()<RobustRayBox>(ray);
       const WideRay wide_ray = make_wide_ray(ray, false, box);
       for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512}) {
-        if (!kernel_isa_available(isa)) continue;
+        if (!skips.have_isa(isa)) continue;
         EXPECT_EQ(
             find_wide_bench_loops(isa, 8, {TriangleTestKind::kWatertight, box}).nodes(&root, 1, &wide_ray, 1),
             expected)
@@ -476,6 +482,7 @@ TEST(WideBvh, NanPlanesAreStoredAsInfinitiesThatTestTheSame) {
       }
     }
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 TEST(HugePages, LargeArraysStartOnAHugePageAndSmallOnesOnALine) {

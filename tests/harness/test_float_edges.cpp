@@ -21,6 +21,7 @@
 #include "builders/registry.h"
 #include "scenes/rng.h"
 #include "scenes/stress_cases.h"
+#include "tests/support/prerequisites.h"
 #include "traversal/exact_reference.h"
 #include "traversal/layout.h"
 #include "traversal/triangle_tests.h"
@@ -113,11 +114,11 @@ double cosine(const Ray& ray, const Triangle& tri) {
 }
 
 // The watertight variant of every layout on every instruction set available here.
-std::vector<std::string> watertight_specs(const LayoutInfo& layout) {
+std::vector<std::string> watertight_specs(const LayoutInfo& layout, test::Skips& skips) {
   if (!layout.has_isa) return {layout.name + ":tri=watertight"};
   std::vector<std::string> out;
   for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
-    if (kernel_isa_available(isa))
+    if (skips.have_isa(isa))
       out.push_back(layout.name + ":tri=watertight,isa=" + std::string(to_string(isa)));
   return out;
 }
@@ -148,13 +149,14 @@ TEST(FloatEdges, WatertightTIsWithinAnUlpOfExactOnNeedles) {
   EXPECT_LE(worst, kMaxUlps) << "WatertightTriangleTest";
 
   // Every layout's watertight kernels, on a tree of the needles.
+  test::Skips skips;
   for (const LayoutInfo& layout : layouts()) {
     const BuilderInfo& builder = find_builder(layout.arity == 2 ? "binned_sah" : "wide_collapse");
     const ParamOverrides overrides =
         layout.arity == 2 ? ParamOverrides{} : ParamOverrides{{"arity", std::to_string(layout.arity)}};
     const Bvh bvh = builder.build(BuildInput::from_triangles(scene.triangles),
                                   resolve_params(builder.name, builder.params, overrides));
-    for (const std::string& spec : watertight_specs(layout)) {
+    for (const std::string& spec : watertight_specs(layout, skips)) {
       SCOPED_TRACE(spec);
       const auto compiled = compile_layout(spec, bvh, scene.triangles);
       std::vector<Hit> hits(scene.rays.size());
@@ -167,10 +169,11 @@ TEST(FloatEdges, WatertightTIsWithinAnUlpOfExactOnNeedles) {
       EXPECT_LE(layout_worst, kMaxUlps);
     }
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 // Every layout's variants with `option` (box=fma or tri=mtn), on every instruction set available here.
-std::vector<std::string> specs_with(const LayoutInfo& layout, const std::string& option) {
+std::vector<std::string> specs_with(const LayoutInfo& layout, const std::string& option, test::Skips& skips) {
   std::vector<std::string> out;
   for (const char* other : option.starts_with("box=") ? std::vector<const char*>{"tri=watertight", "tri=mtn"}
                                                       : std::vector<const char*>{"box=robust", "box=fma"}) {
@@ -180,7 +183,7 @@ std::vector<std::string> specs_with(const LayoutInfo& layout, const std::string&
       continue;
     }
     for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
-      if (kernel_isa_available(isa)) out.push_back(variant + ",isa=" + std::string(to_string(isa)));
+      if (skips.have_isa(isa)) out.push_back(variant + ",isa=" + std::string(to_string(isa)));
   }
   return out;
 }
@@ -188,7 +191,7 @@ std::vector<std::string> specs_with(const LayoutInfo& layout, const std::string&
 // Every layout variant with `option` traces `rays` among `triangles`: no ray the exact reference hits is
 // missed, closest and any hit, and every closest hit is on a primitive hit at the exact distance.
 void expect_no_false_misses(const std::vector<Triangle>& triangles, const std::vector<Ray>& rays,
-                            const std::string& option) {
+                            const std::string& option, test::Skips& skips) {
   const ExactReference reference(triangles);
   const std::vector<ExactHit> exact = reference.closest(rays);
   std::size_t exact_hits = 0;
@@ -200,7 +203,7 @@ void expect_no_false_misses(const std::vector<Triangle>& triangles, const std::v
         layout.arity == 2 ? ParamOverrides{} : ParamOverrides{{"arity", std::to_string(layout.arity)}};
     const Bvh bvh = builder.build(BuildInput::from_triangles(triangles),
                                   resolve_params(builder.name, builder.params, overrides));
-    for (const std::string& spec_text : specs_with(layout, option)) {
+    for (const std::string& spec_text : specs_with(layout, option, skips)) {
       SCOPED_TRACE(spec_text);
       const auto compiled = compile_layout(spec_text, bvh, triangles);
       std::vector<Hit> hits(rays.size());
@@ -235,12 +238,14 @@ StressCaseSpec stress_case(const std::string& kind, double scale, double offset,
 // The stress suite's generator for box=fma's edge: axis-parallel rays, each through the inside of a
 // triangle `scale` across it, from `offset` on its axis.
 TEST(FloatEdges, FmaBoxTestMissesNothingOnAxisRaysThroughThinTrianglesAndFromFarOrigins) {
+  test::Skips skips;
   for (const auto& [scale, offset] : {std::pair{1e-3, 0.0}, {1e-20, 0.0}, {1e-3, 1e21}}) {
     const StressCase c = generate_stress_case(stress_case("axis_thin", scale, offset, 300));
     SCOPED_TRACE(testing::Message() << "axis_thin at scale " << scale << ", offset " << offset);
     ASSERT_EQ(c.scene.removed.total(), 0u);
-    expect_no_false_misses(c.scene.triangles, c.rays, "box=fma");
+    expect_no_false_misses(c.scene.triangles, c.rays, "box=fma", skips);
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 // The stress suite's icospheres at scales inside tri=mtn's float range (1e11: edges and coordinates
@@ -249,6 +254,7 @@ TEST(FloatEdges, FmaBoxTestMissesNothingOnAxisRaysThroughThinTrianglesAndFromFar
 // Trumbore is not watertight: rays through edges are not this test's subject). Unit directions and
 // directions as long as the sphere's radius take both the ray's and the triangle's side of the range.
 TEST(FloatEdges, StoredNormalTestMissesNothingAtExtremeScales) {
+  test::Skips skips;
   for (double scale : {1e11, 1e13, 1e30, 1e-18}) {
     const StressCase c = generate_stress_case(stress_case("sphere", scale, 0.0, 1));
     SCOPED_TRACE(testing::Message() << "sphere at scale " << scale);
@@ -268,8 +274,9 @@ TEST(FloatEdges, StoredNormalTestMissesNothingAtExtremeScales) {
                          to_vec(target.x / length, target.y / length, target.z / length),
                          std::numeric_limits<float>::infinity()});
     }
-    expect_no_false_misses(tris, rays, "tri=mtn");
+    expect_no_false_misses(tris, rays, "tri=mtn", skips);
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "harness/run/environment.h"
 #include "harness/run/runner.h"
 #include "scenes/load.h"
+#include "scenes/ray_file.h"
 #include "tests/support/error_of.h"
 #include "traversal/brute_force.h"
 

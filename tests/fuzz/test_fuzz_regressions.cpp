@@ -6,12 +6,19 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <ostream>
 #include <string>
 #include <vector>
 
 #include "fuzz/fuzz_readers.h"
 
 namespace sahbench::fuzz {
+
+// The reader's name in ctest's listing, not its bytes.
+void PrintTo(const FuzzReader& reader, std::ostream* os) {
+  *os << reader.name;
+}
+
 namespace {
 
 const std::filesystem::path kFuzzDir = std::filesystem::path(SAHBENCH_SOURCE_DIR) / "fuzz";

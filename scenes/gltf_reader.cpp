@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <filesystem>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "core/error.h"
 
@@ -103,6 +106,19 @@ bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, 
   return true;
 }
 
+// tinygltf's file reading, refusing what is not a regular file. tinygltf opens an external buffer's uri
+// as it finds it: a directory opens as a stream whose size reads as 2^63 - 1, which it then allocates
+// (std::length_error or std::bad_alloc, not an Error), and a FIFO or device would block or never end.
+bool read_regular_file(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+                       void* user_data) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    if (err) *err += "'" + path + "' is not a regular file\n";
+    return false;
+  }
+  return tinygltf::ReadWholeFile(out, err, path, user_data);
+}
+
 }  // namespace
 
 tinygltf::Model load_gltf_model(const std::filesystem::path& path, bool binary) {
@@ -110,6 +126,8 @@ tinygltf::Model load_gltf_model(const std::filesystem::path& path, bool binary) 
   if (!std::filesystem::is_regular_file(path)) throw Error(file + ": cannot open file");
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(ignore_image, nullptr);
+  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_regular_file,
+                         &tinygltf::WriteWholeFile, nullptr});
   tinygltf::Model model;
   std::string err, warn;
   const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, file)

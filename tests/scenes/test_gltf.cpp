@@ -297,6 +297,18 @@ TEST(SceneGltf, AccessorWithoutBufferViewIsBounded) {
       << msg;
 }
 
+// A buffer whose uri names a directory is refused by name; tinygltf alone sized it as 2^63 - 1 bytes and
+// allocated that (a crash of the gltf fuzz target; fuzz/regressions/gltf).
+TEST(SceneGltf, BufferUriNamingADirectoryIsAnError) {
+  TempDir dir;
+  const Bytes buffer = quad_buffer();
+  std::filesystem::create_directories(dir.path() / "sub");
+  const auto path = dir.write("dir_buffer.gltf", quad_gltf("sub", buffer.size()));
+  const std::string msg = error_message([&] { load_gltf(path, false); });
+  EXPECT_NE(msg.find("dir_buffer.gltf: invalid glTF file"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("is not a regular file"), std::string::npos) << msg;
+}
+
 TEST(SceneGltf, MissingBinAndMissingFileAndTruncatedGlb) {
   TempDir dir;
   const auto gltf = dir.write("nobin.gltf", quad_gltf("absent.bin", 60));

@@ -93,7 +93,9 @@ ParamSet resolve_params(std::string_view builder, const std::vector<ParamSpec>& 
   for (const auto& spec : specs) values.emplace_back(spec, spec.default_value);
   std::set<std::string> seen;
   for (const auto& [key, text] : overrides) {
-    auto it = std::find_if(values.begin(), values.end(), [&](const auto& v) { return v.first.name == key; });
+    // Named by value for the lambda: clang before 16 cannot capture a structured binding.
+    const std::string& name = key;
+    auto it = std::find_if(values.begin(), values.end(), [&](const auto& v) { return v.first.name == name; });
     if (it == values.end())
       throw Error(std::string(builder) + ": unknown parameter '" + key + "' (known: " + known_names(specs) +
                   ")");

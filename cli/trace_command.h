@@ -2,21 +2,16 @@
 // `sahbench trace`: rays from a file, traced on one builder's tree (ours through one of our layouts, or
 // Embree's through one of Embree's), one output line per ray.
 //
-// Ray file format (text): one ray per line, "ox oy oz dx dy dz [tmin tmax]", numbers separated by
-// spaces, tabs or commas; tmin defaults to 0 and tmax to infinity ("inf" is accepted). Blank lines and
-// lines starting with '#' are ignored. Output CSV: a first line "# builder=... layout=... isa=... query=..."
-// naming what answered, then ray,hit,prim,t,u,v (ray = 0-based index among the rays; hit = 1 or 0; prim,
-// t, u, v empty on a miss; t, u, v printed with 9 significant digits, enough to read back the same float).
-// An any-hit query reports hit only: prim, t, u and v stay empty, as the any-hit kernels (ours and
-// rtcOccluded) stop at the first hit they find and return only that there was one.
+// Rays are read with read_rays (scenes/ray_file.h). Output CSV: a first line "# builder=... layout=...
+// isa=... query=..." naming what answered, then ray,hit,prim,t,u,v (ray = 0-based index among the rays; hit =
+// 1 or 0; prim, t, u, v empty on a miss; t, u, v printed with 9 significant digits, enough to read back the
+// same float). An any-hit query reports hit only: prim, t, u and v stay empty, as the any-hit kernels (ours
+// and rtcOccluded) stop at the first hit they find and return only that there was one.
 
 #include <filesystem>
 #include <iosfwd>
 #include <string>
 #include <string_view>
-#include <vector>
-
-#include "core/ray.h"
 
 namespace sahbench {
 
@@ -37,12 +32,6 @@ struct TraceCommandOptions {
   std::filesystem::path out;
   TraceQuery query = TraceQuery::kClosest;
 };
-
-/// Reads a ray file: one ray per line, `ox oy oz dx dy dz [tmin tmax]`, separated by spaces, tabs or commas;
-/// `#` starts a comment, and a first line of column names is a header. A malformed line, a number outside
-/// float range, a zero direction, a directory or a file without rays is an Error naming the file, line and
-/// token.
-std::vector<Ray> read_rays(const std::filesystem::path& path);
 
 /// Traces the rays and writes the output CSV; names the builder (with its resolved parameters), the
 /// layout, the ISA and the query on `log` as in the CSV's first line. An unknown builder, layout or query,

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <filesystem>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "core/error.h"
 
@@ -13,6 +16,12 @@ namespace {
 
 // glTF stores binary data little-endian; the element reads below copy bytes as they are.
 static_assert(std::endian::native == std::endian::little, "the glTF reader assumes a little-endian host");
+
+// Most bytes an accessor without a bufferView may expand to. Such an accessor is zeros patched by its
+// sparse values (glTF 2.0, section 3.6.2.3), so its count is backed by no data in the file: without a
+// bound, a few bytes of JSON can demand 45 GiB (4e9 VEC3 positions). 256 MiB holds a morph target of
+// over 22M vertices, beyond any real model.
+constexpr std::size_t kMaxUnbackedBytes = std::size_t{256} << 20;
 
 std::size_t component_size(int component_type) {
   switch (component_type) {
@@ -97,6 +106,19 @@ bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, 
   return true;
 }
 
+// tinygltf's file reading, refusing what is not a regular file. tinygltf opens an external buffer's uri
+// as it finds it: a directory opens as a stream whose size reads as 2^63 - 1, which it then allocates
+// (std::length_error or std::bad_alloc, not an Error), and a FIFO or device would block or never end.
+bool read_regular_file(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+                       void* user_data) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    if (err) *err += "'" + path + "' is not a regular file\n";
+    return false;
+  }
+  return tinygltf::ReadWholeFile(out, err, path, user_data);
+}
+
 }  // namespace
 
 tinygltf::Model load_gltf_model(const std::filesystem::path& path, bool binary) {
@@ -104,6 +126,8 @@ tinygltf::Model load_gltf_model(const std::filesystem::path& path, bool binary) 
   if (!std::filesystem::is_regular_file(path)) throw Error(file + ": cannot open file");
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(ignore_image, nullptr);
+  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_regular_file,
+                         &tinygltf::WriteWholeFile, nullptr});
   tinygltf::Model model;
   std::string err, warn;
   const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, file)
@@ -296,11 +320,16 @@ const unsigned char* GltfReader::checked_range(int view_index, std::size_t byte_
   return data.data() + view.byteOffset + byte_offset;
 }
 
-void GltfReader::check_count(const tinygltf::Accessor& acc, const std::string& where) const {
+void GltfReader::check_count(const tinygltf::Accessor& acc, std::size_t element_size,
+                             const std::string& where) const {
   // An accessor backed by a bufferView has been range-checked; one without (all zeros, or sparse only)
-  // could claim any count, so bound it by what 32-bit indices can address.
+  // could claim any count, so bound it by what 32-bit indices can address and by kMaxUnbackedBytes.
   if (acc.count > std::numeric_limits<uint32_t>::max())
     fail(where + ": accessor count " + std::to_string(acc.count) + " is too large");
+  if (acc.bufferView < 0 && acc.count > kMaxUnbackedBytes / element_size)
+    fail(where + ": accessor without a bufferView has " + std::to_string(acc.count) + " elements of " +
+         std::to_string(element_size) + " bytes, more than the " + std::to_string(kMaxUnbackedBytes >> 20) +
+         " MiB of zeros such an accessor may expand to");
 }
 
 void GltfReader::apply_sparse(const tinygltf::Accessor& acc, std::size_t element_size, unsigned char* dst,
@@ -341,7 +370,7 @@ std::vector<unsigned char> GltfReader::read_elements(const tinygltf::Accessor& a
   const unsigned char* src = acc.bufferView >= 0 ? checked_range(acc.bufferView, acc.byteOffset, acc.count,
                                                                  element_size, &stride, where)
                                                  : nullptr;
-  check_count(acc, where);
+  check_count(acc, element_size, where);
   std::vector<unsigned char> raw(acc.count * element_size, 0);
   if (src)
     for (std::size_t i = 0; i < acc.count; ++i)

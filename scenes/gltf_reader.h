@@ -89,7 +89,7 @@ class GltfReader {
   const unsigned char* checked_range(int view_index, std::size_t byte_offset, std::size_t count,
                                      std::size_t element_size, std::size_t* stride,
                                      const std::string& where) const;
-  void check_count(const tinygltf::Accessor& acc, const std::string& where) const;
+  void check_count(const tinygltf::Accessor& acc, std::size_t element_size, const std::string& where) const;
   void apply_sparse(const tinygltf::Accessor& acc, std::size_t element_size, unsigned char* dst,
                     const std::string& where) const;
 

@@ -362,6 +362,9 @@ Scene load_ply(const std::filesystem::path& path) {
 
   for (std::size_t ei = 0; ei < header.elements.size(); ++ei) {
     const Element& e = header.elements[ei];
+    // An element without properties holds no bytes, whatever its count: nothing to read or skip (and a
+    // count near 2^64 would otherwise spin here forever).
+    if (e.properties.empty()) continue;
     const bool is_vertex = ei == layout.vertex_element;
     const bool is_face = ei == layout.face_element;
     if (is_vertex) vertices.reserve(static_cast<std::size_t>(std::min(e.count, kMaxReserve)));

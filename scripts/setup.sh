@@ -11,6 +11,9 @@ packages=(
   libbenchmark-dev libgtest-dev libtomlplusplus-dev libcli11-dev libfmt-dev
   python3-matplotlib python3-pandas
 )
+preset=${SAHBENCH_PRESET:-release}
+# The fuzz preset builds with clang and links libFuzzer (scripts/fuzz.sh).
+if [[ $preset == fuzz ]]; then packages+=(clang libclang-rt-14-dev); fi
 
 missing=()
 for p in "${packages[@]}"; do
@@ -25,6 +28,5 @@ if ((${#missing[@]})); then
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-preset=${SAHBENCH_PRESET:-release}
 cmake --preset "$preset" >/dev/null
 cmake --build --preset "$preset"

@@ -24,6 +24,7 @@
 #include "harness/run/environment.h"
 #include "harness/run/runner.h"
 #include "scenes/load.h"
+#include "scenes/ray_file.h"
 #include "tests/support/error_of.h"
 #include "tests/support/hit_check.h"
 #include "tests/support/test_scenes.h"

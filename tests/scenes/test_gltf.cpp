@@ -282,6 +282,33 @@ TEST(SceneGltf, MalformedFilesThrowNamingTheFile) {
   }
 }
 
+// An accessor without a bufferView is zeros that no bytes of the file back; its count is bounded before
+// anything is allocated (an out-of-memory of the glTF fuzz target: 4e9 positions asked for 45 GiB;
+// fuzz/regressions/gltf).
+TEST(SceneGltf, AccessorWithoutBufferViewIsBounded) {
+  TempDir dir;
+  const auto path = dir.write("unbacked.gltf", R"({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}],
+      "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+      "accessors": [{"componentType": 5126, "count": 4000000000, "type": "VEC3"}]})");
+  const std::string msg = error_message([&] { load_gltf(path, false); });
+  EXPECT_NE(
+      msg.find("unbacked.gltf: mesh 0 primitive 0: accessor without a bufferView has 4000000000 elements"),
+      std::string::npos)
+      << msg;
+}
+
+// A buffer whose uri names a directory is refused by name; tinygltf alone sized it as 2^63 - 1 bytes and
+// allocated that (a crash of the gltf fuzz target; fuzz/regressions/gltf).
+TEST(SceneGltf, BufferUriNamingADirectoryIsAnError) {
+  TempDir dir;
+  const Bytes buffer = quad_buffer();
+  std::filesystem::create_directories(dir.path() / "sub");
+  const auto path = dir.write("dir_buffer.gltf", quad_gltf("sub", buffer.size()));
+  const std::string msg = error_message([&] { load_gltf(path, false); });
+  EXPECT_NE(msg.find("dir_buffer.gltf: invalid glTF file"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("is not a regular file"), std::string::npos) << msg;
+}
+
 TEST(SceneGltf, MissingBinAndMissingFileAndTruncatedGlb) {
   TempDir dir;
   const auto gltf = dir.write("nobin.gltf", quad_gltf("absent.bin", 60));

@@ -224,6 +224,20 @@ TEST(ScenePly, BadAsciiNumber) {
   EXPECT_NE(msg.find("num.ply: line 11: 'x' is not a number"), std::string::npos) << msg;
 }
 
+// An element without properties holds no bytes: a count near 2^64 is skipped at once, not looped over
+// (a timeout of the PLY fuzz target; fuzz/regressions/ply).
+TEST(ScenePly, ElementWithoutPropertiesHoldsNoBytes) {
+  TempDir dir;
+  const auto path =
+      dir.write("empty_element.ply",
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                "property float z\nelement junk 18446744073709551615\nelement face 1\n"
+                "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const Scene scene = load_ply(path);
+  const std::vector<Triangle> expected{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}};
+  EXPECT_EQ(scene.triangles, expected);
+}
+
 TEST(ScenePly, MissingFile) {
   TempDir dir;
   const auto path = dir.path() / "absent.ply";

@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(
-  cmake ninja-build g++ git pkg-config
+  cmake ninja-build g++ git pkg-config ccache
   libembree-dev libtbb-dev libtinygltf-dev libtinyobjloader-dev nlohmann-json3-dev
   libopenimageio-dev libcgal-dev libgmp-dev libmpfr-dev
   libbenchmark-dev libgtest-dev libtomlplusplus-dev libcli11-dev libfmt-dev
@@ -28,5 +28,13 @@ if ((${#missing[@]})); then
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-cmake --preset "$preset" >/dev/null
+# Compiles go through ccache, keyed on paths relative to the checkout, so that a second checkout of the
+# same sources (a CI clone beside a working tree) reuses the objects. Set SAHBENCH_CCACHE=0 to build
+# without it.
+launcher=()
+if [[ ${SAHBENCH_CCACHE:-1} != 0 ]] && command -v ccache >/dev/null 2>&1; then
+  launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
+fi
+cmake --preset "$preset" "${launcher[@]}" >/dev/null
 cmake --build --preset "$preset"

@@ -27,7 +27,7 @@ bool brute_force_any(std::span<const Triangle> triangles, const Ray& ray) {
   const TriangleTest test(ray);
   for (const Triangle& tri : triangles) {
     float t, u, v;
-    if (test.intersect(tri, ray.tmin, far_limit(ray), t, u, v)) return true;
+    if (intersect_any(test, tri, ray.tmin, far_limit(ray), t, u, v)) return true;
   }
   return false;
 }

@@ -133,7 +133,9 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
       for (uint32_t r = node.first; r < end; ++r) {
         const uint32_t prim = bvh.prim_refs[r];
         float t, u, v;
-        if (!triangle_test.intersect(triangles[prim], ray.tmin, best_t, t, u, v)) continue;
+        const bool hit = kAnyHit ? intersect_any(triangle_test, triangles[prim], ray.tmin, best_t, t, u, v)
+                                 : triangle_test.intersect(triangles[prim], ray.tmin, best_t, t, u, v);
+        if (!hit) continue;
         if constexpr (kAnyHit) {
           return {prim, t, u, v};
         } else {

@@ -153,12 +153,14 @@ class WatertightTriangleTest {
 
   /// The watertight decision, with a hit's distance refined (refine_watertight_t).
   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
-    return decide(tri, tmin, tmax, t, u, v) &&
+    return intersect_float(tri, tmin, tmax, t, u, v) &&
            refine_watertight_t(tri.v0, tri.v1, tri.v2, org_, dir_, tmin, tmax, t);
   }
 
- private:
-  bool decide(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
+  /// The watertight decision with the float distance of Woop et al.: what any-hit queries run, which
+  /// report no distance (a shadow ray pays no double-precision distance; its decision against [tmin,
+  /// tmax] is made on the float t, as Embree's is).
+  bool intersect_float(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
     // Vertices relative to the origin, then sheared so the ray is the +z axis through (0, 0).
     const detail::Components a = detail::components(tri.v0 - org_);
     const detail::Components b = detail::components(tri.v1 - org_);
@@ -199,10 +201,22 @@ class WatertightTriangleTest {
     return true;
   }
 
+ private:
   Vec3 org_;
   Vec3 dir_;
   WatertightShear shear_;
 };
+
+/// The triangle test as an any-hit query runs it: the watertight test without its refined distance
+/// (WatertightTriangleTest::intersect_float), the others as they are.
+template <class TriangleTest>
+bool intersect_any(const TriangleTest& test, const Triangle& tri, float tmin, float tmax, float& t, float& u,
+                   float& v) {
+  if constexpr (requires { test.intersect_float(tri, tmin, tmax, t, u, v); })
+    return test.intersect_float(tri, tmin, tmax, t, u, v);
+  else
+    return test.intersect(tri, tmin, tmax, t, u, v);
+}
 
 /// Default determinant threshold of MollerTrumboreTest: EPSILON = 0.000001 in the code listing of
 /// Möller and Trumbore 1997. It is absolute, so its effect depends on the scale of the scene and of

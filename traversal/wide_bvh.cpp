@@ -128,7 +128,12 @@ inline IntOrder set_up(const Ray& ray, WideRay& r) {
   // An untraceable ray (core/ray.h) gets an empty interval, which no box test can widen, NaN or not.
   if (!traceable(ray)) r.tmin = 1.0f, r.tmax = 0.0f;
   // A ray outside box=fma's domain takes the robust box test (FmaRayBox::takes), and no integer path.
-  r.robust_box = kFma && !FmaRayBox::takes(ray);
+  // FmaRayBox::takes, on the reciprocals and products just made: every |d| a normal float, org * inv finite.
+  bool fma_takes = true;
+  for (uint32_t axis = 0; axis < 3; ++axis)
+    fma_takes &= std::abs(ray.dir[axis]) >= std::numeric_limits<float>::min() &&
+                 std::abs(r.org_inv[axis]) < std::numeric_limits<float>::infinity();
+  r.robust_box = kFma && !fma_takes;
   r.mtn_in_double = !mtn_ray_in_range(ray.org, ray.dir);
   // In the domain, box=fma's inv_dir and org_inv are finite and inv_dir non-zero. Each axis in one
   // unsigned compare of |org_inv|'s bits: in [2^-100, inf), or not, and then below 2^-100 (guarded).

@@ -438,6 +438,9 @@ SAHBENCH_KERNEL_INLINE float component(const float (&v)[3][kBlockWidth], uint32_
   return v[axis][lane];
 }
 
+// kRefine: closest hit's distances refined in double (refine_lanes); any hit takes the float ones, as
+// triangle_tests.h's intersect_any does.
+template <bool kRefine>
 inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
                                            float* t_out, float* u_out, float* v_out) {
   uint32_t mask = 0;
@@ -480,7 +483,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
     v_out[i] = e2 * inv_det;
     mask |= 1u << i;
   }
-  return refine_lanes(b, r, tmin, tmax, mask, t_out);
+  return kRefine ? refine_lanes(b, r, tmin, tmax, mask, t_out) : mask;
 }
 
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin,
@@ -524,6 +527,9 @@ SAHBENCH_KERNEL_INLINE __m128 lanes_valid(const TriangleBlock& b) {
   return _mm_castsi128_ps(_mm_xor_si128(invalid, _mm_set1_epi32(-1)));
 }
 
+// kRefine: closest hit's distances refined in double (refine_lanes); any hit takes the float ones, as
+// triangle_tests.h's intersect_any does.
+template <bool kRefine>
 inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
                                            float* t_out, float* u_out, float* v_out) {
   const __m128 valid = lanes_valid(b);
@@ -597,7 +603,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
         mask |= 1u << i;
     }
   }
-  return mask ? refine_lanes(b, r, tmin, tmax, mask, t_out) : 0u;
+  return kRefine && mask ? refine_lanes(b, r, tmin, tmax, mask, t_out) : mask;
 }
 
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin,
@@ -826,11 +832,11 @@ SAHBENCH_KERNEL_INLINE const TriangleBlock& tri_part(const NormalBlock& b) {
   return b.tri;
 }
 
-template <TriangleTestKind kTri>
+template <TriangleTestKind kTri, bool kAnyHit = false>
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block(const BlockOf<kTri>& b, const WideRay& r, float tmin,
                                                 float tmax, float* t, float* u, float* v) {
   if constexpr (kTri == TriangleTestKind::kWatertight)
-    return intersect_block_watertight(b, r, tmin, tmax, t, u, v);
+    return intersect_block_watertight<!kAnyHit>(b, r, tmin, tmax, t, u, v);
   else if constexpr (kTri == TriangleTestKind::kMollerTrumbore)
     return intersect_block_mt(b, r, tmin, tmax, kWideMtEpsilon, t, u, v);
   else if constexpr (kTri == TriangleTestKind::kMollerTrumboreNoEpsilon)
@@ -1047,7 +1053,7 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
 #endif
       for (; b < entry.count; ++b) {
         alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
-        uint32_t lanes = intersect_block<kTri>(blocks[b], r, r.tmin, best_t, t, u, v);
+        uint32_t lanes = intersect_block<kTri, kAnyHit>(blocks[b], r, r.tmin, best_t, t, u, v);
         const TriangleBlock& block = tri_part(blocks[b]);
         if constexpr (kCount) counts->prim_tests += occupied_lanes(block);
         if constexpr (kAnyHit) {
@@ -1095,12 +1101,15 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
 //
 // box=fma: the rays outside its domain (WideRay::robust_box) are skipped by the loop and traced after it
 // with the robust box test, so that the loop has one kernel inlined, as without them.
+inline constexpr int kAllRays = 2;
+
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount>
 void trace_batch(const WideBatch& batch) {
-  auto run = [&]<BoxTestKind kRayBox, AnyHitOrder kOrder, IntOrder kInt>(bool robust_box) {
+  // rays: every ray of the batch (kAllRays), or only those whose WideRay::robust_box is 0 or 1.
+  auto run = [&]<BoxTestKind kRayBox, AnyHitOrder kOrder, IntOrder kInt>(int rays) {
     for (std::size_t i = 0; i < batch.count; ++i) {
       if constexpr (kBox == BoxTestKind::kFma) {
-        if (batch.rays[i].robust_box != robust_box) continue;
+        if (rays != kAllRays && static_cast<int>(batch.rays[i].robust_box) != rays) continue;
       }
       if constexpr (kCount) ++batch.counts->rays;
       const Hit hit = trace_ray<N, kTri, kRayBox, kAnyHit, kCount, kOrder, kInt>(
@@ -1111,28 +1120,31 @@ void trace_batch(const WideBatch& batch) {
         batch.hits[i] = hit;
     }
   };
-  auto with_order = [&]<BoxTestKind kRayBox, IntOrder kInt>(bool robust_box) {
+  auto with_order = [&]<BoxTestKind kRayBox, IntOrder kInt>(int rays) {
     if constexpr (kAnyHit) {
       if (batch.any_hit_order == AnyHitOrder::kStored)
-        return run.template operator()<kRayBox, AnyHitOrder::kStored, kInt>(robust_box);
+        return run.template operator()<kRayBox, AnyHitOrder::kStored, kInt>(rays);
       if (batch.any_hit_order == AnyHitOrder::kNearestStored)
-        return run.template operator()<kRayBox, AnyHitOrder::kNearestStored, kInt>(robust_box);
+        return run.template operator()<kRayBox, AnyHitOrder::kNearestStored, kInt>(rays);
     }
-    run.template operator()<kRayBox, AnyHitOrder::kNearest, kInt>(robust_box);
+    run.template operator()<kRayBox, AnyHitOrder::kNearest, kInt>(rays);
   };
+  // The others, skipping the batch's robust-box rays only where it has some.
+  int fma_rays = kAllRays;
   if constexpr (kBox == BoxTestKind::kFma) {
-    if (batch.robust_box) [[unlikely]]
-      with_order.template operator()<BoxTestKind::kRobust, IntOrder::kNone>(true);
+    if (batch.robust_box) [[unlikely]] {
+      with_order.template operator()<BoxTestKind::kRobust, IntOrder::kNone>(1);
+      fma_rays = 0;
+    }
   }
   if constexpr (kHasIntOrder && kBox == BoxTestKind::kFma) {
     if (batch.int_order == IntOrder::kFree)
-      return with_order.template operator()<kBox, IntOrder::kFree>(false);
+      return with_order.template operator()<kBox, IntOrder::kFree>(fma_rays);
     if (batch.int_order == IntOrder::kGuarded)
-      return with_order.template operator()<kBox, IntOrder::kGuarded>(false);
+      return with_order.template operator()<kBox, IntOrder::kGuarded>(fma_rays);
   }
-  with_order.template operator()<kBox, IntOrder::kNone>(false);
+  with_order.template operator()<kBox, IntOrder::kNone>(fma_rays);
 }
-
 // The table of this instruction set's kernels: [width 4, 8][triangle test][box test][closest, any].
 template <bool kCount>
 WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {

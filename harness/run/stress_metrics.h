@@ -33,6 +33,9 @@ struct ErrorMetrics {
   /// small absolute errors there are huge in ulps.
   uint64_t t_err_ulps_max = 0;
   double t_err_ulps_mean = 0.0;
+  /// t_err_ulps_max over the hits clear of the ray's origin (is_clear_of_origin): the well-conditioned
+  /// distances, on which the default kernels' bound (kMaxClearTErrorUlps) holds.
+  uint64_t t_err_ulps_max_clear = 0;
   /// Rays that must hit (from inside a closed mesh, or aimed into one from outside; the exact
   /// reference agreeing) and that the variant misses.
   uint64_t leaks = 0;
@@ -40,9 +43,21 @@ struct ErrorMetrics {
   uint64_t errors() const { return false_misses + false_hits + wrong_prim; }
 };
 
+/// The bound on the default kernels' t error, in ulps, on hits clear of the origin: the watertight test
+/// computes a hit's distance in double and rounds it once (traversal/triangle_tests.h:
+/// plane_distance_in_double), so it is within one ulp of the exact distance unless the ray grazes the
+/// plane within about 1e-7 rad. The stress suite fails a run where it does not hold.
+inline constexpr uint64_t kMaxClearTErrorUlps = 1;
+
+/// Whether a hit at exact distance `t` is clear of the ray's origin: t |dir| at least 2^-20 |org|. Closer
+/// than that the origin lies on the surface to within a few float roundings of its own coordinates (a
+/// ray starting on a surface), the exact t is tiny or zero, and an error in ulps of it says nothing.
+bool is_clear_of_origin(const Ray& ray, float t);
+
 /// Compares a variant's closest hits with the exact ones. `must_hit` (same size, or empty) flags the
-/// rays that count as leaks when missed.
+/// rays that count as leaks when missed; `rays` (same size, or empty) are the rays traced, for
+/// t_err_ulps_max_clear (0 without them).
 ErrorMetrics measure_errors(std::span<const Hit> hits, std::span<const ExactHit> exact,
-                            std::span<const uint8_t> must_hit);
+                            std::span<const uint8_t> must_hit, std::span<const Ray> rays = {});
 
 }  // namespace sahbench

@@ -70,6 +70,24 @@ TEST(HarnessStressMetrics, CountsEachKindOfErrorAgainstTheExactAnswers) {
   EXPECT_EQ(m.t_err_ulps_max, std::numeric_limits<uint32_t>::max());
   EXPECT_DOUBLE_EQ(m.t_err_ulps_mean, 1.0);  // (2 + 0) / 2
   EXPECT_THROW(measure_errors(std::span(hits).first(2), exact, {}), Error);
+  EXPECT_EQ(m.t_err_ulps_max_clear, 0u);  // no rays given
+}
+
+// The t error clear of the origin leaves out hits within 2^-20 |org| of it (a ray starting on a surface),
+// however many ulps off, and keeps the others.
+TEST(HarnessStressMetrics, TErrorClearOfTheOriginLeavesOutHitsAtTheOrigin) {
+  const Ray from_surface{{1, 0, 0}, 0.0f, {1, 0, 0}, kInf};
+  EXPECT_FALSE(is_clear_of_origin(from_surface, 0.0f));
+  EXPECT_FALSE(is_clear_of_origin(from_surface, 0x1p-21f));
+  EXPECT_TRUE(is_clear_of_origin(from_surface, 0x1p-20f));
+  EXPECT_TRUE(is_clear_of_origin(Ray{{0, 0, 0}, 0.0f, {0, 0, 1}, kInf}, 1e-30f));
+  const std::vector<ExactHit> exact = {exact_hit({1}, 1e-7f), exact_hit({2}, 2.0f)};
+  const std::vector<Hit> hits = {Hit{1, 3e-7f, 0, 0}, Hit{2, std::nextafter(2.0f, 3.0f), 0, 0}};
+  const std::vector<Ray> rays = {from_surface, from_surface};
+  const ErrorMetrics m = measure_errors(hits, exact, {}, rays);
+  EXPECT_GT(m.t_err_ulps_max, 1000u);
+  EXPECT_EQ(m.t_err_ulps_max_clear, 1u);
+  EXPECT_THROW(measure_errors(hits, exact, {}, std::span(rays).first(1)), Error);
 }
 
 TEST(HarnessBoundedRun, ReturnsResultsAndErrorsAndAbandonsWorkPastTheBound) {

@@ -113,6 +113,16 @@ double cosine(const Ray& ray, const Triangle& tri) {
   return std::abs(d) / (std::hypot(nx, ny, nz) * std::hypot(ray.dir.x, ray.dir.y, ray.dir.z));
 }
 
+// A tree of `triangles` for `layout`: binned SAH for the binary layouts, the wide collapse of its arity
+// for the others.
+Bvh tree_for(const LayoutInfo& layout, const std::vector<Triangle>& triangles) {
+  const BuilderInfo& builder = find_builder(layout.arity == 2 ? "binned_sah" : "wide_collapse");
+  const ParamOverrides overrides =
+      layout.arity == 2 ? ParamOverrides{} : ParamOverrides{{"arity", std::to_string(layout.arity)}};
+  return builder.build(BuildInput::from_triangles(triangles),
+                       resolve_params(builder.name, builder.params, overrides));
+}
+
 // The watertight variant of every layout on every instruction set available here.
 std::vector<std::string> watertight_specs(const LayoutInfo& layout, test::Skips& skips) {
   if (!layout.has_isa) return {layout.name + ":tri=watertight"};
@@ -151,11 +161,7 @@ TEST(FloatEdges, WatertightTIsWithinAnUlpOfExactOnNeedles) {
   // Every layout's watertight kernels, on a tree of the needles.
   test::Skips skips;
   for (const LayoutInfo& layout : layouts()) {
-    const BuilderInfo& builder = find_builder(layout.arity == 2 ? "binned_sah" : "wide_collapse");
-    const ParamOverrides overrides =
-        layout.arity == 2 ? ParamOverrides{} : ParamOverrides{{"arity", std::to_string(layout.arity)}};
-    const Bvh bvh = builder.build(BuildInput::from_triangles(scene.triangles),
-                                  resolve_params(builder.name, builder.params, overrides));
+    const Bvh bvh = tree_for(layout, scene.triangles);
     for (const std::string& spec : watertight_specs(layout, skips)) {
       SCOPED_TRACE(spec);
       const auto compiled = compile_layout(spec, bvh, scene.triangles);
@@ -198,11 +204,7 @@ void expect_no_false_misses(const std::vector<Triangle>& triangles, const std::v
   for (const ExactHit& e : exact) exact_hits += e.found();
   ASSERT_GT(exact_hits, rays.size() * 9 / 10);
   for (const LayoutInfo& layout : layouts()) {
-    const BuilderInfo& builder = find_builder(layout.arity == 2 ? "binned_sah" : "wide_collapse");
-    const ParamOverrides overrides =
-        layout.arity == 2 ? ParamOverrides{} : ParamOverrides{{"arity", std::to_string(layout.arity)}};
-    const Bvh bvh = builder.build(BuildInput::from_triangles(triangles),
-                                  resolve_params(builder.name, builder.params, overrides));
+    const Bvh bvh = tree_for(layout, triangles);
     for (const std::string& spec_text : specs_with(layout, option, skips)) {
       SCOPED_TRACE(spec_text);
       const auto compiled = compile_layout(spec_text, bvh, triangles);

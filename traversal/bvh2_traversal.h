@@ -82,6 +82,81 @@ struct StackEntry {
 /// Throws sahbench::Error naming the node: a tree deeper than kMaxDepth (the builders guarantee it).
 [[noreturn]] void throw_stack_overflow(uint32_t node, uint32_t child_count);
 
+// The loop for binary trees (every inner node of a valid arity-2 tree has two children), the shape of
+// Aila and Laine 2009's "while-while" kernel and of tinybvh's BVH::Intersect: both children are tested
+// where their parent is visited, the ray goes on to the nearer one without a trip through the stack and
+// pushes the other with its entry distance, and a popped node entered beyond the closest hit is skipped.
+// It visits the nodes that the general loop below visits, in the same order (on equal entry distances
+// the second child first, as that loop's insertion sort), so results and counters are the same.
+template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
+Hit traverse_binary(const Bvh& bvh, const Triangle* triangles, const Ray& ray, const BoxTest& box_test,
+                    const TriangleTest& triangle_test, float tmax,
+                    [[maybe_unused]] TraversalCounters* counters, AnyHitOrder any_order) {
+  const Node* nodes = bvh.nodes.data();
+  const uint32_t* refs = bvh.prim_refs.data();
+  const float tmin = ray.tmin;
+  StackEntry stack[kStackCapacity];
+  uint32_t size = 0;
+  uint32_t current = 0;
+  Hit best;
+  float best_t = tmax;
+  while (true) {
+    const Node& node = nodes[current];
+    if (!node.is_leaf()) {
+      if constexpr (kCount) {
+        ++counters->inner_visits;
+        counters->box_tests += 2;
+      }
+      const uint32_t first = node.first;
+      float t0, t1;
+      const unsigned hits =
+          box_test.intersect_pair(nodes[first].bounds, nodes[first + 1].bounds, tmin, best_t, t0, t1);
+      if (hits == 3) {
+        bool second_first = !(t0 < t1);
+        if constexpr (kAnyHit) {
+          if (any_order == AnyHitOrder::kStored) second_first = false;
+          if (any_order == AnyHitOrder::kNearestStored) second_first = t1 < t0;
+        }
+        if (size == kStackCapacity) [[unlikely]]
+          throw_stack_overflow(current, 2);
+        stack[size++] = second_first ? StackEntry{first, t0} : StackEntry{first + 1, t1};
+        current = second_first ? first + 1 : first;
+        continue;
+      }
+      if (hits != 0) {
+        current = first + (hits >> 1);
+        continue;
+      }
+    } else {
+      if constexpr (kCount) {
+        ++counters->leaf_visits;
+        counters->prim_tests += node.prim_count;
+      }
+      const uint32_t end = node.first + node.prim_count;
+      for (uint32_t r = node.first; r < end; ++r) {
+        const uint32_t prim = refs[r];
+        float t, u, v;
+        const bool hit = kAnyHit ? intersect_any(triangle_test, triangles[prim], tmin, best_t, t, u, v)
+                                 : triangle_test.intersect(triangles[prim], tmin, best_t, t, u, v);
+        if (!hit) continue;
+        if constexpr (kAnyHit) {
+          return {prim, t, u, v};
+        } else if (t < best_t || prim < best.prim) {
+          best = {prim, t, u, v};
+          best_t = t;
+        }
+      }
+    }
+    // Next: the top of the stack, skipping nodes entered beyond the closest hit (equal is kept for the
+    // tie rule).
+    do {
+      if (size == 0) return best;
+      --size;
+    } while (!kAnyHit && stack[size].t_entry > best_t);
+    current = stack[size].node;
+  }
+}
+
 // The one traversal loop. kAnyHit stops at the first hit in [tmin, tmax]; otherwise the interval's end
 // shrinks to the closest hit so far. kCount adds the statistics, compiled out of the timed kernels.
 //
@@ -92,13 +167,16 @@ struct StackEntry {
 //
 // Ties: a hit at exactly the current closest t replaces it only when its primitive index is lower, so
 // among hits at the same float t the lowest index wins, as in the brute-force reference.
-template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
+//
+// kBinaryLoop sends binary trees to traverse_binary; the tests turn it off to check that both loops agree.
+template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount, bool kBinaryLoop = true>
 Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
              [[maybe_unused]] TraversalCounters* counters, AnyHitOrder order) {
   if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
     // A ray outside box=fma's domain takes the robust box test (ray_box.h: FmaRayBox).
     if (!FmaRayBox::takes(ray)) [[unlikely]]
-      return traverse<TriangleTest, RobustRayBox, kAnyHit, kCount>(bvh, triangles, ray, counters, order);
+      return traverse<TriangleTest, RobustRayBox, kAnyHit, kCount, kBinaryLoop>(bvh, triangles, ray, counters,
+                                                                                order);
   }
   if constexpr (kCount) ++counters->rays;
   if (bvh.nodes.empty() || !traceable(ray)) return {};
@@ -111,11 +189,14 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
   float t_entry;
   const float tmax = far_limit(ray);
   if (!box_test.intersect(bvh.nodes[0].bounds, ray.tmin, tmax, t_entry)) return {};
+  const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
+  if (kBinaryLoop && bvh.arity == 2)
+    return traverse_binary<TriangleTest, BoxTest, kAnyHit, kCount>(bvh, triangles.data(), ray, box_test,
+                                                                   triangle_test, tmax, counters, any_order);
   stack[size++] = {0, t_entry};
 
   Hit best;
   float best_t = tmax;
-  const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
   while (size > 0) {
     const StackEntry entry = stack[--size];
     if constexpr (!kAnyHit) {

@@ -2,13 +2,16 @@
 // Ray/box slab tests (Kay and Kajiya 1986), set up once per ray and run once per node.
 
 #include <array>
-#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 
 #include "core/aabb.h"
 #include "core/ray.h"
+
+#if defined(__SSE4_1__)
+#include <immintrin.h>
+#endif
 
 namespace sahbench {
 
@@ -22,30 +25,31 @@ constexpr float float_gamma(int n) {
 
 namespace detail {
 
-// A box seen as six floats: min x y z, max x y z, so that a per-ray index picks the near or far plane
-// without a branch (pbrt's dirIsNeg; Williams et al. 2005, "An Efficient and Robust Ray-Box
-// Intersection Algorithm").
-using BoxPlanes = std::array<float, 6>;
-static_assert(sizeof(Aabb) == sizeof(BoxPlanes), "Aabb must be six packed floats to be read as planes");
-
-// What both slab tests precompute per ray: origin, reciprocal direction and, per axis, which of the
-// six planes is met first. The near plane is chosen by the sign bit (not by dir < 0), so that -0 counts
+// What both slab tests precompute per ray: origin, reciprocal direction and, per axis, whether the
+// max plane is met first (pbrt's dirIsNeg; Williams et al. 2005, "An Efficient and Robust Ray-Box
+// Intersection Algorithm"). The near plane is chosen by the sign bit (not by dir < 0), so that -0 counts
 // as negative: 1 / -0 = -inf, and the max plane is then the near one, exactly as for any negative value.
 struct SlabSetup {
   std::array<float, 3> org;
   std::array<float, 3> inv_dir;
-  std::array<uint8_t, 3> near_plane;
-  std::array<uint8_t, 3> far_plane;
+  std::array<bool, 3> negative;
 
   explicit SlabSetup(const Ray& ray) {
     for (std::size_t axis = 0; axis < 3; ++axis) {
       org[axis] = ray.org[axis];
       // 1 / +-0 = +-inf by IEEE 754; the slab code below copes with the inf (and the NaN it may make).
       inv_dir[axis] = 1.0f / ray.dir[axis];
-      const bool negative = std::signbit(ray.dir[axis]);
-      near_plane[axis] = static_cast<uint8_t>(negative ? axis + 3 : axis);
-      far_plane[axis] = static_cast<uint8_t>(negative ? axis : axis + 3);
+      negative[axis] = std::signbit(ray.dir[axis]);
     }
+  }
+
+  // The near and far planes of `box` on `axis` for this ray, read from the box itself: a select per
+  // plane rather than an index into a copy of the box, which the compiler would keep on the stack.
+  float near_plane(const Aabb& box, std::size_t axis) const {
+    return negative[axis] ? box.max[axis] : box.min[axis];
+  }
+  float far_plane(const Aabb& box, std::size_t axis) const {
+    return negative[axis] ? box.min[axis] : box.max[axis];
   }
 
   // Intersects the ray's [tmin, tmax] with the three slabs. With kScaleFar, each far distance is
@@ -56,12 +60,11 @@ struct SlabSetup {
   // interval unchanged: an origin on a face plane counts as inside that slab, which can only add hits.
   template <bool kScaleFar>
   bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry, float far_scale = 1.0f) const {
-    const BoxPlanes planes = std::bit_cast<BoxPlanes>(box);
     float t_near = tmin;
     float t_far = tmax;
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      const float t0 = (planes[near_plane[axis]] - org[axis]) * inv_dir[axis];
-      float t1 = (planes[far_plane[axis]] - org[axis]) * inv_dir[axis];
+      const float t0 = (near_plane(box, axis) - org[axis]) * inv_dir[axis];
+      float t1 = (far_plane(box, axis) - org[axis]) * inv_dir[axis];
       if constexpr (kScaleFar) t1 *= far_scale;
       t_near = t0 > t_near ? t0 : t_near;
       t_far = t1 < t_far ? t1 : t_far;
@@ -70,6 +73,71 @@ struct SlabSetup {
     return t_near <= t_far;
   }
 };
+
+// Both boxes of a binary node's children in one pass, four lanes per box (x, y, z and one unused), with
+// the same IEEE operations per plane as SlabSetup::intersect and the same NaN rule: _mm_max_ps(t, near)
+// is `t > near ? t : near`. The binary kernel calls it once per inner node.
+enum class SlabForm { kRobust, kFast, kFma };
+
+#if defined(__SSE4_1__)
+struct SlabLanes {
+  __m128 org, inv_dir, org_inv, negative;
+
+  explicit SlabLanes(const SlabSetup& s)
+      : org(_mm_setr_ps(s.org[0], s.org[1], s.org[2], 0.0f)),
+        inv_dir(_mm_setr_ps(s.inv_dir[0], s.inv_dir[1], s.inv_dir[2], 1.0f)),
+        org_inv(_mm_mul_ps(org, inv_dir)),
+        negative(_mm_castsi128_ps(
+            _mm_setr_epi32(-int(s.negative[0]), -int(s.negative[1]), -int(s.negative[2]), 0))) {}
+
+  // Bit 0: `a` is met within [tmin, tmax], bit 1: `b`; their entry distances in t_a and t_b.
+  template <SlabForm kForm>
+  [[gnu::always_inline]] unsigned intersect_pair(const Aabb& a, const Aabb& b, float tmin, float tmax,
+                                                 float& t_a, float& t_b, float far_scale) const {
+    __m128 near_a, far_a, near_b, far_b;
+    distances<kForm>(a, near_a, far_a, far_scale);
+    distances<kForm>(b, near_b, far_b, far_scale);
+    near_a = _mm_max_ps(near_a, _mm_set1_ps(tmin));
+    near_b = _mm_max_ps(near_b, _mm_set1_ps(tmin));
+    far_a = _mm_min_ps(far_a, _mm_set1_ps(tmax));
+    far_b = _mm_min_ps(far_b, _mm_set1_ps(tmax));
+    // Lanes (a, b) of x, y and z side by side, reduced over the three axes; lane 3 is never read.
+    const __m128 near_xy = _mm_unpacklo_ps(near_a, near_b);  // ax bx ay by
+    const __m128 near_z = _mm_unpackhi_ps(near_a, near_b);   // az bz
+    const __m128 far_xy = _mm_unpacklo_ps(far_a, far_b);
+    const __m128 far_z = _mm_unpackhi_ps(far_a, far_b);
+    const __m128 t_near = _mm_max_ps(_mm_max_ps(near_xy, _mm_movehl_ps(near_xy, near_xy)), near_z);
+    const __m128 t_far = _mm_min_ps(_mm_min_ps(far_xy, _mm_movehl_ps(far_xy, far_xy)), far_z);
+    t_a = _mm_cvtss_f32(t_near);
+    t_b = _mm_cvtss_f32(_mm_shuffle_ps(t_near, t_near, _MM_SHUFFLE(1, 1, 1, 1)));
+    return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(t_near, t_far))) & 3u;
+  }
+
+ private:
+  // Near and far distances of `box`'s planes, per axis. The max corner is read from the box's own bytes
+  // (min.z, max.x, max.y, max.z, shifted down a lane), so nothing past the box is loaded.
+  template <SlabForm kForm>
+  [[gnu::always_inline]] void distances(const Aabb& box, __m128& near, __m128& far, float far_scale) const {
+    const __m128 lo = _mm_loadu_ps(&box.min.x);
+    const __m128 hi_shifted = _mm_loadu_ps(&box.min.z);
+    const __m128 hi = _mm_shuffle_ps(hi_shifted, hi_shifted, _MM_SHUFFLE(3, 3, 2, 1));
+    const __m128 near_plane = _mm_blendv_ps(lo, hi, negative);
+    const __m128 far_plane = _mm_blendv_ps(hi, lo, negative);
+    if constexpr (kForm == SlabForm::kFma) {
+#if defined(__FMA__)
+      near = _mm_fmsub_ps(near_plane, inv_dir, org_inv);
+      far = _mm_fmsub_ps(far_plane, inv_dir, org_inv);
+#else
+      static_assert(kForm != SlabForm::kFma, "box=fma pairs need FMA instructions");
+#endif
+    } else {
+      near = _mm_mul_ps(_mm_sub_ps(near_plane, org), inv_dir);
+      far = _mm_mul_ps(_mm_sub_ps(far_plane, org), inv_dir);
+      if constexpr (kForm == SlabForm::kRobust) far = _mm_mul_ps(far, _mm_set1_ps(far_scale));
+    }
+  }
+};
+#endif
 
 }  // namespace detail
 
@@ -97,8 +165,21 @@ class RobustRayBox {
     return setup_.intersect<true>(box, tmin, tmax, t_entry, kFarScale);
   }
 
+  /// intersect() on two boxes at once (a binary node's children): bit 0 for `a`, bit 1 for `b`.
+  [[gnu::always_inline]] unsigned intersect_pair(const Aabb& a, const Aabb& b, float tmin, float tmax,
+                                                 float& t_a, float& t_b) const {
+#if defined(__SSE4_1__)
+    return lanes_.intersect_pair<detail::SlabForm::kRobust>(a, b, tmin, tmax, t_a, t_b, kFarScale);
+#else
+    return unsigned(intersect(a, tmin, tmax, t_a)) | unsigned(intersect(b, tmin, tmax, t_b)) << 1;
+#endif
+  }
+
  private:
   detail::SlabSetup setup_;
+#if defined(__SSE4_1__)
+  detail::SlabLanes lanes_{setup_};
+#endif
 };
 
 /// The plain slab test (Kay and Kajiya 1986; Williams et al. 2005) without Ize's scaling: one multiply per
@@ -112,8 +193,21 @@ class FastRayBox {
     return setup_.intersect<false>(box, tmin, tmax, t_entry);
   }
 
+  /// intersect() on two boxes at once (a binary node's children): bit 0 for `a`, bit 1 for `b`.
+  [[gnu::always_inline]] unsigned intersect_pair(const Aabb& a, const Aabb& b, float tmin, float tmax,
+                                                 float& t_a, float& t_b) const {
+#if defined(__SSE4_1__)
+    return lanes_.intersect_pair<detail::SlabForm::kFast>(a, b, tmin, tmax, t_a, t_b, 1.0f);
+#else
+    return unsigned(intersect(a, tmin, tmax, t_a)) | unsigned(intersect(b, tmin, tmax, t_b)) << 1;
+#endif
+  }
+
  private:
   detail::SlabSetup setup_;
+#if defined(__SSE4_1__)
+  detail::SlabLanes lanes_{setup_};
+#endif
 };
 
 /// The slab test as Embree writes it (its BVH node intersectors): t = plane * rdir - org * rdir, each
@@ -148,12 +242,11 @@ class FmaRayBox {
   }
 
   bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry) const {
-    const detail::BoxPlanes planes = std::bit_cast<detail::BoxPlanes>(box);
     float t_near = tmin;
     float t_far = tmax;
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      const float t0 = std::fma(planes[setup_.near_plane[axis]], setup_.inv_dir[axis], -org_inv_[axis]);
-      const float t1 = std::fma(planes[setup_.far_plane[axis]], setup_.inv_dir[axis], -org_inv_[axis]);
+      const float t0 = std::fma(setup_.near_plane(box, axis), setup_.inv_dir[axis], -org_inv_[axis]);
+      const float t1 = std::fma(setup_.far_plane(box, axis), setup_.inv_dir[axis], -org_inv_[axis]);
       t_near = t0 > t_near ? t0 : t_near;
       t_far = t1 < t_far ? t1 : t_far;
     }
@@ -161,9 +254,22 @@ class FmaRayBox {
     return t_near <= t_far;
   }
 
+  /// intersect() on two boxes at once (a binary node's children): bit 0 for `a`, bit 1 for `b`.
+  [[gnu::always_inline]] unsigned intersect_pair(const Aabb& a, const Aabb& b, float tmin, float tmax,
+                                                 float& t_a, float& t_b) const {
+#if defined(__SSE4_1__) && defined(__FMA__)
+    return lanes_.intersect_pair<detail::SlabForm::kFma>(a, b, tmin, tmax, t_a, t_b, 1.0f);
+#else
+    return unsigned(intersect(a, tmin, tmax, t_a)) | unsigned(intersect(b, tmin, tmax, t_b)) << 1;
+#endif
+  }
+
  private:
   detail::SlabSetup setup_;
   std::array<float, 3> org_inv_;
+#if defined(__SSE4_1__)
+  detail::SlabLanes lanes_{setup_};
+#endif
 };
 
 }  // namespace sahbench

@@ -36,7 +36,7 @@ struct Kernel {
 using Kernels =
     ::testing::Types<Kernel<WatertightTriangleTest, RobustRayBox>, Kernel<WatertightTriangleTest, FastRayBox>,
                      Kernel<MollerTrumboreTest, RobustRayBox>, Kernel<MollerTrumboreTest, FastRayBox>,
-                     Kernel<MollerTrumboreTest, FmaRayBox>>;
+                     Kernel<MollerTrumboreTest, FmaRayBox>, Kernel<MollerTrumboreNormalTest, FmaRayBox>>;
 
 // Same hit as the reference, or a tie: the same distance within the tolerance, with the kernel's
 // primitive also hit at that distance by the same triangle test. Returns an explanation, empty if agreed.
@@ -59,6 +59,30 @@ std::string disagreement(const Hit& got, const Hit& ref, std::span<const Triangl
 template <class K>
 class TravBvhKernels : public ::testing::Test {
  protected:
+  // The binary trees' own loop (traverse_binary) against the general loop on the same binary tree: the
+  // same hit and the same counters, for closest hit and for any hit in each child order.
+  static void check_binary_loop(const Bvh& bvh, std::span<const Triangle> tris, const Ray& ray,
+                                std::size_t i) {
+    using TriangleTest = typename K::TriangleTest;
+    using BoxTest = typename K::BoxTest;
+    TraversalCounters binary, general;
+    const Hit a = detail::traverse<TriangleTest, BoxTest, false, true, true>(bvh, tris, ray, &binary,
+                                                                             AnyHitOrder::kAuto);
+    const Hit b = detail::traverse<TriangleTest, BoxTest, false, true, false>(bvh, tris, ray, &general,
+                                                                              AnyHitOrder::kAuto);
+    EXPECT_TRUE(a.prim == b.prim && a.t == b.t && a.u == b.u && a.v == b.v) << "closest, ray " << i;
+    EXPECT_EQ(binary, general) << "closest counters, ray " << i;
+    for (AnyHitOrder order : {AnyHitOrder::kNearest, AnyHitOrder::kStored, AnyHitOrder::kNearestStored}) {
+      TraversalCounters any_binary, any_general;
+      const Hit c =
+          detail::traverse<TriangleTest, BoxTest, true, true, true>(bvh, tris, ray, &any_binary, order);
+      const Hit d =
+          detail::traverse<TriangleTest, BoxTest, true, true, false>(bvh, tris, ray, &any_general, order);
+      EXPECT_EQ(c.prim, d.prim) << "any hit, order " << int(order) << ", ray " << i;
+      EXPECT_EQ(any_binary, any_general) << "any-hit counters, order " << int(order) << ", ray " << i;
+    }
+  }
+
   // Checks closest_hit, any_hit and the counted variants of kernel K against brute force.
   void check(const std::vector<Triangle>& tris, const std::vector<Ray>& rays, uint32_t arity,
              int allowed_mismatches) {
@@ -88,6 +112,7 @@ class TravBvhKernels : public ::testing::Test {
       TraversalCounters any_counters;
       EXPECT_EQ((any_hit_counted<TriangleTest, BoxTest>(bvh, tris, ray, any_counters)), any);
       EXPECT_EQ(any_counters.rays, 1u);
+      if (arity == 2) check_binary_loop(bvh, tris, ray, i);
     }
     if (allowed_mismatches == 0) {
       EXPECT_EQ(closest_mismatches, 0);

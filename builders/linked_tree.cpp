@@ -1,8 +1,10 @@
 #include "builders/linked_tree.h"
 
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <bit>
 #include <string>
 #include <utility>
 
@@ -11,67 +13,49 @@
 namespace sahbench {
 namespace {
 
-// Subtrees of fewer nodes than this are refitted by the task that reaches them: large enough that a
-// task's work dwarfs spawning it, small enough that a tree of 100K nodes still spreads over the threads.
-constexpr uint32_t kSerialRefitNodes = 4096;
+// Parallel tasks per thread at the top of the tree, as in core/refit.cpp: enough spare tasks that a lopsided
+// tree still balances across threads. Which subtrees run as tasks changes neither boxes nor sums.
+constexpr int kTasksPerThread = 16;
+
+using Summary = LinkedTree::Summary;
 
 class Refitter {
  public:
-  explicit Refitter(std::vector<LinkedNode>& nodes) : nodes_(nodes) {}
+  Refitter(std::vector<LinkedNode>& nodes, LinkedTree::Levels* levels, uint32_t spawn_depth)
+      : nodes_(nodes), levels_(levels), spawn_depth_(spawn_depth) {}
 
-  // Post-order; returns the subtree's node count so that the caller can decide where to spawn. The
-  // recursion depth is the tree's, which the passes keep within kMaxDepth.
-  uint32_t refit(uint32_t n) {
+  // Post-order below a node at `depth`. The recursion depth is the tree's, which the passes keep within
+  // kMaxDepth.
+  Summary refit(uint32_t n, uint32_t depth) {
     LinkedNode& node = nodes_[n];
-    if (node.is_leaf()) return 1;
-    uint32_t sizes[2];
-    if (parallel_) {
-      // Spawn only near the top: whether the children run as tasks does not change the boxes.
-      tbb::parallel_invoke([&] { sizes[0] = refit_serial_below(node.child[0]); },
-                           [&] { sizes[1] = refit_serial_below(node.child[1]); });
-    } else {
-      sizes[0] = refit(node.child[0]);
-      sizes[1] = refit(node.child[1]);
+    Summary out;
+    if (!node.is_leaf()) {
+      Summary children[2];
+      if (depth < spawn_depth_) {
+        tbb::parallel_invoke([&] { children[0] = refit(node.child[0], depth + 1); },
+                             [&] { children[1] = refit(node.child[1], depth + 1); });
+      } else {
+        children[0] = refit(node.child[0], depth + 1);
+        children[1] = refit(node.child[1], depth + 1);
+      }
+      node.bounds = merge(nodes_[node.child[0]].bounds, nodes_[node.child[1]].bounds);
+      out.height = 1 + std::max(children[0].height, children[1].height);
+      out.inner_area = area_in_double(node.bounds) + children[0].inner_area + children[1].inner_area;
     }
-    node.bounds = merge(nodes_[node.child[0]].bounds, nodes_[node.child[1]].bounds);
-    return 1 + sizes[0] + sizes[1];
+    if (levels_) {
+      levels_->depth[n] = depth;
+      levels_->height[n] = out.height;
+    }
+    return out;
   }
 
  private:
-  // A task for one child: parallel again while the child's subtree is large, by the count of the
-  // previous refit of the same node (sizes do not change as boxes do).
-  uint32_t refit_serial_below(uint32_t n) {
-    Refitter child(nodes_);
-    child.parallel_ = subtree_large(n);
-    return child.refit(n);
-  }
-
-  // Whether n's subtree has at least kSerialRefitNodes nodes, by a bounded walk.
-  bool subtree_large(uint32_t n) const {
-    std::vector<uint32_t> stack{n};
-    uint32_t seen = 0;
-    while (!stack.empty() && seen < kSerialRefitNodes) {
-      const LinkedNode& node = nodes_[stack.back()];
-      stack.pop_back();
-      ++seen;
-      if (!node.is_leaf()) stack.insert(stack.end(), {node.child[0], node.child[1]});
-    }
-    return seen >= kSerialRefitNodes;
-  }
-
   std::vector<LinkedNode>& nodes_;
-  bool parallel_ = true;
+  LinkedTree::Levels* levels_;
+  uint32_t spawn_depth_;
 };
 
 }  // namespace
-
-double area_in_double(const Aabb& box) {
-  if (box.is_empty()) return 0.0;
-  const double x = static_cast<double>(box.max.x) - box.min.x;
-  const double y = static_cast<double>(box.max.y) - box.min.y;
-  const double z = static_cast<double>(box.max.z) - box.min.z;
-  return x * y + y * z + z * x;
-}
 
 LinkedTree::LinkedTree(const Bvh& bvh, std::string_view pass) : refs_(bvh.prim_refs) {
   if (bvh.arity != 2)
@@ -115,45 +99,15 @@ bool LinkedTree::in_subtree(uint32_t n, uint32_t ancestor) const {
   return false;
 }
 
-void LinkedTree::refit() {
-  if (root != kNoNode) Refitter(nodes).refit(root);
-}
-
-double LinkedTree::inner_area() const {
-  double sum = 0.0;
-  for (const LinkedNode& node : nodes)
-    if (!node.is_leaf()) sum += area_in_double(node.bounds);
-  return sum;
-}
-
-void LinkedTree::depths_and_heights(std::vector<uint32_t>& depth, std::vector<uint32_t>& height) const {
-  depth.assign(nodes.size(), 0);
-  height.assign(nodes.size(), 0);
-  if (root == kNoNode) return;
-  // Pre-order for the depths; its reverse visits children before parents, for the heights.
-  std::vector<uint32_t> order, stack{root};
-  order.reserve(nodes.size());
-  while (!stack.empty()) {
-    const uint32_t n = stack.back();
-    stack.pop_back();
-    order.push_back(n);
-    const LinkedNode& node = nodes[n];
-    if (node.is_leaf()) continue;
-    for (const uint32_t c : node.child) {
-      depth[c] = depth[n] + 1;
-      stack.push_back(c);
-    }
+LinkedTree::Summary LinkedTree::refit(Levels* levels) {
+  if (levels) {
+    levels->depth.resize(nodes.size());
+    levels->height.resize(nodes.size());
   }
-  for (auto it = order.rbegin(); it != order.rend(); ++it) {
-    const LinkedNode& node = nodes[*it];
-    if (!node.is_leaf()) height[*it] = 1 + std::max(height[node.child[0]], height[node.child[1]]);
-  }
-}
-
-uint32_t LinkedTree::max_depth() const {
-  std::vector<uint32_t> depth, height;
-  depths_and_heights(depth, height);
-  return root == kNoNode ? 0 : height[root];
+  if (root == kNoNode) return {};
+  const int tasks = tbb::this_task_arena::max_concurrency() * kTasksPerThread;
+  return Refitter(nodes, levels, static_cast<uint32_t>(std::bit_width(static_cast<unsigned>(tasks))))
+      .refit(root, 0);
 }
 
 Bvh LinkedTree::to_bvh() const {

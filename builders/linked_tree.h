@@ -27,7 +27,13 @@ struct LinkedNode {
 
 /// Half the surface area in double, as the statistics compute it (core/bvh_stats.cpp), so that neither
 /// 1e30 coordinates overflow nor 1e-25 ones underflow.
-double area_in_double(const Aabb& box);
+inline double area_in_double(const Aabb& box) {
+  if (box.is_empty()) return 0.0;
+  const double x = static_cast<double>(box.max.x) - box.min.x;
+  const double y = static_cast<double>(box.max.y) - box.min.y;
+  const double z = static_cast<double>(box.max.z) - box.min.z;
+  return x * y + y * z + z * x;
+}
 
 class LinkedTree {
  public:
@@ -44,16 +50,22 @@ class LinkedTree {
   /// Whether `n` lies in the subtree of `ancestor` (or is it), by walking up the parent links.
   bool in_subtree(uint32_t n, uint32_t ancestor) const;
 
-  /// Every inner box recomputed as the union of its children's, bottom up (in parallel with TBB; the
-  /// boxes are exact unions, so the result does not depend on the thread count).
-  void refit();
-  /// The sum of the inner nodes' areas (area_in_double), in index order: the part of the SAH that
-  /// changing the topology changes.
-  double inner_area() const;
-  /// The largest depth of any node, the root's being 0.
-  uint32_t max_depth() const;
-  /// depth[n] and height[n] (0 for leaves) of every node.
-  void depths_and_heights(std::vector<uint32_t>& depth, std::vector<uint32_t>& height) const;
+  /// What refit() finds on its way: the tree's height (its deepest node's depth, the root's being 0)
+  /// and the sum of its inner nodes' areas (area_in_double), the part of the SAH that a change of
+  /// topology changes. The sum is taken child before parent along the tree, the same on any thread.
+  struct Summary {
+    uint32_t height = 0;
+    double inner_area = 0.0;
+  };
+  /// depth[n] and height[n] (0 for leaves) of every node, as refit() may record them.
+  struct Levels {
+    std::vector<uint32_t> depth, height;
+  };
+
+  /// Every inner box recomputed as the union of its children's, bottom up, in parallel with TBB (the
+  /// boxes are exact unions, so the result does not depend on the thread count); `levels`, when given,
+  /// gets every node's depth and height.
+  Summary refit(Levels* levels = nullptr);
 
   /// The tree in the common format: depth first, each node's two children side by side, and the leaves'
   /// references in the order the leaves are met.

@@ -54,7 +54,7 @@ class Reinserter {
   void run() {
     std::vector<LinkedNode> best = tree_.nodes;
     uint32_t best_root = tree_.root;
-    double best_area = tree_.inner_area();
+    double best_area = tree_.refit(&levels_).inner_area;
     for (uint32_t it = 0; it < params_.iterations; ++it) {
       const std::vector<Move> moves = find_moves(best_area);
       if (moves.empty()) return;
@@ -63,16 +63,16 @@ class Reinserter {
       bool improved = false;
       for (std::size_t count = moves.size(); count > 0 && !improved; count /= 2) {
         apply(moves, count);
-        tree_.refit();
-        const double area = tree_.inner_area();
-        improved = area < best_area * (1.0 - kMinRelativeGain) && tree_.max_depth() <= kMaxDepth;
+        const LinkedTree::Summary after = tree_.refit(&levels_);
+        improved = after.inner_area < best_area * (1.0 - kMinRelativeGain) && after.height <= kMaxDepth;
         if (improved) {
           best = tree_.nodes;
           best_root = tree_.root;
-          best_area = area;
+          best_area = after.inner_area;
         } else {
           tree_.nodes = best;
           tree_.root = best_root;
+          tree_.refit(&levels_);  // the levels of the tree restored
         }
       }
       if (!improved) return;
@@ -82,7 +82,6 @@ class Reinserter {
  private:
   // The best move of each of the batch's nodes, those that gain, in the order to apply them.
   std::vector<Move> find_moves(double total_area) {
-    tree_.depths_and_heights(depth_, height_);
     std::vector<uint32_t> order;
     order.reserve(tree_.nodes.size());
     for (uint32_t n = 0; n < tree_.nodes.size(); ++n)
@@ -94,9 +93,11 @@ class Reinserter {
     const std::size_t batch = std::clamp<std::size_t>(
         static_cast<std::size_t>(std::ceil(params_.batch * double(order.size()))), 1, order.size());
     // The largest first; ties by index, so that the batch is the same on every run.
-    std::partial_sort(order.begin(), order.begin() + std::ptrdiff_t(batch), order.end(),
-                      [&](uint32_t a, uint32_t b) { return area[a] != area[b] ? area[a] > area[b] : a < b; });
-    order.resize(batch);
+    const auto larger = [&](uint32_t a, uint32_t b) {
+      return area[a] != area[b] ? area[a] > area[b] : a < b;
+    };
+    std::nth_element(order.begin(), order.begin() + std::ptrdiff_t(batch - 1), order.end(), larger);
+    order.resize(batch);  // the set is unique; the moves are ordered by gain below
 
     std::vector<Move> found(batch);
     tbb::enumerable_thread_specific<Scratch> scratch;
@@ -130,11 +131,12 @@ class Reinserter {
       removed += area[a] - area_in_double(below);
       s.path.emplace_back(a, below);
     }
-    // path[i] is the ancestor at depth depth_[parent] - 1 - i.
-    const uint32_t parent_depth = depth_[parent];
+    // path[i] is the ancestor at depth depth[parent] - 1 - i.
+    const std::vector<uint32_t>& depth = levels_.depth;
+    const uint32_t parent_depth = depth[parent];
     auto box_of = [&](uint32_t x) -> const Aabb& {
-      if (depth_[x] < parent_depth) {
-        const auto& [on_path, shrunk] = s.path[parent_depth - 1 - depth_[x]];
+      if (depth[x] < parent_depth) {
+        const auto& [on_path, shrunk] = s.path[parent_depth - 1 - depth[x]];
         if (on_path == x) return shrunk;
       }
       return nodes[x].bounds;
@@ -153,7 +155,7 @@ class Reinserter {
       if (c.induced + box_area >= best_cost) break;  // every place left costs at least this
       const Aabb& x_box = box_of(c.node);
       const double merged = area_in_double(merge(x_box, box));
-      if (c.induced + merged < best_cost && c.depth + 1 + height_[n] <= kMaxDepth) {
+      if (c.induced + merged < best_cost && c.depth + 1 + levels_.height[n] <= kMaxDepth) {
         best_cost = c.induced + merged;
         best.target = c.node;
       }
@@ -216,7 +218,7 @@ class Reinserter {
 
   LinkedTree& tree_;
   const ReinsertParams& params_;
-  std::vector<uint32_t> depth_, height_;
+  LinkedTree::Levels levels_;  // of the tree as it stands between iterations
 };
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/task_arena.h>
 
 #include <bit>
 #include <limits>
@@ -20,8 +21,9 @@ namespace {
 // double sums taken in different orders.
 constexpr double kMinRelativeGain = 1e-9;
 
-// Subtrees of fewer nodes than this are restructured by the task that reaches them.
-constexpr uint32_t kSerialNodes = 4096;
+// Parallel tasks per thread at the top of the tree, as in core/refit.cpp: enough that a lopsided tree still
+// spreads over the threads. Which subtrees run as tasks does not change the result.
+constexpr int kTasksPerThread = 16;
 
 // One task's tables, indexed by subsets (bit masks) of the treelet's leaves.
 struct Tables {
@@ -41,40 +43,22 @@ class Restructurer {
   // treelet is formed from subtrees already final in this pass. Subtrees are disjoint, so their tasks
   // touch different nodes, and the order among them does not change the result.
   void pass() {
-    count_nodes();
-    visit(tree_.root);
+    const int tasks = tbb::this_task_arena::max_concurrency() * kTasksPerThread;
+    spawn_depth_ = static_cast<uint32_t>(std::bit_width(static_cast<unsigned>(tasks)));
+    visit(tree_.root, 0);
   }
 
  private:
-  // size_[n]: the nodes of n's subtree, which decide where visit() spawns tasks.
-  void count_nodes() {
-    std::vector<uint32_t> order;
-    order.reserve(tree_.nodes.size());
-    std::vector<uint32_t> stack{tree_.root};
-    while (!stack.empty()) {
-      const uint32_t n = stack.back();
-      stack.pop_back();
-      order.push_back(n);
-      const LinkedNode& node = tree_.nodes[n];
-      if (!node.is_leaf()) stack.insert(stack.end(), {node.child[0], node.child[1]});
-    }
-    size_.assign(tree_.nodes.size(), 1);
-    for (auto it = order.rbegin(); it != order.rend(); ++it) {
-      const LinkedNode& node = tree_.nodes[*it];
-      if (!node.is_leaf()) size_[*it] = 1 + size_[node.child[0]] + size_[node.child[1]];
-    }
-  }
-
-  void visit(uint32_t n) {
+  void visit(uint32_t n, uint32_t depth) {
     const LinkedNode& node = tree_.nodes[n];
     if (node.is_leaf()) return;
     // A treelet's root keeps its index, so the children read here are the ones the visits below keep.
     const uint32_t a = node.child[0], b = node.child[1];
-    if (size_[n] >= kSerialNodes)
-      tbb::parallel_invoke([&] { visit(a); }, [&] { visit(b); });
+    if (depth < spawn_depth_)
+      tbb::parallel_invoke([&] { visit(a, depth + 1); }, [&] { visit(b, depth + 1); });
     else {
-      visit(a);
-      visit(b);
+      visit(a, depth + 1);
+      visit(b, depth + 1);
     }
     restructure(n);
   }
@@ -162,7 +146,7 @@ class Restructurer {
 
   LinkedTree& tree_;
   const TreeletParams& params_;
-  std::vector<uint32_t> size_;
+  uint32_t spawn_depth_ = 0;
   tbb::enumerable_thread_specific<Tables> tables_;
 };
 
@@ -176,16 +160,17 @@ Bvh restructure_treelets(const Bvh& source, const TreeletParams& params) {
   if (tree.nodes.size() < 5 || params.iterations == 0) return source;  // fewer than 3 leaves
   Restructurer restructurer(tree, params);
   std::vector<LinkedNode> best = tree.nodes;
-  double best_area = tree.inner_area();
+  double best_area = tree.refit().inner_area;
   for (uint32_t it = 0; it < params.iterations; ++it) {
     restructurer.pass();
-    const double area = tree.inner_area();
-    if (!(area < best_area * (1.0 - kMinRelativeGain)) || tree.max_depth() > kMaxDepth) {
+    // The pass leaves every box exact; the refit sums the areas and finds the height.
+    const LinkedTree::Summary after = tree.refit();
+    if (!(after.inner_area < best_area * (1.0 - kMinRelativeGain)) || after.height > kMaxDepth) {
       tree.nodes = best;
       break;
     }
     best = tree.nodes;
-    best_area = area;
+    best_area = after.inner_area;
   }
   Bvh out = tree.to_bvh();
   // As in reinsert(): the statistics' sum, taken in another order, has the last word.

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <map>
 #include <set>
 
+#include "builders/registry.h"
 #include "core/error.h"
 
 namespace sahbench {
@@ -29,8 +31,13 @@ std::string known_names(const std::vector<ParamSpec>& specs) {
   return out.empty() ? "none" : out;
 }
 
+// Sources nest only as deep as someone writes them; a default source that names its own pass would recurse
+// forever, and this guards against such a registration.
+constexpr int kMaxSourceDepth = 16;
+
 double parse_value(std::string_view builder, const ParamSpec& spec, const std::string& text) {
   const std::string where = std::string(builder) + ": parameter '" + spec.name + "' = '" + text + "'";
+  if (spec.type == ParamType::kSource) return 0.0;  // resolved by resolve_source
   if (spec.type == ParamType::kChoice) {
     for (std::size_t i = 0; i < spec.choices.size(); ++i)
       if (spec.choices[i] == text) return static_cast<double>(i);
@@ -50,34 +57,123 @@ double parse_value(std::string_view builder, const ParamSpec& spec, const std::s
   return value;
 }
 
+ParamSet resolve_params_at(std::string_view builder, const std::vector<ParamSpec>& specs,
+                           const ParamOverrides& overrides, int depth);
+
+// The source named `name` for parameter `spec` of `builder`, with the overrides nested under it.
+SourceSpec resolve_source(std::string_view builder, const ParamSpec& spec, const std::string& name,
+                          const ParamOverrides& nested, int depth) {
+  const std::string where = std::string(builder) + "." + spec.name + "=" + name;
+  if (depth >= kMaxSourceDepth)
+    throw Error(where + ": sources nest deeper than " + std::to_string(kMaxSourceDepth) + " levels");
+  SourceSpec source;
+  try {
+    source.info = &find_builder(name);
+  } catch (const Error& e) {
+    throw Error(std::string(builder) + ": parameter '" + spec.name + "': " + e.what());
+  }
+  const auto& shared = spec.shared_sources;
+  if (nested.empty() && std::find(shared.begin(), shared.end(), name) != shared.end()) return source;
+  auto params =
+      std::make_shared<const ParamSet>(resolve_params_at(where, source.info->params, nested, depth + 1));
+  if (source.info->check) source.info->check(*params);
+  const uint32_t arity = source.info->arity ? source.info->arity(*params) : 2;
+  if (arity != 2)
+    throw Error(where + ": builds " + std::to_string(arity) + "-wide trees, and " + std::string(builder) +
+                " takes a binary tree from '" + spec.name + "' (a builder or pass of arity 2)");
+  source.params = std::move(params);
+  return source;
+}
+
+ParamSet resolve_params_at(std::string_view builder, const std::vector<ParamSpec>& specs,
+                           const ParamOverrides& overrides, int depth) {
+  std::vector<ParamSet::Value> values;
+  for (const auto& spec : specs) values.push_back({spec, spec.default_value});
+  std::set<std::string> seen;
+  std::map<std::string, std::string> source_names;  // kSource parameter -> the builder named
+  std::map<std::string, ParamOverrides> nested;     // kSource parameter -> the overrides under it
+  for (const auto& [key, text] : overrides) {
+    // "P.rest": rest belongs to source parameter P.
+    const auto dot = key.find('.');
+    const std::string name = key.substr(0, dot);
+    auto it = std::find_if(values.begin(), values.end(), [&](const auto& v) { return v.spec.name == name; });
+    if (it == values.end())
+      throw Error(std::string(builder) + ": unknown parameter '" + key + "' (known: " + known_names(specs) +
+                  ")");
+    if (dot != std::string::npos) {
+      if (it->spec.type != ParamType::kSource)
+        throw Error(std::string(builder) + ": parameter '" + name + "' is not a tree source, so '" + key +
+                    "' names nothing");
+      nested[name].emplace_back(key.substr(dot + 1), text);
+      continue;
+    }
+    if (!seen.insert(key).second)
+      throw Error(std::string(builder) + ": parameter '" + key + "' is given twice");
+    if (it->spec.type == ParamType::kSource) source_names[name] = text;
+    it->number = parse_value(builder, it->spec, text);
+  }
+  for (auto& value : values) {
+    if (value.spec.type != ParamType::kSource) continue;
+    const auto named = source_names.find(value.spec.name);
+    const std::string& source = named == source_names.end() ? value.spec.default_source : named->second;
+    value.source = resolve_source(builder, value.spec, source, nested[value.spec.name], depth);
+  }
+  return ParamSet(std::string(builder), std::move(values));
+}
+
 }  // namespace
 
-double ParamSet::get(std::string_view name) const {
-  for (const auto& [spec, value] : values_)
-    if (spec.name == name) return value;
+const std::string& SourceSpec::name() const {
+  return info->name;
+}
+
+const ParamSet::Value& ParamSet::find(std::string_view name) const {
+  for (const auto& value : values_)
+    if (value.spec.name == name) return value;
   throw Error(builder_ + ": no parameter '" + std::string(name) + "' is declared");
+}
+
+double ParamSet::get(std::string_view name) const {
+  const Value& value = find(name);
+  if (value.spec.type == ParamType::kSource)
+    throw Error(builder_ + ": parameter '" + std::string(name) + "' is a tree source, not a number");
+  return value.number;
 }
 
 std::string ParamSet::to_string() const {
   std::string out;
-  for (const auto& [spec, value] : values_)
-    out += (out.empty() ? "" : ";") + spec.name + "=" + format_value(value, spec);
+  for (const auto& value : values_) {
+    out += (out.empty() ? "" : ";") + value.spec.name + "=";
+    if (value.spec.type != ParamType::kSource) {
+      out += format_value(value.number, value.spec);
+      continue;
+    }
+    out += value.source.name();
+    if (!value.source.shared()) out += "(" + value.source.params->to_string() + ")";
+  }
   return out;
 }
 
 bool ParamSet::has(std::string_view name) const {
-  for (const auto& [spec, value] : values_)
-    if (spec.name == name) return true;
+  for (const auto& value : values_)
+    if (value.spec.name == name) return true;
   return false;
 }
 
 const std::string& ParamSet::get_choice(std::string_view name) const {
-  for (const auto& [spec, value] : values_)
-    if (spec.name == name) {
-      if (spec.type != ParamType::kChoice) break;
-      return spec.choices.at(static_cast<std::size_t>(value));
+  for (const auto& value : values_)
+    if (value.spec.name == name) {
+      if (value.spec.type != ParamType::kChoice) break;
+      return value.spec.choices.at(static_cast<std::size_t>(value.number));
     }
   throw Error(builder_ + ": no choice parameter '" + std::string(name) + "' is declared");
+}
+
+const SourceSpec& ParamSet::get_source(std::string_view name) const {
+  const Value& value = find(name);
+  if (value.spec.type != ParamType::kSource)
+    throw Error(builder_ + ": parameter '" + std::string(name) + "' is not a tree source");
+  return value.source;
 }
 
 ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index,
@@ -87,23 +183,17 @@ ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint3
           std::move(help), std::move(choices)};
 }
 
+ParamSpec source_param(std::string name, std::string default_source, std::string help,
+                       std::vector<std::string> shared_sources) {
+  ParamSpec spec{std::move(name), ParamType::kSource, 0.0, 0.0, 0.0, std::move(help)};
+  spec.default_source = std::move(default_source);
+  spec.shared_sources = std::move(shared_sources);
+  return spec;
+}
+
 ParamSet resolve_params(std::string_view builder, const std::vector<ParamSpec>& specs,
                         const ParamOverrides& overrides) {
-  std::vector<std::pair<ParamSpec, double>> values;
-  for (const auto& spec : specs) values.emplace_back(spec, spec.default_value);
-  std::set<std::string> seen;
-  for (const auto& [key, text] : overrides) {
-    // Named by value for the lambda: clang before 16 cannot capture a structured binding.
-    const std::string& name = key;
-    auto it = std::find_if(values.begin(), values.end(), [&](const auto& v) { return v.first.name == name; });
-    if (it == values.end())
-      throw Error(std::string(builder) + ": unknown parameter '" + key + "' (known: " + known_names(specs) +
-                  ")");
-    if (!seen.insert(key).second)
-      throw Error(std::string(builder) + ": parameter '" + key + "' is given twice");
-    it->second = parse_value(builder, it->first, text);
-  }
-  return ParamSet(std::string(builder), std::move(values));
+  return resolve_params_at(builder, specs, overrides, 0);
 }
 
 std::pair<std::string, std::string> parse_override(std::string_view text) {

@@ -2,8 +2,16 @@
 // Builder parameters: each builder declares its parameters (name, type, default, range, help); a user's
 // `key=value` overrides are checked against that declaration, and the resolved set (every parameter with
 // its value) is what the builder reads and what the CSV's builder_params column records.
+//
+// Passes take a tree from a source (a kSource parameter, usually `source`): any registered builder or
+// pass of arity 2, named with its own parameters, so that passes compose. The overrides spell the chain
+// with dotted keys, `source=reinsert`, `source.iterations=2`, `source.source=binned_sah`,
+// `source.source.max_leaf=4` (a config's nested tables are read into the same keys), and the CSV form
+// writes a named source's resolved parameters in parentheses after its name:
+// `source=reinsert(iterations=2;...;source=binned_sah(bins=32;...))`.
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -12,7 +20,8 @@
 namespace sahbench {
 
 /// kChoice: one of a list of names, held as its index (min 0, max choices - 1) and written by name.
-enum class ParamType { kInt, kFloat, kChoice };
+/// kSource: a binary tree source, a registered builder or pass with its own parameters (SourceSpec).
+enum class ParamType { kInt, kFloat, kChoice, kSource };
 
 struct ParamSpec {
   std::string name;
@@ -22,18 +31,49 @@ struct ParamSpec {
   double max_value = 0.0;
   std::string help;
   std::vector<std::string> choices = {};  ///< kChoice only
+  /// kSource: the builder used when none is named.
+  std::string default_source = {};
+  /// kSource: builders that, named alone (no nested parameters), the pass builds with its own parameters
+  /// (wide_collapse's bins and leaf sizes); their CSV form is the bare name. Any other source, or one of
+  /// these given a nested parameter, is built with its own parameters over its own defaults.
+  std::vector<std::string> shared_sources = {};
 };
 
 /// A kChoice parameter whose default is choices[default_index].
 ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index,
                        std::string help);
 
+/// A kSource parameter: the pass takes a binary tree from `default_source` unless another is named.
+ParamSpec source_param(std::string name, std::string default_source, std::string help,
+                       std::vector<std::string> shared_sources = {});
+
 using ParamOverrides = std::vector<std::pair<std::string, std::string>>;
+
+struct BuilderInfo;
+class ParamSet;
+
+/// The value of a kSource parameter: which builder makes the pass's input tree, and with what.
+struct SourceSpec {
+  const BuilderInfo* info = nullptr;
+  /// The source's resolved parameters; null for a shared source (ParamSpec::shared_sources), which the
+  /// pass builds with its own.
+  std::shared_ptr<const ParamSet> params;
+
+  bool shared() const { return params == nullptr; }
+  const std::string& name() const;
+};
 
 class ParamSet {
  public:
+  /// One declared parameter and its value: a number (kChoice: the index), or for kSource its source.
+  struct Value {
+    ParamSpec spec;
+    double number = 0.0;
+    SourceSpec source = {};
+  };
+
   ParamSet() = default;
-  ParamSet(std::string builder, std::vector<std::pair<ParamSpec, double>> values)
+  ParamSet(std::string builder, std::vector<Value> values)
       : builder_(std::move(builder)), values_(std::move(values)) {}
 
   /// The value of a declared parameter; asking for an undeclared one is a programming error (throws).
@@ -44,17 +84,26 @@ class ParamSet {
   bool has(std::string_view name) const;
   /// The name chosen for a kChoice parameter.
   const std::string& get_choice(std::string_view name) const;
+  /// The source of a kSource parameter.
+  const SourceSpec& get_source(std::string_view name) const;
 
-  /// "key=value;key=value" in declaration order, integers without a fraction: the CSV form.
+  /// "key=value;key=value" in declaration order, integers without a fraction, a source as
+  /// "NAME(its to_string())" unless shared: the CSV form.
   std::string to_string() const;
 
  private:
+  const Value& find(std::string_view name) const;
+
   std::string builder_;
-  std::vector<std::pair<ParamSpec, double>> values_;
+  std::vector<Value> values_;
 };
 
 /// Resolves `overrides` against `specs`: unknown names, values that do not parse as the declared type,
-/// values out of range and repeated names are errors naming the builder, the key and the value.
+/// values out of range and repeated names are errors naming the builder, the key and the value. A kSource
+/// parameter's value names a registered builder, and keys "P.KEY" are that source's own overrides,
+/// resolved against it (recursively) and checked by its BuilderInfo::check; an unknown source, a key
+/// nested under a parameter that is not a source, and a source that builds wider than binary trees are
+/// errors naming them.
 ParamSet resolve_params(std::string_view builder, const std::vector<ParamSpec>& specs,
                         const ParamOverrides& overrides);
 

@@ -5,8 +5,10 @@
 #include "builders/binned_sah.h"
 #include "builders/child_order.h"
 #include "builders/collapse.h"
+#include "builders/reinsert.h"
 #include "builders/sbvh.h"
 #include "builders/sweep_sah.h"
+#include "builders/treelet.h"
 #include "core/error.h"
 
 namespace sahbench {
@@ -100,6 +102,19 @@ BuilderInfo wide_binned_sah_info() {
 // The default keeps the build the plain binned SAH's.
 constexpr double kSourceTravScale = 1.0;
 
+// The parameters that wide_collapse only passes on to a shared source. Set away from their defaults
+// while the source has parameters of its own, they would be recorded but do nothing: an error.
+void check_unshared(const ParamSet& p, const char* builder) {
+  if (p.get_source("source").shared()) return;
+  for (const ParamSpec& spec : find_builder(builder).params)
+    for (const char* name : {"bins", "adaptive_bins", "min_leaf", "source_c_trav_scale"})
+      if (spec.name == name && p.get(name) != spec.default_value)
+        throw Error(std::string(builder) + ": " + name +
+                    " applies only to a source named alone (binned_sah, sweep_sah or sbvh), not to source=" +
+                    p.get_source("source").name() +
+                    " with parameters of its own; give it to the source (source." + name + "=...)");
+}
+
 BuilderInfo wide_collapse_info() {
   auto params = binned_params(kWideSahBlock);
   params.insert(
@@ -107,9 +122,12 @@ BuilderInfo wide_collapse_info() {
       {arity_param(),
        choice_param("method", {"sah", "greedy"}, 0,
                     "sah: SAH-optimal collapse (Ylitie et al. 2017); greedy: open the largest child"),
-       choice_param("source", {"binned_sah", "sweep_sah", "sbvh"}, 0,
-                    "the binary builder whose tree is collapsed (with the bins and leaf parameters here); "
-                    "method=sah may merge a subtree of up to max_leaf references into one leaf"),
+       source_param(
+           "source", "binned_sah",
+           "the binary builder or pass whose tree is collapsed; binned_sah, sweep_sah and sbvh named "
+           "alone take the bins and leaf parameters here, any source given its own (source.KEY=...) "
+           "takes those; method=sah may merge a subtree of up to max_leaf references into one leaf",
+           {"binned_sah", "sweep_sah", "sbvh"}),
        {"source_c_trav_scale", ParamType::kFloat, kSourceTravScale, 0, 1,
         "the binary source is built with c_trav times this (below 1: a finer source, whose leaves "
         "method=sah merges back where its SAH says so)"}});
@@ -119,9 +137,12 @@ BuilderInfo wide_collapse_info() {
           [](const BuildInput& input, const ParamSet& p) {
             BinnedSahParams binary = binned_config(p);
             binary.top_down.cost.c_trav *= p.get_float("source_c_trav_scale");
-            const std::string& source = p.get_choice("source");
+            const SourceSpec& spec = p.get_source("source");
+            const std::string& source = spec.name();
             Bvh tree;
-            if (source == "sweep_sah") {
+            if (!spec.shared()) {
+              tree = build_source(input, p);
+            } else if (source == "sweep_sah") {
               // The sweep counts primitives, not blocks, in its split search: it builds with block 1, and
               // the collapse applies sah_block.
               TopDownConfig per_prim = binary.top_down;
@@ -146,6 +167,7 @@ BuilderInfo wide_collapse_info() {
             TopDownConfig config = top_down_config(p);
             config.arity = arity_of(p);
             check_config(config, "wide_collapse");
+            check_unshared(p, "wide_collapse");
           },
           arity_of};
 }
@@ -208,6 +230,57 @@ BuilderInfo with_children_for_occlusion(BuilderInfo info) {
   return info;
 }
 
+// The SAH constants a pass reports its tree's cost with (the statistics'); its optimisation lowers the
+// inner nodes' areas, which any c_trav weighs alike.
+std::vector<ParamSpec> pass_cost_params() {
+  const SahCost defaults;
+  return {{"c_trav", ParamType::kFloat, defaults.c_trav, 0, 1e6, "SAH cost of visiting an inner node"},
+          {"c_isect", ParamType::kFloat, defaults.c_isect, 1e-6, 1e6, "SAH cost of one ray/triangle test"}};
+}
+
+const char* const kPassSourceHelp =
+    "the binary builder or pass whose tree is optimised, with its own parameters (source.KEY=...)";
+
+BuilderInfo reinsert_info() {
+  const ReinsertParams defaults;
+  std::vector<ParamSpec> params = {
+      source_param("source", "binned_sah", kPassSourceHelp),
+      {"iterations", ParamType::kInt, double(defaults.iterations), 0, 1000,
+       "rounds of search and reinsertion (0: the source's tree)"},
+      {"batch", ParamType::kFloat, defaults.batch, 1e-6, 1,
+       "fraction of the nodes, the largest first, searched for a better place per round"}};
+  for (auto& p : pass_cost_params()) params.push_back(std::move(p));
+  return {
+      "reinsert",
+      "pass: reinsertion of subtrees where the SAH drops most (Bittner, Hapala and Havran 2013; parallel "
+      "search as Meister and Bittner 2018); never raises the source's SAH",
+      std::move(params),
+      [](const BuildInput& input, const ParamSet& p) {
+        return reinsert(build_source(input, p), {p.get_uint("iterations"), p.get("batch"), sah_cost_of(p)});
+      },
+      {}};
+}
+
+BuilderInfo treelet_info() {
+  const TreeletParams defaults;
+  std::vector<ParamSpec> params = {
+      source_param("source", "binned_sah", kPassSourceHelp),
+      {"treelet_size", ParamType::kInt, double(defaults.treelet_size), kMinTreeletSize, kMaxTreeletSize,
+       "leaves per treelet; its work grows as 3^treelet_size"},
+      {"iterations", ParamType::kInt, double(defaults.iterations), 0, 100,
+       "bottom-up passes (0: the source's tree); stops early once one gains nothing"}};
+  for (auto& p : pass_cost_params()) params.push_back(std::move(p));
+  return {"treelet",
+          "pass: treelet restructuring by dynamic programming over subsets (Karras and Aila 2013); never "
+          "raises the source's SAH",
+          std::move(params),
+          [](const BuildInput& input, const ParamSet& p) {
+            return restructure_treelets(build_source(input, p), {p.get_uint("treelet_size"),
+                                                                 p.get_uint("iterations"), sah_cost_of(p)});
+          },
+          {}};
+}
+
 std::vector<BuilderInfo>& registry() {
   // One line per builder.
   static std::vector<BuilderInfo> all = {
@@ -216,6 +289,8 @@ std::vector<BuilderInfo>& registry() {
       with_children_for_occlusion(wide_binned_sah_info()),
       with_children_for_occlusion(wide_collapse_info()),
       sbvh_info(),
+      reinsert_info(),
+      treelet_info(),
   };
   return all;
 }
@@ -240,6 +315,13 @@ const BuilderInfo& find_builder(std::string_view name) {
   std::string known;
   for (const auto& b : all) known += (known.empty() ? "" : ", ") + b.name;
   throw Error("unknown builder '" + std::string(name) + "' (known: " + known + ")");
+}
+
+Bvh build_source(const BuildInput& input, const ParamSet& params, std::string_view key) {
+  const SourceSpec& source = params.get_source(key);
+  if (source.shared())
+    throw Error("source '" + source.name() + "' shares its pass's parameters; the pass builds it itself");
+  return source.info->build(input, *source.params);
 }
 
 SahCost sah_cost_of(const ParamSet& params) {

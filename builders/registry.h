@@ -38,6 +38,11 @@ void register_builder(BuilderInfo info);
 /// The builder called `name`; an unknown name is an error listing the known ones.
 const BuilderInfo& find_builder(std::string_view name);
 
+/// The tree of the tree source `key` of a pass (a kSource parameter of `params`), built from `input` by
+/// the source's builder with its own parameters. A shared source (SourceSpec::shared) is the pass's own
+/// to build; asking for it here is an Error.
+Bvh build_source(const BuildInput& input, const ParamSet& params, std::string_view key = "source");
+
 /// The SAH constants a builder ran with (every builder declares c_trav and c_isect), for statistics
 /// and the CSV.
 SahCost sah_cost_of(const ParamSet& params);

@@ -18,6 +18,12 @@ void print_catalogue(std::ostream& out) {
   for (const auto& b : builders()) {
     fmt::print(out, "  {:<14} {}\n", b.name, b.summary);
     for (const auto& p : b.params) {
+      if (p.type == ParamType::kSource) {
+        fmt::print(out,
+                   "      {:<14} default {:<8} a binary builder or pass (source.KEY=value: its own)  {}\n",
+                   p.name, p.default_source, p.help);
+        continue;
+      }
       if (p.type == ParamType::kChoice) {
         fmt::print(out, "      {:<14} default {:<8} one of {}  {}\n", p.name,
                    p.choices.at(static_cast<std::size_t>(p.default_value)), fmt::join(p.choices, "|"),

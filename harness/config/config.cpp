@@ -168,11 +168,82 @@ void read_animation(const Source& src, const toml::node& node, ExperimentConfig&
   config.animation = std::move(animation);
 }
 
-// One builder parameter with all of its values (one unless swept), each with its line.
+// One builder parameter with all of its values (one unless swept), each with its line. A nested source's
+// parameters are keyed by their dotted path ("source.iterations").
 struct SweepKey {
   std::string key;
   std::vector<std::pair<std::string, const toml::node*>> values;
 };
+
+// The value or list of values of `key` (a list sweeps), each as a ParamOverrides string with its node.
+SweepKey read_sweep(const Source& src, const std::string& key, const toml::node& node) {
+  SweepKey sweep{key, {}};
+  if (const auto* list = node.as_array()) {
+    if (list->empty()) src.fail(node, "builder parameter '" + key + "' must not be an empty list");
+    for (const auto& item : *list) {
+      if (item.is_array() || item.is_table())
+        src.fail(item, "builder parameter '" + key + "' lists " + type_name(item) + "; lists may not nest");
+      sweep.values.emplace_back(param_text(src, item, key), &item);
+    }
+  } else {
+    sweep.values.emplace_back(param_text(src, node, key), &node);
+  }
+  return sweep;
+}
+
+// Whether parameter `key` of `info` is a tree source, whose value may be a table.
+bool is_source_param(const BuilderInfo& info, const std::string& key) {
+  return std::any_of(info.params.begin(), info.params.end(),
+                     [&](const ParamSpec& p) { return p.name == key && p.type == ParamType::kSource; });
+}
+
+// A tree source written as a table, `param = { name = "reinsert", iterations = 2, source = {...} }` or
+// `[builder.param]`, the value of source parameter `param` of `owner`: read into the dotted keys of
+// ParamOverrides under `path` (param = name, param.KEY = value, ...), each value checked against the
+// builder it belongs to at its own line, and the whole source, unless it sweeps, at its name's.
+void read_source_table(const Source& src, const toml::table& table, const BuilderInfo& owner,
+                       const std::string& param, const std::string& path, std::vector<SweepKey>& keys) {
+  const auto* name_node = table.get("name");
+  if (!name_node) src.fail(table, "tree source '" + path + "' has no name (name = \"binned_sah\", ...)");
+  const std::string name = read_string(src, *name_node, path + ".name");
+  const BuilderInfo* info = nullptr;
+  try {
+    info = &find_builder(name);
+  } catch (const Error& e) {
+    src.fail(*name_node, owner.name + ": parameter '" + param + "': " + e.what());
+  }
+  const std::size_t first_key = keys.size();
+  keys.push_back({path, {{name, name_node}}});
+  for (const auto& [key, node] : in_file_order(table)) {
+    if (key == "name") continue;
+    const std::string nested = path + "." + key;
+    if (node->is_table() && is_source_param(*info, key)) {
+      read_source_table(src, *node->as_table(), *info, key, nested, keys);
+      continue;
+    }
+    SweepKey sweep = read_sweep(src, nested, *node);
+    for (const auto& [text, at] : sweep.values) {
+      try {
+        resolve_params(info->name, info->params, {{key, text}});
+      } catch (const Error& e) {
+        src.fail(*at, "tree source '" + path + "': " + e.what());
+      }
+    }
+    keys.push_back(std::move(sweep));
+  }
+  // Parameters that are valid one by one may not fit together (a wide source, min_leaf above max_leaf).
+  ParamOverrides together;
+  const std::size_t strip = path.size() - param.size();  // the owner's own prefix
+  for (std::size_t k = first_key; k < keys.size(); ++k) {
+    if (keys[k].values.size() != 1) return;  // a sweep: each run is resolved as it is expanded
+    together.emplace_back(keys[k].key.substr(strip), keys[k].values.front().first);
+  }
+  try {
+    resolve_params(owner.name, owner.params, together);
+  } catch (const Error& e) {
+    src.fail(*name_node, e.what());
+  }
+}
 
 // Expands one [[builder]] table into its runs, checking every value against the builder's declaration.
 std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table, bool animation) {
@@ -195,17 +266,11 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
     if (key == "name") continue;
     if (embree && key != "quality")
       src.fail(*node, "embree: unknown parameter '" + key + "' (known: quality)");
-    SweepKey sweep{key, {}};
-    if (const auto* list = node->as_array()) {
-      if (list->empty()) src.fail(*node, "builder parameter '" + key + "' must not be an empty list");
-      for (const auto& item : *list) {
-        if (item.is_array() || item.is_table())
-          src.fail(item, "builder parameter '" + key + "' lists " + type_name(item) + "; lists may not nest");
-        sweep.values.emplace_back(param_text(src, item, key), &item);
-      }
-    } else {
-      sweep.values.emplace_back(param_text(src, *node, key), node);
+    if (!embree && node->is_table() && is_source_param(*info, key)) {
+      read_source_table(src, *node->as_table(), *info, key, key, keys);
+      continue;
     }
+    SweepKey sweep = read_sweep(src, key, *node);
     for (const auto& [text, at] : sweep.values) {
       try {
         if (embree && text == "refit" && !animation)

@@ -34,6 +34,18 @@
 //   max_leaf = 8                      # integers, floats, strings and booleans (true = 1) are accepted
 //
 //   [[builder]]
+//   name = "reinsert"                 # a pass: `source` names the binary builder or pass it takes its
+//   iterations = 4                    # tree from, as a table (or inline: source = { name = ..., ... })
+//   [builder.source]                  # with that builder's own parameters, nested again for its own
+//   name = "treelet"                  # source; lists sweep there as here. `source = "treelet"` alone
+//   source = { name = "binned_sah", max_leaf = 4 }   # takes that builder's defaults.
+//                                     # The command line spells the same chain with dotted keys:
+//                                     #   reinsert:iterations=4,source=treelet,source.source=binned_sah,
+//                                     #   source.source.max_leaf=4
+//                                     # builder_params records it resolved, each source's values in
+//                                     # parentheses: source=treelet(source=binned_sah(...);...);iterations=4
+//
+//   [[builder]]
 //   name = "embree"
 //   quality = ["medium", "high"]      # embree takes only quality: low | medium (default) | high, and
 //                                     # refit in animation experiments

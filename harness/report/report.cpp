@@ -48,12 +48,14 @@ std::string row_label(const CsvRow& row) {
   return field(row, "builder") + (params.empty() ? "" : " [" + params + "]");
 }
 
-// "k=v;k=v" as written in builder_params, in order.
+// "k=v;k=v" as written in builder_params, in order. A tree source's value, "NAME(k=v;...)", is one value.
 std::vector<std::pair<std::string, std::string>> split_params(const std::string& params) {
   std::vector<std::pair<std::string, std::string>> out;
   std::size_t start = 0;
   while (start < params.size()) {
-    const std::size_t end = std::min(params.find(';', start), params.size());
+    std::size_t end = start;
+    for (int depth = 0; end < params.size() && (depth > 0 || params[end] != ';'); ++end)
+      depth += params[end] == '(' ? 1 : params[end] == ')' ? -1 : 0;
     const std::string item = params.substr(start, end - start);
     const std::size_t eq = item.find('=');
     if (!item.empty())

@@ -39,6 +39,13 @@
 namespace sahbench {
 namespace {
 
+// A tree whose references repeat (spatial splits, in sbvh or a pass over it) has leaf boxes clipped to
+// parts of its triangles; core/refit.h can only give a leaf its triangles' whole boxes, which keeps every
+// hit but not the clipping the build chose.
+constexpr const char* kRefitOfSplitsNote =
+    "references repeat (spatial splits): refitted leaves take their triangles' whole boxes, not the "
+    "build's clipped ones";
+
 // What a cell's tree is.
 enum class Variant {
   kRebuild,        // one of our builders, built on this frame
@@ -203,9 +210,12 @@ class AnimationRunner {
     animated.positions_at(times.front(), first);
     std::map<std::size_t, RefitState> refits;
     for (std::size_t i = 0; i < builders_.size(); ++i)
-      if (builders_[i].variant == Variant::kRefit)
+      if (builders_[i].variant == Variant::kRefit) {
         refits[i].tree =
             builders_[i].run->info->build(BuildInput::from_triangles(first), builders_[i].run->values);
+        if (refits[i].tree.prim_refs.size() > first.size())
+          log_ << fmt::format("scene {}: {}: {}\n", name, builders_[i].label, kRefitOfSplitsNote);
+      }
 
     for (uint32_t f = 0; f < times.size(); ++f) {
       if (pending[f] == 0) continue;
@@ -403,6 +413,7 @@ class AnimationRunner {
         CsvRow row = base_row(frame, job, threads, layout.name);
         put_ray_set(row, rs);
         if (job.refit) add_note(row, "tree and layout of frame 0 refitted");
+        if (job.refit && bvh.prim_refs.size() > scene.triangles.size()) add_note(row, kRefitOfSplitsNote);
         return row;
       };
       if (!checked.ok()) {

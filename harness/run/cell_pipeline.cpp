@@ -1,5 +1,7 @@
 #include "harness/run/cell_pipeline.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
 #include "builders/registry.h"
@@ -110,6 +112,11 @@ CheckedTree check_tree(const Bvh& bvh, std::span<const Triangle> triangles, cons
   return out;
 }
 
+std::optional<double> source_sah_cost(std::span<const Triangle> triangles, const ParamSet& params) {
+  if (!params.has("source") || params.get_source("source").shared()) return std::nullopt;
+  return sah_cost(build_source(BuildInput::from_triangles(triangles), params), sah_cost_of(params));
+}
+
 void put_invalid_tree(CsvRow& row, const Bvh& bvh, const ValidationReport& report) {
   row["nodes"] = std::to_string(bvh.nodes.size());
   row["arity"] = std::to_string(bvh.arity);
@@ -123,6 +130,7 @@ void put_our_layout(CsvRow& row, const CompiledLayout& layout, const Bvh& bvh, c
   row["bytes_per_tri"] = bytes_per_triangle(layout.bytes(), scene_triangles);
   row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
   put_tree_stats(row, tree.stats, tree.cost);
+  if (tree.source_sah) row["source_sah_cost"] = fmt::format("{:.6f}", *tree.source_sah);
   row["arity"] = std::to_string(bvh.arity);
 }
 

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -92,9 +93,17 @@ struct CheckedTree {
   ValidationReport report;
   SahCost cost;
   BvhStats stats;  ///< zero for an invalid tree
+  /// A pass's: the SAH cost, by `cost`, of the tree it started from (source_sah_cost), for the row's
+  /// source_sah_cost column.
+  std::optional<double> source_sah;
   bool ok() const { return report.ok(); }
 };
 CheckedTree check_tree(const Bvh& bvh, std::span<const Triangle> triangles, const ParamSet& params);
+
+/// The SAH cost, by the constants of `params`, of the tree a pass starts from: its tree source built again
+/// here (untimed) on `triangles`. Nullopt for a builder without a source of its own (not a pass, or
+/// wide_collapse's shared sources, which it builds itself).
+std::optional<double> source_sah_cost(std::span<const Triangle> triangles, const ParamSet& params);
 
 /// The row of a cell whose tree is invalid: nodes, arity, and a note naming the validator's first error.
 /// Its cells are not traced (a broken tree can read out of bounds).

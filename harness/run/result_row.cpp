@@ -21,7 +21,8 @@ const std::vector<std::string>& extra_columns() {
                                                    "bytes_per_tri",
                                                    "sah_block",
                                                    "fingerprint_parts",
-                                                   "build_layout_ms_samples"};
+                                                   "build_layout_ms_samples",
+                                                   "source_sah_cost"};
   return columns;
 }
 

@@ -19,8 +19,8 @@
 namespace sahbench {
 
 /// The CSV columns of a run: DESIGN.md's (csv.h), then config, seed, scene_source, scene_removed, query,
-/// embree_version, notes, build_isa, bytes_per_tri, sah_block, fingerprint_parts and
-/// build_layout_ms_samples.
+/// embree_version, notes, build_isa, bytes_per_tri, sah_block, fingerprint_parts,
+/// build_layout_ms_samples and source_sah_cost.
 std::vector<std::string> result_columns();
 
 /// The key that identifies a cell, in the form `scene|builder|builder_params|layout|threads|ray_set|frame`,

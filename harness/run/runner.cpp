@@ -256,7 +256,7 @@ class ExperimentRunner {
     const Scene& scene = group.scene;
     const Bvh& bvh = *job.tree;
     const TimingSummary build_t = job.source.time();
-    const CheckedTree checked = check_tree(bvh, scene.triangles, b.values);
+    CheckedTree checked = check_tree(bvh, scene.triangles, b.values);
     if (!checked.ok()) {
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.label(), scene.name, checked.report.summary());
@@ -272,6 +272,7 @@ class ExperimentRunner {
         }
       return;
     }
+    checked.source_sah = source_sah_cost(scene.triangles, b.values);
     for (const CellLayout& layout : layouts_for(b)) {
       bool any = false;
       for (const auto& rs : group.sets) any |= group.wanted(b, layout.name, rs);

@@ -3,11 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "builders/registry.h"
@@ -49,6 +51,16 @@ inline std::vector<BuilderVariant> builder_variants() {
   // configs/wide.toml's finer row.
   out.push_back({"wide_collapse", {{"c_trav", "2"}, {"source_c_trav_scale", "0.25"}, {"min_leaf", "4"}}});
   out.push_back({"wide_collapse", {{"source_c_trav_scale", "0"}, {"source", "sbvh"}}});
+  // The passes over every kind of binary source, and composed: a pass over a pass, the collapse over each.
+  out.push_back({"reinsert", {{"source", "sweep_sah"}, {"batch", "1"}, {"iterations", "2"}}});
+  out.push_back({"reinsert", {{"source", "sbvh"}, {"iterations", "2"}}});
+  out.push_back({"reinsert", {{"source.max_leaf", "1"}, {"iterations", "3"}, {"batch", "0.5"}}});
+  out.push_back({"treelet", {{"treelet_size", "3"}, {"source", "sbvh"}}});
+  out.push_back({"treelet", {{"treelet_size", "10"}, {"iterations", "1"}, {"source.max_leaf", "1"}}});
+  out.push_back({"treelet", {{"source", "reinsert"}, {"source.source", "sweep_sah"}}});
+  out.push_back({"wide_collapse", {{"source", "reinsert"}, {"source.iterations", "2"}}});
+  out.push_back({"wide_collapse", {{"arity", "4"}, {"method", "greedy"}, {"source", "treelet"}}});
+  out.push_back({"wide_collapse", {{"source", "binned_sah"}, {"source.max_leaf", "2"}}});
   // Spatial splits tried at every node: without unsplitting, with the fewest slabs everywhere; and with
   // the most slabs, a large budget and single-reference leaves.
   out.push_back({"sbvh", {{"alpha", "0"}, {"unsplit", "0"}, {"spatial_bins", "4"}, {"adaptive_bins", "0"}}});
@@ -59,16 +71,37 @@ inline std::vector<BuilderVariant> builder_variants() {
 }
 
 /// The most references a builder may return for `prims` primitives: (1 + max_dup) n for builders with a
-/// duplication budget (spatial splits), n for the others.
+/// duplication budget (spatial splits), n for the others; a pass's, its source's.
 inline std::size_t max_references(const BuilderInfo& info, const ParamSet& params, std::size_t prims) {
-  // wide_collapse source=sbvh collapses an SBVH with sbvh's default budget.
-  if (info.name == "wide_collapse" && params.get_choice("source") == "sbvh")
-    return static_cast<std::size_t>(std::floor((1.0 + double(SbvhParams{}.max_dup)) * double(prims)));
+  if (params.has("source")) {
+    const SourceSpec& source = params.get_source("source");
+    if (!source.shared()) return max_references(*source.info, *source.params, prims);
+    // wide_collapse source=sbvh collapses an SBVH with sbvh's default budget.
+    if (source.name() == "sbvh")
+      return static_cast<std::size_t>(std::floor((1.0 + double(SbvhParams{}.max_dup)) * double(prims)));
+  }
   for (const auto& spec : info.params)
     if (spec.name == "max_dup")
       return static_cast<std::size_t>(
           std::floor((1.0 + double(params.get_float("max_dup"))) * double(prims)));
   return prims;
+}
+
+/// The largest leaf a builder may make: its max_leaf, and a pass's source's where the pass keeps the
+/// source's leaves (a collapse merges leaves up to its own max_leaf and keeps larger ones).
+inline uint32_t max_leaf_of(const ParamSet& params) {
+  uint32_t limit = params.has("max_leaf") ? params.get_uint("max_leaf") : 0;
+  if (params.has("source") && !params.get_source("source").shared())
+    limit = std::max(limit, max_leaf_of(*params.get_source("source").params));
+  return limit;
+}
+
+/// The override that sets the leaf size of `info`'s trees to `value`: its own max_leaf, or for a pass
+/// without one its source's.
+inline std::pair<std::string, std::string> max_leaf_override(const BuilderInfo& info, std::string value) {
+  for (const auto& spec : info.params)
+    if (spec.name == "max_leaf") return {"max_leaf", std::move(value)};
+  return {"source.max_leaf", std::move(value)};
 }
 
 /// Each reference of each leaf: the leaf box (grown by the validator's tolerance) holds a part of its

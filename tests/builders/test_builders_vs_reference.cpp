@@ -41,7 +41,7 @@ TEST_P(BuilderVsReference, ValidTreesAndSameHitsAsBruteForce) {
     ASSERT_EQ(bvh.arity, info.arity ? info.arity(params) : 2u);
     for (const Node& node : bvh.nodes) ASSERT_LE(node.child_count, bvh.arity);
     const BvhStats stats = compute_stats(bvh, scene.triangles.size(), sah_cost_of(params));
-    EXPECT_LE(stats.max_leaf_size, params.get_uint("max_leaf"));
+    EXPECT_LE(stats.max_leaf_size, test::max_leaf_of(params));
     EXPECT_LE(stats.max_depth, kMaxDepth);
     EXPECT_GE(bvh.prim_refs.size(), scene.triangles.size());
     EXPECT_LE(bvh.prim_refs.size(), test::max_references(info, params, scene.triangles.size()));
@@ -87,7 +87,7 @@ TEST(BuilderEdgeCases, SingleTriangleIsOneLeaf) {
 TEST(BuilderEdgeCases, IdenticalTrianglesBeyondMaxLeafAreSplitByCount) {
   const std::vector<Triangle> tris(100000, Triangle{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
   for (const auto& info : builders()) {
-    const auto params = resolve_params(info.name, info.params, {{"max_leaf", "4"}});
+    const auto params = resolve_params(info.name, info.params, {test::max_leaf_override(info, "4")});
     const Bvh bvh = info.build(BuildInput::from_triangles(tris), params);
     ASSERT_TRUE(validate(bvh, tris).ok()) << info.name;
     const auto stats = compute_stats(bvh, tris.size(), sah_cost_of(params));

@@ -4,6 +4,7 @@
 #include <tbb/task_arena.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "builders/binned_sah.h"
@@ -17,11 +18,22 @@ TEST(BuilderDeterminism, SameTreeForAnyThreadCount) {
   // Large enough for the parallel binning, partitioning and subtree tasks to run.
   const auto tris = test::random_triangles(150000, 77, 100.0f);
   const BuildInput input = BuildInput::from_triangles(tris);
-  for (const auto& info : builders()) {
+  std::vector<std::pair<std::string, ParamOverrides>> runs;
+  for (const auto& info : builders()) runs.push_back({info.name, {}});
+  // Passes in a chain, and the passes where every node searches (reinsert) or treelets are largest.
+  runs.push_back({"wide_collapse",
+                  {{"source", "treelet"},
+                   {"source.iterations", "1"},
+                   {"source.source", "reinsert"},
+                   {"source.source.iterations", "2"}}});
+  runs.push_back({"reinsert", {{"batch", "1"}, {"iterations", "1"}}});
+  runs.push_back({"treelet", {{"treelet_size", "9"}, {"iterations", "1"}}});
+  for (const auto& [name, overrides] : runs) {
     // The SBVH clips every reference at every node of a soup like this one, which would take most of the
     // suite's time; Sbvh.SameTreeForAnyThreadCount checks it on inputs of its own.
-    if (info.name == "sbvh") continue;
-    const ParamSet params = resolve_params(info.name, info.params, {});
+    if (name == "sbvh") continue;
+    const BuilderInfo& info = find_builder(name);
+    const ParamSet params = resolve_params(info.name, info.params, overrides);
     auto build_with = [&](int threads) {
       tbb::task_arena arena(threads);
       return arena.execute([&] { return info.build(input, params); });
@@ -30,7 +42,8 @@ TEST(BuilderDeterminism, SameTreeForAnyThreadCount) {
     ASSERT_FALSE(one.nodes.empty());
     for (int threads : {2, 3, 4}) {
       const Bvh many = build_with(threads);
-      EXPECT_TRUE(one == many) << info.name << " differs between 1 and " << threads << " threads";
+      EXPECT_TRUE(one == many) << name << " [" << params.to_string() << "] differs between 1 and " << threads
+                               << " threads";
     }
   }
 }
@@ -63,7 +76,7 @@ TEST(BuilderLayout, NodesComeOutDepthFirstWithSiblingsTogether) {
   const auto tris = test::random_triangles(40000, 5, 100.0f);
   const BuildInput input = BuildInput::from_triangles(tris);
   tbb::task_arena arena(4);
-  for (const char* name : {"binned_sah", "sweep_sah", "sbvh"}) {
+  for (const char* name : {"binned_sah", "sweep_sah", "sbvh", "reinsert", "treelet"}) {
     const BuilderInfo& info = find_builder(name);
     const ParamSet params = resolve_params(info.name, info.params, {});
     expect_depth_first(arena.execute([&] { return info.build(input, params); }), name);

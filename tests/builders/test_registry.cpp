@@ -2,6 +2,7 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
+#include "tests/support/test_scenes.h"
 
 namespace sahbench {
 namespace {
@@ -54,6 +55,87 @@ TEST(BuilderRegistry, InconsistentLeafSizesAreRejectedAtBuild) {
   const std::vector<Triangle> tris{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}};
   expect_error([&] { info.build(BuildInput::from_triangles(tris), params); },
                {"max_leaf = 4", "below min_leaf = 8"});
+}
+
+}  // namespace
+}  // namespace sahbench
+
+namespace sahbench {
+namespace {
+
+ParamSet resolve_named(const std::string& name, const ParamOverrides& overrides) {
+  const BuilderInfo& info = find_builder(name);
+  return resolve_params(info.name, info.params, overrides);
+}
+
+TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
+  // wide_collapse's sources named alone share its parameters and are written by name, as before chains.
+  EXPECT_EQ(resolve_named("wide_collapse", {}).to_string(),
+            "arity=8;method=sah;source=binned_sah;source_c_trav_scale=1;bins=32;adaptive_bins=1;min_leaf=1;"
+            "max_leaf=8;c_trav=1;c_isect=1;sah_block=4");
+  EXPECT_TRUE(resolve_named("wide_collapse", {{"source", "sbvh"}}).get_source("source").shared());
+  // Any source with a parameter of its own, and any other source, is written with all of its values.
+  const ParamSet chain = resolve_named("wide_collapse", {{"source", "reinsert"},
+                                                         {"source.iterations", "2"},
+                                                         {"source.source", "binned_sah"},
+                                                         {"source.source.max_leaf", "4"}});
+  EXPECT_EQ(chain.to_string(),
+            "arity=8;method=sah;source=reinsert(source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;"
+            "max_leaf=4;c_trav=1;c_isect=1);iterations=2;batch=0.05;c_trav=1;c_isect=1);"
+            "source_c_trav_scale=1;bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;"
+            "sah_block=4");
+  const SourceSpec& reinsert = chain.get_source("source");
+  ASSERT_FALSE(reinsert.shared());
+  EXPECT_EQ(reinsert.name(), "reinsert");
+  EXPECT_EQ(reinsert.params->get_uint("iterations"), 2u);
+  EXPECT_EQ(reinsert.params->get_source("source").params->get_uint("max_leaf"), 4u);
+  EXPECT_FALSE(resolve_named("wide_collapse", {{"source.bins", "32"}}).get_source("source").shared());
+  // A pass's default source is built with its own defaults.
+  EXPECT_EQ(resolve_named("treelet", {}).to_string(),
+            "source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1);"
+            "treelet_size=7;iterations=3;c_trav=1;c_isect=1");
+}
+
+TEST(SourceChain, OwnSourceBuildsTheSourceWithItsParameters) {
+  const auto tris = test::random_triangles(4000, 9);
+  const BuildInput input = BuildInput::from_triangles(tris);
+  const ParamSet p = resolve_named("reinsert", {{"source", "sweep_sah"}, {"source.max_leaf", "2"}});
+  const BuilderInfo& sweep = find_builder("sweep_sah");
+  EXPECT_TRUE(build_source(input, p) ==
+              sweep.build(input, resolve_params(sweep.name, sweep.params, {{"max_leaf", "2"}})));
+  expect_error([&] { build_source(input, resolve_named("wide_collapse", {})); }, {"shares"});
+}
+
+TEST(SourceChain, BadChainsAreErrorsThatNameThem) {
+  auto resolve = [](ParamOverrides o) { return [o] { resolve_named("wide_collapse", o); }; };
+  expect_error(resolve({{"source", "binned"}}), {"wide_collapse", "'source'", "unknown builder 'binned'"});
+  expect_error(resolve({{"source", "reinsert"}, {"source.iteratons", "2"}}),
+               {"wide_collapse.source=reinsert", "unknown parameter 'iteratons'", "iterations"});
+  expect_error(resolve({{"source", "reinsert"}, {"source.source", "sweep"}}),
+               {"wide_collapse.source=reinsert", "unknown builder 'sweep'"});
+  expect_error(resolve({{"source", "reinsert"}, {"source.source.bins", "2"}}),
+               {"wide_collapse.source=reinsert.source=binned_sah", "'bins' = '2'", "outside"});
+  expect_error(resolve({{"bins.x", "2"}}), {"'bins' is not a tree source", "'bins.x'"});
+  expect_error(resolve({{"source", "wide_binned_sah"}}),
+               {"wide_collapse.source=wide_binned_sah", "8-wide", "binary"});
+  expect_error(resolve({{"source", "reinsert"}, {"source.iterations", "2"}, {"source.iterations", "3"}}),
+               {"'iterations' is given twice"});
+  // A nested source's own combination check runs where it is resolved.
+  expect_error(resolve({{"source", "binned_sah"}, {"source.min_leaf", "8"}, {"source.max_leaf", "4"}}),
+               {"max_leaf = 4", "below min_leaf = 8"});
+  // Parameters wide_collapse passes on to a shared source, set for a source with parameters of its own.
+  const BuilderInfo& collapse = find_builder("wide_collapse");
+  expect_error(
+      [&] {
+        collapse.check(resolve_named("wide_collapse", {{"source", "treelet"}, {"bins", "8"}}));
+      },
+      {"bins applies only to a source named alone", "source.bins"});
+  collapse.check(resolve_named("wide_collapse", {{"source", "treelet"}, {"max_leaf", "4"}}));
+  // A binary wide builder is a fine source.
+  EXPECT_EQ(resolve_named("reinsert", {{"source", "wide_binned_sah"}, {"source.arity", "2"}})
+                .get_source("source")
+                .name(),
+            "wide_binned_sah");
 }
 
 }  // namespace

@@ -208,6 +208,42 @@ TEST(HarnessAnimationRun, ConfigCameraViewsEveryFrame) {
   }
 }
 
+// Passes and their chains refit like any tree; a tree with repeated references (a pass over sbvh) is refitted
+// too, and its rows and the log say that its leaves lose the build's clipping.
+TEST(HarnessAnimationRun, ComposedTreesRefitAndTreesWithSplitsSaySo) {
+  const auto dir = temp_dir();
+  const auto config = dir / "animation_passes.toml", csv = dir / "animation_passes.csv";
+  std::filesystem::remove(csv);
+  std::ofstream(config)
+      << "[experiment]\nname = \"animation_passes\"\noutput = \"" << csv.string() << "\"\n"
+      << "scenes = [\"proc:wave:tris=1500,amplitude=0.2\"]\nreference = \"brute_force\"\n"
+      << "layouts = [\"bvh2\", \"bvh8\"]\n"
+      << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+      << "[animation]\nframes = 2\n"
+      << "[[builder]]\nname = \"wide_collapse\"\nsource = { name = \"treelet\", source = \"reinsert\" }\n"
+      << "[[builder]]\nname = \"reinsert\"\nsource = { name = \"sbvh\", alpha = 0, max_leaf = 1 }\n"
+      << "[[ray_set]]\nkind = \"primary\"\nwidth = 16\nheight = 16\n"
+      << "[[ray_set]]\nkind = \"shadow\"\nwidth = 16\nheight = 16\n";
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+  const auto rows = read_csv(csv);
+  ASSERT_EQ(rows.size(), 16u) << log.str();  // 2 builders x (rebuild, refit) x 2 frames x 2 ray sets
+  const std::string splits = "references repeat (spatial splits)";
+  for (const auto& row : rows) {
+    const std::string what = row.at("builder") + " frame " + row.at("frame") + " " + row.at("ray_set");
+    EXPECT_EQ(row.at("mismatches"), "0") << what;
+    const bool over_sbvh = row.at("builder").find("reinsert") != std::string::npos;
+    if (over_sbvh) {
+      EXPECT_GT(std::stod(row.at("refs_per_prim")), 1.0) << what;
+    }
+    const bool noted = row.at("notes").find(splits) != std::string::npos;
+    EXPECT_EQ(noted, over_sbvh && row.at("builder").starts_with("refit(")) << what;
+  }
+  EXPECT_NE(log.str().find("refit(reinsert[source=sbvh,source.alpha=0,source.max_leaf=1]): " + splits),
+            std::string::npos)
+      << log.str();
+}
+
 // The refit cells trace their layouts refitted in place (bvh2: the common format's copy; bvh8: wide
 // nodes and triangle blocks), timed into layout_refit_ms; the rebuild cells compile theirs (layout_ms).
 TEST(HarnessAnimationRun, RefitCellsRefitTheirLayoutsInPlace) {

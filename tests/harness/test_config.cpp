@@ -174,10 +174,12 @@ TEST(HarnessConfigParse, HeaderExampleIsValid) {
   }
   const auto config = parse_experiment_config(toml, "config.h example");
   EXPECT_EQ(config.name, "default");
-  EXPECT_EQ(labels(config),
-            (std::vector<std::string>{"binned_sah[bins=8,max_leaf=8]", "binned_sah[bins=16,max_leaf=8]",
-                                      "binned_sah[bins=32,max_leaf=8]", "embree[quality=medium]",
-                                      "embree[quality=high]"}));
+  EXPECT_EQ(
+      labels(config),
+      (std::vector<std::string>{
+          "binned_sah[bins=8,max_leaf=8]", "binned_sah[bins=16,max_leaf=8]", "binned_sah[bins=32,max_leaf=8]",
+          "reinsert[iterations=4,source=treelet,source.source=binned_sah,source.source.max_leaf=4]",
+          "embree[quality=medium]", "embree[quality=high]"}));
   EXPECT_EQ(config.ray_sets.size(), 4u);
   EXPECT_EQ(config.threads, (std::vector<int>{1, 2}));
   ASSERT_EQ(config.cameras.size(), 1u);
@@ -355,6 +357,79 @@ TEST(HarnessConfigValues, ParameterCombinationsAreCheckedWhenLoading) {
   // Each value is in range, but together they cannot build: caught at load, not when the cell runs.
   expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nmin_leaf = 8\nmax_leaf = 4\n", 10,
                {"max_leaf = 4", "below min_leaf = 8"});
+}
+
+// Lines 1-7, with a layout for wide trees; tests append from line 8 on.
+const std::string kWideBase =
+    "[experiment]\nname = \"t\"\nscenes = [\"proc:soup:tris=1k\"]\nlayouts = [\"bvh2\", \"bvh8\"]\n\n"
+    "[[ray_set]]\nkind = \"primary\"\n";
+
+TEST(HarnessConfigSource, TablesInlineTablesAndTheCommandLineSpellOneChain) {
+  const auto config = parse_experiment_config(kWideBase + R"(
+[[builder]]
+name = "wide_collapse"
+source = { name = "reinsert", iterations = [1, 2], source = { name = "binned_sah", max_leaf = 4 } }
+
+[[builder]]
+name = "treelet"
+[builder.source]
+name = "reinsert"
+iterations = 3
+source = "sweep_sah"
+)",
+                                              "test.toml");
+  ASSERT_EQ(config.builders.size(), 3u);
+  EXPECT_EQ(config.builders[0].params, (ParamOverrides{{"source", "reinsert"},
+                                                       {"source.iterations", "1"},
+                                                       {"source.source", "binned_sah"},
+                                                       {"source.source.max_leaf", "4"}}));
+  EXPECT_EQ(config.builders[1].params[1], (std::pair<std::string, std::string>{"source.iterations", "2"}));
+  BuilderRun cli = parse_builder_run(
+      "wide_collapse:source=reinsert,source.iterations=1,source.source=binned_sah,source.source.max_leaf=4");
+  resolve(cli);
+  EXPECT_EQ(cli.params_text(), config.builders[0].params_text());
+  EXPECT_EQ(cli.arity, 8u);
+  EXPECT_NE(cli.params_text().find(";source=reinsert(source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;"
+                                   "max_leaf=4;c_trav=1;c_isect=1);iterations=1;"),
+            std::string::npos)
+      << cli.params_text();
+  const SourceSpec& reinsert = config.builders[2].values.get_source("source");
+  EXPECT_EQ(reinsert.params->get_uint("iterations"), 3u);
+  EXPECT_EQ(reinsert.params->get_source("source").name(), "sweep_sah");
+
+  // A name alone: the source's defaults, or for wide_collapse's three shared sources its own parameters,
+  // written as before sources nested.
+  const auto plain = parse_experiment_config(
+      kWideBase + "[[builder]]\nname = \"wide_collapse\"\nsource = { name = \"sweep_sah\" }\n", "test.toml");
+  EXPECT_EQ(plain.builders[0].params, (ParamOverrides{{"source", "sweep_sah"}}));
+  EXPECT_TRUE(plain.builders[0].values.get_source("source").shared());
+  EXPECT_NE(plain.builders[0].params_text().find(";source=sweep_sah;"), std::string::npos);
+}
+
+TEST(HarnessConfigSource, BadSourcesNameKeyAndLine) {
+  auto wide = [](const std::string& extra) {
+    return kWideBase + "[[builder]]\nname = \"wide_collapse\"\n" + extra;
+  };
+  // Lines: 8 [[builder]], 9 name, 10 on the extra.
+  expect_error(wide("source = { name = \"reinsert\", iteratons = 2 }\n"), 10,
+               {"tree source 'source'", "unknown parameter 'iteratons'", "iterations"});
+  expect_error(wide("[builder.source]\nname = \"binned\"\n"), 11, {"'source'", "unknown builder 'binned'"});
+  expect_error(wide("[builder.source]\niterations = 2\n"), 10, {"tree source 'source' has no name"});
+  expect_error(wide("[builder.source]\nname = \"wide_binned_sah\"\n"), 11, {"8-wide", "binary tree"});
+  expect_error(wide("[builder.source]\nname = \"wide_binned_sah\"\narity = [2, 4]\n"), 8,
+               {"source.arity=4", "4-wide"});
+  expect_error(wide("bins = { name = \"binned_sah\" }\n"), 10, {"'bins'", "not a table"});
+  expect_error(wide("[builder.source]\nname = \"reinsert\"\nsource = { name = \"binned_sah\", bins = 2 }\n"),
+               12, {"tree source 'source.source'", "'bins' = '2'", "outside [4, 256]"});
+  expect_error(wide("[builder.source]\nname = \"reinsert\"\nsource.name = \"treelet\"\nsource.size = 3\n"),
+               13, {"unknown parameter 'size'", "treelet_size"});
+  // Checked together where the values are single, at the source's name; each run of a sweep at the table.
+  expect_error(wide("[builder.source]\nname = \"binned_sah\"\nmin_leaf = 8\nmax_leaf = 4\n"), 11,
+               {"below min_leaf = 8"});
+  expect_error(wide("[builder.source]\nname = \"binned_sah\"\nmin_leaf = [1, 8]\nmax_leaf = 4\n"), 8,
+               {"builder run", "below min_leaf = 8"});
+  // wide_collapse's shared parameters mean nothing to a source with parameters of its own.
+  expect_error(wide("bins = 16\nsource = \"treelet\"\n"), 8, {"bins applies only to a source named alone"});
 }
 
 TEST(HarnessConfigEmbree, QualitySweepAndDefault) {

@@ -102,6 +102,32 @@ TEST(HarnessRun, EveryCellWritesARowWithNoMismatchesAndResumeSkipsThem) {
   EXPECT_NE(again.str().find("0 cells to run"), std::string::npos) << again.str();
 }
 
+// A pass's rows give the SAH of the tree it started from beside its own: here binned_sah bins=8's, which
+// the config also runs.
+TEST(HarnessRun, PassRowsRecordTheirSourcesSah) {
+  const auto config = write_config(
+      "run_pass", "[[builder]]\nname = \"reinsert\"\nsource = { name = \"binned_sah\", bins = 8 }\n");
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+  const auto rows = read_csv(temp_dir() / "run_pass.csv");
+  std::map<std::string, std::string> binned_sah;  // scene -> sah_cost of binned_sah bins=8
+  for (const auto& row : rows)
+    if (row.at("builder") == "binned_sah" && row.at("builder_params").find("bins=8;") == 0)
+      binned_sah[row.at("scene")] = row.at("sah_cost");
+  ASSERT_EQ(binned_sah.size(), 2u);
+  std::size_t passes = 0;
+  for (const auto& row : rows) {
+    if (row.at("builder") != "reinsert") {
+      EXPECT_EQ(row.at("source_sah_cost"), "") << row.at("builder");
+      continue;
+    }
+    ++passes;
+    EXPECT_EQ(row.at("source_sah_cost"), binned_sah.at(row.at("scene")));
+    EXPECT_LE(std::stod(row.at("sah_cost")), std::stod(row.at("source_sah_cost")));
+  }
+  EXPECT_EQ(passes, 16u);
+}
+
 TEST(HarnessRun, InterleavedAndBackToBackRepetitionsGiveTheSameCellsAndCounts) {
   // Interleaving changes only when each repetition runs: the same cells, each timed `trace` times, with
   // the same counts and reference checks, and (Embree's cells included) every structure alive until its

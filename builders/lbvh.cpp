@@ -1,0 +1,133 @@
+#include "builders/lbvh.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <bit>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "builders/leaf_collapse.h"
+#include "builders/morton.h"
+#include "core/error.h"
+
+namespace sahbench {
+namespace {
+
+constexpr const char* kName = "lbvh";
+// Nodes or primitives per task in the parallel loops (the results do not depend on it).
+constexpr std::size_t kGrain = 1u << 12;
+
+// The binary radix tree over sorted Morton codes, Karras 2012, section 4 and Figure 4: inner node i
+// covers a range of positions with one end at i, and splits it where the common prefix of its keys
+// grows. A key is the code followed by the position, so equal codes compare by position.
+template <class Code>
+class RadixTree {
+ public:
+  RadixTree(const HugePageArray<Code>& codes)
+      : codes_(codes.data()), n_(static_cast<int64_t>(codes.size())) {}
+
+  // Length of the common prefix of the keys at positions i and j, or -1 when j is outside the array.
+  // Written as a select: whether codes are equal is as unpredictable as the searches' branches.
+  int delta(int64_t i, int64_t j) const {
+    if (j < 0 || j >= n_) return -1;
+    const Code x = codes_[i] ^ codes_[j];
+    const int by_code = std::countl_zero(x);
+    const int by_position = int(8 * sizeof(Code)) + std::countl_zero(static_cast<uint32_t>(i ^ j));
+    return x != 0 ? by_code : by_position;
+  }
+
+  // The children of inner node i, as tags (leaf positions or inner nodes).
+  void children(int64_t i, uint32_t child[2]) const {
+    // The range's direction: towards the neighbour with the longer common prefix.
+    const int64_t d = delta(i, i + 1) > delta(i, i - 1) ? 1 : -1;
+    // Its other end: an upper bound by doubling, then a binary search.
+    const int delta_min = delta(i, i - d);
+    int64_t l_max = 2;
+    while (delta(i, i + l_max * d) > delta_min) l_max *= 2;
+    int64_t l = 0;
+    for (int64_t t = l_max / 2; t >= 1; t /= 2) l += delta(i, i + (l + t) * d) > delta_min ? t : 0;
+    const int64_t j = i + l * d;
+    // The split: the last position whose key shares more than the range's common prefix with i's.
+    const int delta_node = delta(i, j);
+    int64_t s = 0;
+    for (int64_t t = l; t > 1;) {
+      t = (t + 1) / 2;
+      s += delta(i, i + (s + t) * d) > delta_node ? t : 0;
+    }
+    const int64_t gamma = i + s * d + std::min<int64_t>(d, 0);
+    const auto g = static_cast<uint32_t>(gamma);
+    child[0] = std::min(i, j) == gamma ? leaf_tag(g) : g;
+    child[1] = std::max(i, j) == gamma + 1 ? leaf_tag(g + 1) : g + 1;
+  }
+
+ private:
+  const Code* codes_;
+  int64_t n_;
+};
+
+template <class Code>
+Bvh build(const BuildInput& input, const LbvhParams& params) {
+  const auto n = static_cast<uint32_t>(input.size());
+  const MortonOrder<Code> sorted = sort_by_morton<Code>(input.bounds.span());
+  const LeafCollapse rule(params.top_down);
+  if (n == 1) return finish_cluster_tree({{}, {}, sorted.ids.span(), input.bounds.span(), leaf_tag(0)}, rule);
+
+  // The radix tree: inner node i's children, and every node's parent (leaves' in leaf_parent).
+  HugePageArray<ClusterNode> nodes(n - 1);
+  HugePageArray<SubtreeCost> costs(n - 1);
+  HugePageArray<uint32_t> parent(n - 1), leaf_parent(n);
+  HugePageArray<uint8_t> arrivals(n - 1);
+  const RadixTree<Code> radix(sorted.codes);
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n - 1, kGrain), [&](const auto& r) {
+    for (uint32_t i = r.begin(); i != r.end(); ++i) {
+      uint32_t child[2];
+      radix.children(i, child);
+      nodes[i].child[0] = child[0];
+      nodes[i].child[1] = child[1];
+      for (const uint32_t c : child) (is_leaf_tag(c) ? leaf_parent[tag_index(c)] : parent[c]) = i;
+      arrivals[i] = 0;
+    }
+  });
+
+  // Boxes and costs bottom-up: from every leaf towards the root, where the first of a node's two children
+  // to arrive stops and the second goes on, so each node is computed once, after both its children
+  // (Karras 2012, section 4). The counter's acquire-release orders the first child's writes before the
+  // second's reads, and a node's values depend only on its children's: the same for any thread count.
+  const ClusterTree tree{nodes.span(), costs.span(), sorted.ids.span(), input.bounds.span(), 0};
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kGrain), [&](const auto& r) {
+    for (uint32_t leaf = r.begin(); leaf != r.end(); ++leaf) {
+      uint32_t p = leaf_parent[leaf];
+      while (std::atomic_ref<uint8_t>(arrivals[p]).fetch_add(1, std::memory_order_acq_rel) != 0) {
+        ClusterNode& node = nodes[p];
+        node.bounds = merge(tag_bounds(tree, node.child[0]), tag_bounds(tree, node.child[1]));
+        costs[p] = rule.combine(node.bounds, rule.of(tree, node.child[0]), rule.of(tree, node.child[1]));
+        if (p == 0) break;
+        p = parent[p];
+      }
+    }
+  });
+  return finish_cluster_tree(tree, rule);
+}
+
+}  // namespace
+
+void check_lbvh_params(const LbvhParams& params) {
+  if (params.bits != 30 && params.bits != 63)
+    throw Error(std::string(kName) + ": bits = " + std::to_string(params.bits) + " must be 30 or 63");
+  if (params.top_down.arity != 2)
+    throw Error(std::string(kName) + ": arity = " + std::to_string(params.top_down.arity) +
+                " (the builder writes binary trees)");
+  check_config(params.top_down, kName);
+}
+
+Bvh build_lbvh(const BuildInput& input, const LbvhParams& params) {
+  check_lbvh_params(params);
+  check_prim_count(input.size(), kName);
+  if (input.size() == 0) return Bvh{};
+  return params.bits == 30 ? build<uint32_t>(input, params) : build<uint64_t>(input, params);
+}
+
+}  // namespace sahbench

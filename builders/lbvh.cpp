@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <cstdint>
@@ -41,10 +42,12 @@ class RadixTree {
 
   // The children of inner node i, as tags (leaf positions or inner nodes).
   void children(int64_t i, uint32_t child[2]) const {
-    // The range's direction: towards the neighbour with the longer common prefix.
-    const int64_t d = delta(i, i + 1) > delta(i, i - 1) ? 1 : -1;
+    // The range's direction: towards the neighbour with the longer common prefix; the other neighbour's
+    // prefix is the one the range's keys all exceed.
+    const int next = delta(i, i + 1), previous = delta(i, i - 1);
+    const int64_t d = next > previous ? 1 : -1;
+    const int delta_min = std::min(next, previous);
     // Its other end: an upper bound by doubling, then a binary search.
-    const int delta_min = delta(i, i - d);
     int64_t l_max = 2;
     while (delta(i, i + l_max * d) > delta_min) l_max *= 2;
     int64_t l = 0;

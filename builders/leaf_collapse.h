@@ -11,6 +11,7 @@
 // exponentially spaced primitives. finish_cluster_tree keeps every leaf within kMaxDepth - 1 of the root
 // by rebuilding, by median splits, the largest subtrees that would reach deeper (see its comment).
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 
@@ -67,9 +68,23 @@ class LeafCollapse {
   explicit LeafCollapse(const TopDownConfig& config) : config_(config) {}
 
   /// A single primitive with box `bounds`.
-  SubtreeCost leaf(const Aabb& bounds) const;
+  SubtreeCost leaf(const Aabb& bounds) const {
+    return {static_cast<float>(half_area(bounds) * double(config_.cost.leaf_cost(1))), 1, 1, 0};
+  }
+
   /// A node with box `bounds` over subtrees `left` and `right`: a leaf where the rule says so.
-  SubtreeCost combine(const Aabb& bounds, const SubtreeCost& left, const SubtreeCost& right) const;
+  SubtreeCost combine(const Aabb& bounds, const SubtreeCost& left, const SubtreeCost& right) const {
+    const uint32_t prims = left.prims + right.prims;
+    const uint32_t height = 1 + std::max(left.height, right.height);
+    const double area = half_area(bounds);
+    const double as_inner = area * double(config_.cost.c_trav) + double(left.cost) + double(right.cost);
+    if (prims <= config_.max_leaf) {
+      const double as_leaf = area * double(config_.cost.leaf_cost(prims));
+      if (prims <= config_.min_leaf || as_leaf <= as_inner)
+        return {static_cast<float>(as_leaf), prims, 1, height};
+    }
+    return {static_cast<float>(as_inner), prims, 1 + left.out_nodes + right.out_nodes, height};
+  }
 
   /// The subtree under `tag` (a leaf tag or a node whose cost is set).
   SubtreeCost of(const ClusterTree& tree, uint32_t tag) const {
@@ -78,6 +93,14 @@ class LeafCollapse {
   }
 
  private:
+  // In double (see SubtreeCost::cost); the boxes are never empty.
+  static double half_area(const Aabb& box) {
+    const double x = double(box.max.x) - box.min.x;
+    const double y = double(box.max.y) - box.min.y;
+    const double z = double(box.max.z) - box.min.z;
+    return x * y + y * z + z * x;
+  }
+
   TopDownConfig config_;
 };
 

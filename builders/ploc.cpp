@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -22,7 +23,6 @@ constexpr const char* kName = "ploc";
 // Clusters per task in each round's parallel loops. Fixed, so the chunks do not depend on the thread
 // count (the results never depend on the chunks: neighbours are exact minima, positions exact sums).
 constexpr uint32_t kChunk = 1u << 13;
-constexpr uint32_t kNone = ~0u;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 struct Cluster {
@@ -42,26 +42,22 @@ inline float distance(const Aabb& a, const Aabb& b) {
   return area == area ? area : kInf;
 }
 
-// Equal distances (identical boxes, or areas that overflow to infinity) are ordered by the pair's
-// indices: the closer pair in the order first, then the pair whose lower index is even, then the lower
-// pair. One total order on pairs seen from both ends keeps nearest neighbours free of cycles; and where
-// all distances are equal, the even-odd rule pairs clusters 0-1, 2-3, ..., halving their number each
-// round, where a rule by the lower index alone would merge a single pair per round into a chain.
-inline uint64_t pair_rank(uint32_t i, uint32_t j) {
-  const uint32_t lo = std::min(i, j), hi = std::max(i, j);
-  return (uint64_t{hi - lo} << 33) | (uint64_t{lo & 1u} << 32) | lo;
+// A candidate neighbour of cluster i as one integer, so that the nearest is a minimum without branches:
+// the distance's bits (non-negative floats order as their bit patterns), then for equal distances the
+// pair's indices: the closer pair in the order first, then the pair whose lower index is even, then the
+// lower pair, i.e. the neighbour before i before the one after it. One total order on pairs, the same
+// seen from both ends, keeps nearest neighbours free of cycles; and where all distances are equal, the
+// even-odd rule pairs clusters 0-1, 2-3, ..., halving their number each round, where a rule by the lower
+// index alone would merge one pair per round into a chain.
+inline uint64_t candidate(float distance, uint32_t gap, uint32_t lower, bool after) {
+  return uint64_t{std::bit_cast<uint32_t>(distance)} << 32 | gap << 2 | (lower & 1u) << 1 | uint32_t{after};
 }
 
-struct Nearest {
-  float distance = kInf;
-  uint32_t index = kNone;
-
-  // Takes cluster j at distance d from cluster i where it comes first in the order above.
-  void offer(uint32_t i, uint32_t j, float d) {
-    if (index == kNone || d < distance || (d == distance && pair_rank(i, j) < pair_rank(i, index)))
-      distance = d, index = j;
-  }
-};
+// The neighbour of cluster i that `key` (a candidate's) stands for.
+inline uint32_t neighbour_of(uint32_t i, uint64_t key) {
+  const auto gap = static_cast<uint32_t>(key >> 2) & 0x3FFFFFFFu;
+  return (key & 1u) ? i + gap : i - gap;
+}
 
 class Clustering {
  public:
@@ -98,20 +94,27 @@ class Clustering {
   void find_neighbours(const Cluster* clusters, uint32_t count) {
     tbb::parallel_for(0u, chunks(count), [&](uint32_t c) {
       const uint32_t begin = c * kChunk, end = std::min(count, begin + kChunk);
-      std::vector<Nearest> nearest(end - begin);
+      std::vector<uint64_t> nearest(end - begin, ~uint64_t{0});
       for (uint32_t i = begin; i < std::min(end, begin + radius_); ++i)
-        for (uint32_t j = i > radius_ ? i - radius_ : 0; j < begin; ++j)
-          nearest[i - begin].offer(i, j, distance(clusters[i].bounds, clusters[j].bounds));
+        for (uint32_t j = i > radius_ ? i - radius_ : 0; j < begin; ++j) {
+          const uint64_t key = candidate(distance(clusters[i].bounds, clusters[j].bounds), i - j, j, false);
+          nearest[i - begin] = std::min(nearest[i - begin], key);
+        }
       for (uint32_t i = begin; i < end; ++i) {
         const Aabb& box = clusters[i].bounds;
-        Nearest& mine = nearest[i - begin];
+        uint64_t mine = nearest[i - begin];
         const uint32_t last = std::min(count - 1, i + radius_);
-        for (uint32_t j = i + 1; j <= last; ++j) {
+        const uint32_t inside = std::min(end - 1, last);  // neighbours after i in this chunk
+        uint32_t j = i + 1;
+        for (; j <= inside; ++j) {
           const float d = distance(box, clusters[j].bounds);
-          mine.offer(i, j, d);
-          if (j < end) nearest[j - begin].offer(j, i, d);
+          mine = std::min(mine, candidate(d, j - i, i, true));
+          uint64_t& theirs = nearest[j - begin];
+          theirs = std::min(theirs, candidate(d, j - i, i, false));
         }
-        neighbour_[i] = mine.index;
+        for (; j <= last; ++j)
+          mine = std::min(mine, candidate(distance(box, clusters[j].bounds), j - i, i, true));
+        neighbour_[i] = neighbour_of(i, mine);
       }
     });
   }

@@ -1,9 +1,10 @@
 #pragma once
-// Parallel least-significant-digit radix sort of keys with 32-bit values (the sort that LBVH builders
-// use on Morton codes: Karras 2012, section 5; Embree's Morton builder). Each pass counts the digits of
-// fixed chunks of the input in parallel, turns the counts into each chunk's output positions (digit by
-// digit, chunk by chunk) and scatters every chunk in parallel. LSD radix sort is stable, so equal keys
-// keep their input order, and the result is the same for any thread count and chunking.
+// Parallel radix sort of keys with 32-bit values, the sort that linear BVH builders use on Morton codes
+// (Lauterbach et al. 2009, "Fast BVH Construction on GPUs"; Karras 2012). The most significant digit is
+// sorted first, over the whole array, by counting fixed chunks in parallel, turning the counts into each
+// chunk's output positions and scattering the chunks in parallel; then each of its buckets, in parallel, by
+// the other digits, least significant first, within the cache. Every pass is stable, so the whole sort is:
+// equal keys keep their input order, and the result does not depend on the thread count or the chunking.
 
 #include <cstdint>
 

@@ -61,14 +61,18 @@ void expect_sorts_like_stable_sort(std::size_t n, uint32_t key_bits, Key mask, u
 }
 
 TEST(RadixSort, SortsStablyLikeStdStableSort) {
-  // Sizes below, at and across the sort's chunks, on one and on two threads.
+  // Sizes sorted in the cache at once, and sizes sorted by the top digit first (over 2^17), on one and
+  // on two threads.
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-    for (std::size_t n : {0u, 1u, 2u, 1000u, 32768u, 100001u}) {
+    for (std::size_t n : {0u, 1u, 2u, 1000u, 32768u, 100001u, 400000u}) {
       SCOPED_TRACE(n);
       expect_sorts_like_stable_sort<uint32_t>(n, 30, (1u << 30) - 1, n + 1);
       expect_sorts_like_stable_sort<uint64_t>(n, 63, (uint64_t{1} << 63) - 1, n + 2);
     }
+    // Every key in one bucket of the top digit: the bucket is too large to sort in the cache.
+    expect_sorts_like_stable_sort<uint32_t>(400000, 30, (1u << 19) - 1, 3);
+    expect_sorts_like_stable_sort<uint64_t>(400000, 63, (uint64_t{1} << 40) - 1, 4);
   }
 }
 

@@ -115,6 +115,59 @@ Bvh build(const BuildInput& input, const LbvhParams& params) {
   return finish_cluster_tree(tree, rule);
 }
 
+// The same radix tree, found bottom-up in one pass with its boxes and costs: Apetrei 2014, "Fast and
+// Simple Agglomerative LBVH Construction". Inner node k splits between positions k and k + 1; a node
+// over positions [a, b] is the left child of split b where delta(b, b + 1) exceeds delta(a - 1, a), and
+// the right child of split a - 1 otherwise (the parent is the neighbouring split whose keys share more).
+// From every leaf towards the root, the first of a node's two children to arrive leaves its end of the
+// range in the node's slot and stops; the second takes it and goes on with the whole range. No
+// searches, and no parent links: the tree and its order of children are Karras's, so the output is the
+// same, node for node.
+template <class Code>
+Bvh build_apetrei(const BuildInput& input, const LbvhParams& params) {
+  const auto n = static_cast<uint32_t>(input.size());
+  const MortonOrder<Code> sorted = sort_by_morton<Code>(input.bounds.span());
+  const LeafCollapse rule(params.top_down);
+  if (n == 1) return finish_cluster_tree({{}, {}, sorted.ids.span(), input.bounds.span(), leaf_tag(0)}, rule);
+
+  constexpr uint32_t kUnset = ~0u;
+  HugePageArray<ClusterNode> nodes(n - 1);
+  HugePageArray<SubtreeCost> costs(n - 1);
+  HugePageArray<uint32_t> other_end(n - 1);
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n - 1, kGrain), [&](const auto& r) {
+    for (uint32_t k = r.begin(); k != r.end(); ++k) other_end[k] = kUnset;
+  });
+  const RadixTree<Code> radix(sorted.codes);
+  // delta between positions k and k + 1; -1 beyond either end.
+  auto split_delta = [&](int64_t k) { return k < 0 || k + 1 >= n ? -1 : radix.delta(k, k + 1); };
+  ClusterTree tree{nodes.span(), costs.span(), sorted.ids.span(), input.bounds.span(), 0};
+  std::atomic<uint32_t> root{0};
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kGrain), [&](const auto& r) {
+    for (uint32_t leaf = r.begin(); leaf != r.end(); ++leaf) {
+      uint32_t tag = leaf_tag(leaf), a = leaf, b = leaf;
+      for (;;) {
+        const bool left = split_delta(b) > split_delta(int64_t{a} - 1);
+        const uint32_t p = left ? b : a - 1;
+        nodes[p].child[left ? 0 : 1] = tag;
+        const uint32_t end =
+            std::atomic_ref<uint32_t>(other_end[p]).exchange(left ? a : b, std::memory_order_acq_rel);
+        if (end == kUnset) break;
+        (left ? b : a) = end;
+        ClusterNode& node = nodes[p];
+        node.bounds = merge(tag_bounds(tree, node.child[0]), tag_bounds(tree, node.child[1]));
+        costs[p] = rule.combine(node.bounds, rule.of(tree, node.child[0]), rule.of(tree, node.child[1]));
+        tag = p;
+        if (a == 0 && b == n - 1) {
+          root.store(p, std::memory_order_relaxed);
+          break;
+        }
+      }
+    }
+  });
+  tree.root = root.load();
+  return finish_cluster_tree(tree, rule);
+}
+
 }  // namespace
 
 void check_lbvh_params(const LbvhParams& params) {
@@ -130,6 +183,9 @@ Bvh build_lbvh(const BuildInput& input, const LbvhParams& params) {
   check_lbvh_params(params);
   check_prim_count(input.size(), kName);
   if (input.size() == 0) return Bvh{};
+  if (params.hierarchy == LbvhHierarchy::kApetrei)
+    return params.bits == 30 ? build_apetrei<uint32_t>(input, params)
+                             : build_apetrei<uint64_t>(input, params);
   return params.bits == 30 ? build<uint32_t>(input, params) : build<uint64_t>(input, params);
 }
 

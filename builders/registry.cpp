@@ -212,8 +212,16 @@ uint32_t morton_bits(const ParamSet& p) {
 
 BuilderInfo lbvh_info() {
   auto params = top_down_params();
-  params.insert(params.begin(), morton_bits_param());
-  auto config = [](const ParamSet& p) { return LbvhParams{morton_bits(p), top_down_config(p)}; };
+  params.insert(params.begin(),
+                {morton_bits_param(),
+                 choice_param("hierarchy", {"karras", "apetrei"}, 0,
+                              "karras: one search per inner node (Karras 2012); apetrei: one bottom-up pass "
+                              "(Apetrei 2014), the same tree")});
+  auto config = [](const ParamSet& p) {
+    const auto hierarchy =
+        p.get_choice("hierarchy") == "apetrei" ? LbvhHierarchy::kApetrei : LbvhHierarchy::kKarras;
+    return LbvhParams{morton_bits(p), hierarchy, top_down_config(p)};
+  };
   return {"lbvh",
           "linear BVH: Morton codes, radix sort, parallel radix tree (Karras 2012), SAH leaf collapse",
           std::move(params),

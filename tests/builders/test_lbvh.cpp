@@ -172,6 +172,21 @@ TEST(Lbvh, DeepRadixTreesAreRebuiltWithinTheDepthLimit) {
   EXPECT_TRUE(validate(build("lbvh", tris), tris).ok());
 }
 
+TEST(Lbvh, ApetreisPassFindsKarrasTree) {
+  std::vector<Triangle> clustered;
+  for (int i = 0; i < 3000; ++i) clustered.push_back(around({float(i % 7), float(i % 3), 0.0f}, 0.25f));
+  for (const auto& tris : {test::random_triangles(50000, 41), clustered, axis_chain()}) {
+    for (const char* bits : {"30", "63"}) {
+      for (const char* max_leaf : {"1", "8"}) {
+        const ParamOverrides common{{"bits", bits}, {"max_leaf", max_leaf}};
+        ParamOverrides apetrei = common;
+        apetrei.push_back({"hierarchy", "apetrei"});
+        EXPECT_TRUE(build("lbvh", tris, common) == build("lbvh", tris, apetrei)) << bits << " " << max_leaf;
+      }
+    }
+  }
+}
+
 TEST(Lbvh, LeafCollapseNeverRaisesTheSah) {
   // Collapsing a subtree into a leaf is taken only where it costs no more, so the tree with leaves of up
   // to 8 costs no more than the same radix tree with single-primitive leaves.

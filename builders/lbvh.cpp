@@ -71,76 +71,58 @@ class RadixTree {
   int64_t n_;
 };
 
+// Karras's way: the children of every inner node found in parallel, one task per node (section 4), then
+// boxes and costs bottom-up: from every leaf towards the root, where the first of a node's two children
+// to arrive stops and the second goes on, so each node is computed once, after both its children. The
+// counter's acquire-release orders the first child's writes before the second's reads, and a node's
+// values depend only on its children's: the same for any thread count. Returns the root's tag.
 template <class Code>
-Bvh build(const BuildInput& input, const LbvhParams& params) {
-  const auto n = static_cast<uint32_t>(input.size());
-  const MortonOrder<Code> sorted = sort_by_morton<Code>(input.bounds.span());
-  const LeafCollapse rule(params.top_down);
-  if (n == 1) return finish_cluster_tree({{}, {}, sorted.ids.span(), input.bounds.span(), leaf_tag(0)}, rule);
-
-  // The radix tree: inner node i's children, and every node's parent (leaves' in leaf_parent).
-  HugePageArray<ClusterNode> nodes(n - 1);
-  HugePageArray<SubtreeCost> costs(n - 1);
+uint32_t karras_pass(const ClusterTree& tree, const RadixTree<Code>& radix, const LeafCollapse& rule) {
+  const auto n = static_cast<uint32_t>(tree.order.size());
   HugePageArray<uint32_t> parent(n - 1), leaf_parent(n);
   HugePageArray<uint8_t> arrivals(n - 1);
-  const RadixTree<Code> radix(sorted.codes);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n - 1, kGrain), [&](const auto& r) {
     for (uint32_t i = r.begin(); i != r.end(); ++i) {
-      uint32_t child[2];
+      uint32_t* child = tree.nodes[i].child;
       radix.children(i, child);
-      nodes[i].child[0] = child[0];
-      nodes[i].child[1] = child[1];
-      for (const uint32_t c : child) (is_leaf_tag(c) ? leaf_parent[tag_index(c)] : parent[c]) = i;
+      for (int c = 0; c < 2; ++c)
+        (is_leaf_tag(child[c]) ? leaf_parent[tag_index(child[c])] : parent[child[c]]) = i;
       arrivals[i] = 0;
     }
   });
-
-  // Boxes and costs bottom-up: from every leaf towards the root, where the first of a node's two children
-  // to arrive stops and the second goes on, so each node is computed once, after both its children
-  // (Karras 2012, section 4). The counter's acquire-release orders the first child's writes before the
-  // second's reads, and a node's values depend only on its children's: the same for any thread count.
-  const ClusterTree tree{nodes.span(), costs.span(), sorted.ids.span(), input.bounds.span(), 0};
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kGrain), [&](const auto& r) {
     for (uint32_t leaf = r.begin(); leaf != r.end(); ++leaf) {
       uint32_t p = leaf_parent[leaf];
       while (std::atomic_ref<uint8_t>(arrivals[p]).fetch_add(1, std::memory_order_acq_rel) != 0) {
-        ClusterNode& node = nodes[p];
+        ClusterNode& node = tree.nodes[p];
         node.bounds = merge(tag_bounds(tree, node.child[0]), tag_bounds(tree, node.child[1]));
-        costs[p] = rule.combine(node.bounds, rule.of(tree, node.child[0]), rule.of(tree, node.child[1]));
+        tree.costs[p] = rule.combine(node.bounds, rule.of(tree, node.child[0]), rule.of(tree, node.child[1]));
         if (p == 0) break;
         p = parent[p];
       }
     }
   });
-  return finish_cluster_tree(tree, rule);
+  return 0;  // Karras's root is inner node 0
 }
 
-// The same radix tree, found bottom-up in one pass with its boxes and costs: Apetrei 2014, "Fast and
-// Simple Agglomerative LBVH Construction". Inner node k splits between positions k and k + 1; a node
-// over positions [a, b] is the left child of split b where delta(b, b + 1) exceeds delta(a - 1, a), and
-// the right child of split a - 1 otherwise (the parent is the neighbouring split whose keys share more).
-// From every leaf towards the root, the first of a node's two children to arrive leaves its end of the
-// range in the node's slot and stops; the second takes it and goes on with the whole range. No
-// searches, and no parent links: the tree and its order of children are Karras's, so the output is the
-// same, node for node.
+// Apetrei's way ("Fast and Simple Agglomerative LBVH Construction", 2014): the same radix tree, found
+// bottom-up in one pass with its boxes and costs. Inner node k splits between positions k and k + 1; a
+// node over positions [a, b] is the left child of split b where delta(b, b + 1) exceeds
+// delta(a - 1, a), and the right child of split a - 1 otherwise (the parent is the neighbouring split
+// whose keys share more). From every leaf towards the root, the first of a node's two children to arrive
+// leaves its end of the range in the node's slot and stops; the second takes it and goes on with the
+// whole range. No searches and no parent links; the tree and the order of children are Karras's, so the
+// output is the same, node for node. Returns the root's tag.
 template <class Code>
-Bvh build_apetrei(const BuildInput& input, const LbvhParams& params) {
-  const auto n = static_cast<uint32_t>(input.size());
-  const MortonOrder<Code> sorted = sort_by_morton<Code>(input.bounds.span());
-  const LeafCollapse rule(params.top_down);
-  if (n == 1) return finish_cluster_tree({{}, {}, sorted.ids.span(), input.bounds.span(), leaf_tag(0)}, rule);
-
+uint32_t apetrei_pass(const ClusterTree& tree, const RadixTree<Code>& radix, const LeafCollapse& rule) {
+  const auto n = static_cast<uint32_t>(tree.order.size());
   constexpr uint32_t kUnset = ~0u;
-  HugePageArray<ClusterNode> nodes(n - 1);
-  HugePageArray<SubtreeCost> costs(n - 1);
   HugePageArray<uint32_t> other_end(n - 1);
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n - 1, kGrain), [&](const auto& r) {
     for (uint32_t k = r.begin(); k != r.end(); ++k) other_end[k] = kUnset;
   });
-  const RadixTree<Code> radix(sorted.codes);
   // delta between positions k and k + 1; -1 beyond either end.
   auto split_delta = [&](int64_t k) { return k < 0 || k + 1 >= n ? -1 : radix.delta(k, k + 1); };
-  ClusterTree tree{nodes.span(), costs.span(), sorted.ids.span(), input.bounds.span(), 0};
   std::atomic<uint32_t> root{0};
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kGrain), [&](const auto& r) {
     for (uint32_t leaf = r.begin(); leaf != r.end(); ++leaf) {
@@ -148,14 +130,14 @@ Bvh build_apetrei(const BuildInput& input, const LbvhParams& params) {
       for (;;) {
         const bool left = split_delta(b) > split_delta(int64_t{a} - 1);
         const uint32_t p = left ? b : a - 1;
-        nodes[p].child[left ? 0 : 1] = tag;
+        tree.nodes[p].child[left ? 0 : 1] = tag;
         const uint32_t end =
             std::atomic_ref<uint32_t>(other_end[p]).exchange(left ? a : b, std::memory_order_acq_rel);
         if (end == kUnset) break;
         (left ? b : a) = end;
-        ClusterNode& node = nodes[p];
+        ClusterNode& node = tree.nodes[p];
         node.bounds = merge(tag_bounds(tree, node.child[0]), tag_bounds(tree, node.child[1]));
-        costs[p] = rule.combine(node.bounds, rule.of(tree, node.child[0]), rule.of(tree, node.child[1]));
+        tree.costs[p] = rule.combine(node.bounds, rule.of(tree, node.child[0]), rule.of(tree, node.child[1]));
         tag = p;
         if (a == 0 && b == n - 1) {
           root.store(p, std::memory_order_relaxed);
@@ -164,7 +146,22 @@ Bvh build_apetrei(const BuildInput& input, const LbvhParams& params) {
       }
     }
   });
-  tree.root = root.load();
+  return root.load();
+}
+
+template <class Code>
+Bvh build(const BuildInput& input, const LbvhParams& params) {
+  const auto n = static_cast<uint32_t>(input.size());
+  const MortonOrder<Code> sorted = sort_by_morton<Code>(input.bounds.span());
+  const LeafCollapse rule(params.top_down);
+  HugePageArray<ClusterNode> nodes(n - 1);
+  HugePageArray<SubtreeCost> costs(n - 1);
+  ClusterTree tree{nodes.span(), costs.span(), sorted.ids.span(), input.bounds.span(), leaf_tag(0)};
+  if (n > 1) {
+    const RadixTree<Code> radix(sorted.codes);
+    tree.root = params.hierarchy == LbvhHierarchy::kApetrei ? apetrei_pass(tree, radix, rule)
+                                                            : karras_pass(tree, radix, rule);
+  }
   return finish_cluster_tree(tree, rule);
 }
 
@@ -183,9 +180,6 @@ Bvh build_lbvh(const BuildInput& input, const LbvhParams& params) {
   check_lbvh_params(params);
   check_prim_count(input.size(), kName);
   if (input.size() == 0) return Bvh{};
-  if (params.hierarchy == LbvhHierarchy::kApetrei)
-    return params.bits == 30 ? build_apetrei<uint32_t>(input, params)
-                             : build_apetrei<uint64_t>(input, params);
   return params.bits == 30 ? build<uint32_t>(input, params) : build<uint64_t>(input, params);
 }
 

@@ -32,7 +32,7 @@ struct Cluster {
 };
 static_assert(sizeof(Cluster) == 32);
 
-// The distance of two clusters: the half area of their merged box (section 3.1). NaN, from an infinite
+// The distance of two clusters: the half area of their merged box. NaN, from an infinite
 // extent times a zero one, counts as the largest distance.
 inline float distance(const Aabb& a, const Aabb& b) {
   const float x = std::max(a.max.x, b.max.x) - std::min(a.min.x, b.min.x);
@@ -87,7 +87,7 @@ class Clustering {
  private:
   static uint32_t chunks(uint32_t count) { return (count + kChunk - 1) / kChunk; }
 
-  // Section 3.1: each cluster's nearest neighbour among those within `radius` positions. Each task
+  // Each cluster's nearest neighbour among those within `radius` positions. Each task
   // takes a chunk and computes every distance in it once, offering it to both ends (the pairs reaching
   // back into the previous chunk are computed first); the neighbour is a minimum in a total order, so it
   // does not depend on how the chunks are cut.
@@ -121,7 +121,7 @@ class Clustering {
 
   bool mutual(uint32_t i) const { return neighbour_[neighbour_[i]] == i; }
 
-  // Sections 3.2 and 3.3: mutual nearest neighbours i < j merge into a new node at i's place, j's place
+  // Mutual nearest neighbours i < j merge into a new node at i's place, j's place
   // is dropped, and the rest move down over the dropped places. New nodes are numbered from `first_node`
   // in the order of their places. Returns the number of merges.
   uint32_t merge_mutual(const Cluster* in, Cluster* out, uint32_t count, uint32_t first_node) {

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -68,16 +69,27 @@ class DyadicGrid {
   }
 
  private:
+  // In fixed point over the scene's extent, with 2^kMaxLevel units, the planes of level l are the
+  // multiples of 2^(kMaxLevel - l): the coarsest plane between two points is the multiple of the
+  // largest power of two between them, found from the highest bit in which the two differ.
   Plane coarsest_on(int a, double min, double max) const {
     if (!(extent_[a] > 0.0) || !(max > min)) return {};
-    const double u = (min - lo_[a]) / extent_[a];
-    double cells = 2.0;  // 2^level
-    for (uint32_t level = 1; level <= kMaxLevel; ++level, cells *= 2.0) {
-      // The first plane of this level above `min`; rounding may put it on `min`, hence the check.
-      const double position = lo_[a] + (std::floor(u * cells) + 1.0) / cells * extent_[a];
-      if (position > min && position < max) return {level, a, position};
+    constexpr double kUnits = 0x1p32;
+    static_assert(kMaxLevel == 32);
+    const double u0 = (min - lo_[a]) / extent_[a] * kUnits, u1 = (max - lo_[a]) / extent_[a] * kUnits;
+    const auto first = static_cast<uint64_t>(std::max(0.0, std::floor(u0) + 1.0));         // above min
+    const auto last = static_cast<uint64_t>(std::min(kUnits - 1.0, std::ceil(u1) - 1.0));  // below max
+    if (!(u1 > 0.0) || first > last) return {};
+    uint64_t m = first;
+    if (first != last) {
+      const uint64_t low = (uint64_t{1} << std::bit_width(first ^ last) >> 1) - 1;
+      m = last & ~low;
+      if (std::countr_zero(first) > std::countr_zero(m)) m = first;
     }
-    return {};
+    const double position = lo_[a] + double(m) / kUnits * extent_[a];
+    // Rounding may put the plane on min or max: then it does not cut the box.
+    if (!(position > min && position < max)) return {};
+    return {kMaxLevel - static_cast<uint32_t>(std::countr_zero(m)), a, position};
   }
 
   std::array<double, 3> lo_, extent_;
@@ -109,6 +121,13 @@ float above(double x, double pad) {
   return double(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
 }
 
+// A part of a triangle being split: the triangle clipped to it, its box, and the splits still its to make.
+struct Piece {
+  ClipPolygon polygon;
+  Aabb box;
+  uint32_t splits;
+};
+
 // The splitting of one triangle (Karras and Aila 2013, section 5).
 class TriangleSplitter {
  public:
@@ -133,42 +152,43 @@ class TriangleSplitter {
 
   /// Writes at most splits + 1 boxes of pieces that together cover the triangle to `out`; returns how
   /// many. A piece no grid plane cuts, or that a plane misses after rounding, is not split further, so
-  /// there may be fewer.
-  uint32_t split(const Aabb& box, uint32_t splits, Aabb* out) const {
-    struct Piece {
-      ClipPolygon polygon;
-      Aabb box;
-      uint32_t splits;
-    };
-    std::vector<Piece> stack;  // a triangle's pieces may be many: no recursion
+  /// there may be fewer. `stack` is working space.
+  uint32_t split(const Aabb& box, uint32_t splits, Aabb* out, std::vector<Piece>& stack) const {
+    // A triangle's pieces may be many: a stack, not recursion. Each split adds one entry, so with this
+    // much room the references into it stay valid.
+    stack.clear();
+    stack.reserve(std::size_t{splits} + 2);
     stack.push_back({ClipPolygon::of(tri_), box, splits});
     uint32_t written = 0;
     while (!stack.empty()) {
-      Piece piece = std::move(stack.back());
-      stack.pop_back();
-      const DyadicGrid::Plane plane = piece.splits > 0 ? grid_.coarsest(piece.box) : DyadicGrid::Plane{};
+      const DyadicGrid::Plane plane =
+          stack.back().splits > 0 ? grid_.coarsest(stack.back().box) : DyadicGrid::Plane{};
       if (plane.level == kNoPlane) {
-        out[written++] = piece.box;
+        out[written++] = stack.back().box;
+        stack.pop_back();
         continue;
       }
-      Piece low{piece.polygon, {}, 0}, high{piece.polygon, {}, 0};
+      // The piece becomes its upper half in place, and a copy on top of it the lower half (taken first).
+      stack.push_back(stack.back());
+      Piece& high = stack[stack.size() - 2];
+      Piece& low = stack.back();
       low.polygon.clip(plane.axis, plane.position, true);
       high.polygon.clip(plane.axis, plane.position, false);
       if (low.polygon.empty() || high.polygon.empty()) {
-        out[written++] = piece.box;
+        out[written++] = high.box;
+        stack.resize(stack.size() - 2);
         continue;
       }
-      low.box = bounds(low.polygon, piece.box);
-      high.box = bounds(high.polygon, piece.box);
+      const Aabb whole = high.box;
+      low.box = bounds(low.polygon, whole);
+      high.box = bounds(high.polygon, whole);
       // The remaining splits go to the halves in proportion to the area their boxes waste.
-      const uint32_t rest = piece.splits - 1;
+      const uint32_t rest = high.splits - 1;
       const double w_low = waste(low.box, polygon_area(low.polygon));
       const double w_high = waste(high.box, polygon_area(high.polygon));
       const double share = w_low + w_high > 0.0 ? w_low / (w_low + w_high) : 0.5;
       low.splits = std::min(rest, static_cast<uint32_t>(std::floor(double(rest) * share + 0.5)));
       high.splits = rest - low.splits;
-      stack.push_back(std::move(high));
-      stack.push_back(std::move(low));
     }
     return written;
   }
@@ -247,29 +267,31 @@ NodeRange root_range(std::span<const PrimRef> refs) {
 }
 
 // Pieces of one triangle that meet in a leaf need one reference there: drops the repeats, leaf by leaf
-// in reference order, and closes the gaps.
+// in reference order (the tree's depth-first order), and closes the gaps.
 void drop_repeats_in_leaves(Bvh& bvh) {
-  std::vector<std::pair<uint32_t, uint32_t>> leaves;  // (first reference, node)
-  for (uint32_t i = 0; i < bvh.nodes.size(); ++i)
-    if (bvh.nodes[i].is_leaf()) leaves.emplace_back(bvh.nodes[i].first, i);
-  std::sort(leaves.begin(), leaves.end());
   // Leaves of more references than this are deduplicated by sorting, smaller ones by search.
   constexpr uint32_t kSearchLimit = 32;
   uint32_t* refs = bvh.prim_refs.data();
   uint32_t out = 0;
-  for (const auto& [first, index] : leaves) {
-    Node& leaf = bvh.nodes[index];
-    const uint32_t begin = out;
-    if (leaf.prim_count <= kSearchLimit) {
-      for (uint32_t r = first; r < first + leaf.prim_count; ++r)
+  std::vector<uint32_t> stack{0};
+  while (!stack.empty()) {
+    Node& node = bvh.nodes[stack.back()];
+    stack.pop_back();
+    if (!node.is_leaf()) {
+      for (uint32_t c = node.child_count; c-- > 0;) stack.push_back(node.first + c);
+      continue;
+    }
+    const uint32_t begin = out, first = node.first;
+    if (node.prim_count <= kSearchLimit) {
+      for (uint32_t r = first; r < first + node.prim_count; ++r)
         if (std::find(refs + begin, refs + out, refs[r]) == refs + out) refs[out++] = refs[r];
     } else {
-      std::sort(refs + first, refs + first + leaf.prim_count);
-      for (uint32_t r = first; r < first + leaf.prim_count; ++r)
+      std::sort(refs + first, refs + first + node.prim_count);
+      for (uint32_t r = first; r < first + node.prim_count; ++r)
         if (out == begin || refs[out - 1] != refs[r]) refs[out++] = refs[r];
     }
-    leaf.first = begin;
-    leaf.prim_count = static_cast<uint16_t>(out - begin);
+    node.first = begin;
+    node.prim_count = static_cast<uint16_t>(out - begin);
   }
   bvh.prim_refs.resize(out);
 }
@@ -348,13 +370,14 @@ Bvh build_presplit(const BuildInput& input, const PresplitParams& params) {
   const uint64_t capacity = exclusive_scan(reserved, offset);
   HugePageArray<Aabb> boxes(capacity);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kChunk), [&](const auto& r) {
+    std::vector<Piece> stack;
     for (std::size_t i = r.begin(); i != r.end(); ++i) {
       if (splits[i] == 0) {
         boxes[offset[i]] = input.bounds[i];
         written[i] = 1;
       } else {
-        written[i] =
-            TriangleSplitter(input.triangles[i], grid).split(input.bounds[i], splits[i], &boxes[offset[i]]);
+        written[i] = TriangleSplitter(input.triangles[i], grid)
+                         .split(input.bounds[i], splits[i], &boxes[offset[i]], stack);
       }
     }
   });

@@ -5,6 +5,9 @@
 #include "builders/binned_sah.h"
 #include "builders/child_order.h"
 #include "builders/collapse.h"
+#include "builders/lbvh.h"
+#include "builders/ploc.h"
+#include "builders/presplit.h"
 #include "builders/reinsert.h"
 #include "builders/sbvh.h"
 #include "builders/sweep_sah.h"
@@ -219,6 +222,70 @@ BuilderInfo sbvh_info() {
           [](const ParamSet& p) { check_sbvh_params(sbvh_params(p)); }};
 }
 
+// The Morton-order builders: the code length as a choice, and the leaf parameters of the top-down
+// builders, which their SAH leaf collapse (leaf_collapse.h) follows.
+ParamSpec morton_bits_param() {
+  return choice_param("bits", {"30", "63"}, 0, "Morton code length: 10 or 21 bits per axis");
+}
+
+uint32_t morton_bits(const ParamSet& p) {
+  return p.get_choice("bits") == "63" ? 63 : 30;
+}
+
+BuilderInfo lbvh_info() {
+  auto params = top_down_params();
+  params.insert(params.begin(),
+                {morton_bits_param(),
+                 choice_param("hierarchy", {"karras", "apetrei"}, 0,
+                              "karras: one search per inner node (Karras 2012); apetrei: one bottom-up pass "
+                              "(Apetrei 2014), the same tree")});
+  auto config = [](const ParamSet& p) {
+    const auto hierarchy =
+        p.get_choice("hierarchy") == "apetrei" ? LbvhHierarchy::kApetrei : LbvhHierarchy::kKarras;
+    return LbvhParams{morton_bits(p), hierarchy, top_down_config(p)};
+  };
+  return {"lbvh",
+          "linear BVH: Morton codes, radix sort, parallel radix tree (Karras 2012), SAH leaf collapse",
+          std::move(params),
+          [config](const BuildInput& input, const ParamSet& p) { return build_lbvh(input, config(p)); },
+          [config](const ParamSet& p) { check_lbvh_params(config(p)); }};
+}
+
+BuilderInfo ploc_info() {
+  auto params = top_down_params();
+  const PlocParams defaults;
+  params.insert(params.begin(), {{"radius", ParamType::kInt, double(defaults.radius), 1, kPlocMaxRadius,
+                                  "clusters searched on each side in the Morton order"},
+                                 morton_bits_param()});
+  auto config = [](const ParamSet& p) {
+    return PlocParams{p.get_uint("radius"), morton_bits(p), top_down_config(p)};
+  };
+  return {
+      "ploc",
+      "parallel locally-ordered clustering (Meister and Bittner 2018) over Morton order, SAH leaf collapse",
+      std::move(params),
+      [config](const BuildInput& input, const ParamSet& p) { return build_ploc(input, config(p)); },
+      [config](const ParamSet& p) { check_ploc_params(config(p)); }};
+}
+
+BuilderInfo presplit_info() {
+  auto params = binned_params();
+  // As a double, so that the CSV shows 0.3 rather than its float rounding.
+  constexpr double kDefaultSplitBudget = 0.3;
+  static_assert(float(kDefaultSplitBudget) == PresplitParams{}.split_budget);
+  params.insert(params.begin(),
+                {"split_budget", ParamType::kFloat, kDefaultSplitBudget, 0, kPresplitMaxBudget,
+                 "extra references for split triangles, as a fraction of n"});
+  auto config = [](const ParamSet& p) {
+    return PresplitParams{p.get_float("split_budget"), binned_config(p)};
+  };
+  return {"presplit",
+          "large triangles' references split before a binned SAH build (Karras and Aila 2013, section 5)",
+          std::move(params),
+          [config](const BuildInput& input, const ParamSet& p) { return build_presplit(input, config(p)); },
+          [config](const ParamSet& p) { check_presplit_params(config(p)); }};
+}
+
 // The wide builders' trees come out with each node's children in the order in which any hit visits the
 // children of wide nodes (child_order.h), by the builder's own SAH constants.
 BuilderInfo with_children_for_occlusion(BuilderInfo info) {
@@ -291,6 +358,9 @@ std::vector<BuilderInfo>& registry() {
       sbvh_info(),
       reinsert_info(),
       treelet_info(),
+      lbvh_info(),
+      ploc_info(),
+      presplit_info(),
   };
   return all;
 }

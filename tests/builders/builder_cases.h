@@ -67,11 +67,23 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back(
       {"sbvh",
        {{"alpha", "0"}, {"max_dup", "2"}, {"max_leaf", "1"}, {"spatial_bins", "256"}, {"c_trav", "3"}}});
+  // The bottom-up builders: 63-bit codes, single-primitive leaves, and a coarser collapse.
+  out.push_back({"lbvh", {{"bits", "63"}}});
+  out.push_back({"lbvh", {{"hierarchy", "apetrei"}}});
+  out.push_back({"lbvh", {{"max_leaf", "1"}}});
+  out.push_back({"lbvh", {{"min_leaf", "4"}, {"max_leaf", "16"}, {"c_trav", "3"}}});
+  out.push_back({"ploc", {{"radius", "1"}}});
+  out.push_back({"ploc", {{"radius", "64"}, {"bits", "63"}, {"max_leaf", "1"}}});
+  out.push_back({"ploc", {{"min_leaf", "4"}, {"max_leaf", "16"}, {"c_trav", "3"}}});
+  // Presplitting: none, and the largest budget with single-reference leaves.
+  out.push_back({"presplit", {{"split_budget", "0"}}});
+  out.push_back({"presplit", {{"split_budget", "4"}, {"max_leaf", "1"}}});
   return out;
 }
 
-/// The most references a builder may return for `prims` primitives: (1 + max_dup) n for builders with a
-/// duplication budget (spatial splits), n for the others; a pass's, its source's.
+/// The most references a builder may return for `prims` primitives: (1 + max_dup) n or
+/// (1 + split_budget) n for builders with a duplication budget (spatial splits, presplitting), n for the
+/// others; a pass's, its source's.
 inline std::size_t max_references(const BuilderInfo& info, const ParamSet& params, std::size_t prims) {
   if (params.has("source")) {
     const SourceSpec& source = params.get_source("source");
@@ -81,9 +93,9 @@ inline std::size_t max_references(const BuilderInfo& info, const ParamSet& param
       return static_cast<std::size_t>(std::floor((1.0 + double(SbvhParams{}.max_dup)) * double(prims)));
   }
   for (const auto& spec : info.params)
-    if (spec.name == "max_dup")
+    if (spec.name == "max_dup" || spec.name == "split_budget")
       return static_cast<std::size_t>(
-          std::floor((1.0 + double(params.get_float("max_dup"))) * double(prims)));
+          std::floor((1.0 + double(params.get_float(spec.name))) * double(prims)));
   return prims;
 }
 

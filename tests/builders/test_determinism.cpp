@@ -76,7 +76,8 @@ TEST(BuilderLayout, NodesComeOutDepthFirstWithSiblingsTogether) {
   const auto tris = test::random_triangles(40000, 5, 100.0f);
   const BuildInput input = BuildInput::from_triangles(tris);
   tbb::task_arena arena(4);
-  for (const char* name : {"binned_sah", "sweep_sah", "sbvh", "reinsert", "treelet"}) {
+  for (const char* name :
+       {"binned_sah", "sweep_sah", "sbvh", "reinsert", "treelet", "lbvh", "ploc", "presplit"}) {
     const BuilderInfo& info = find_builder(name);
     const ParamSet params = resolve_params(info.name, info.params, {});
     expect_depth_first(arena.execute([&] { return info.build(input, params); }), name);

@@ -33,6 +33,35 @@ TEST(BuilderRegistry, DefaultsAppearInCsvForm) {
             "bins=16;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=0.5;c_isect=1");
 }
 
+TEST(BuilderRegistry, BottomUpAndPresplitDefaultsAppearInCsvForm) {
+  auto defaults = [](const char* name) {
+    const auto& info = find_builder(name);
+    return resolve_params(info.name, info.params, {}).to_string();
+  };
+  EXPECT_EQ(defaults("lbvh"), "bits=30;hierarchy=karras;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
+  EXPECT_EQ(defaults("ploc"), "radius=16;bits=30;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
+  EXPECT_EQ(defaults("presplit"),
+            "split_budget=0.3;bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
+  const auto& lbvh = find_builder("lbvh");
+  expect_error(
+      [&] {
+        resolve_params(lbvh.name, lbvh.params, {{"bits", "32"}});
+      },
+      {"lbvh", "'bits' = '32'", "not one of 30, 63"});
+  const auto& ploc = find_builder("ploc");
+  expect_error(
+      [&] {
+        resolve_params(ploc.name, ploc.params, {{"radius", "0"}});
+      },
+      {"ploc", "'radius' = '0'", "outside [1, 256]"});
+  const auto& presplit = find_builder("presplit");
+  expect_error(
+      [&] {
+        resolve_params(presplit.name, presplit.params, {{"split_budget", "9"}});
+      },
+      {"presplit", "'split_budget' = '9'", "outside [0, 4]"});
+}
+
 TEST(BuilderRegistry, BadParametersAreErrorsThatNameThem) {
   const auto& info = find_builder("binned_sah");
   auto resolve = [&](ParamOverrides o) { return [&info, o] { resolve_params(info.name, info.params, o); }; };

@@ -35,9 +35,10 @@ std::vector<BuilderRun> resolved_runs(const BuildCommandOptions& options) {
   return out;
 }
 
-// "embree_medium" for Embree's run, the builder's name for ours.
+// "embree_medium" (or "embree_medium_robust") for Embree's run, the builder's name for ours.
 std::string short_label(const BuilderRun& run) {
-  return run.is_embree() ? "embree_" + to_string(run.quality) : run.name;
+  if (!run.is_embree()) return run.name;
+  return "embree_" + to_string(run.quality) + (run.robust ? "_robust" : "");
 }
 
 }  // namespace
@@ -64,7 +65,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
       "# build ms: median [min, max] of {} reps after {} warm-up, interleaved across builders; ours include\n"
       "#   per-primitive bounds, Embree's is rtcCommitScene alone\n",
       options.reps, options.warmup);
-  fmt::print(out, "{:>7} {:<16} {:<46} {:>10} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
+  fmt::print(out, "{:>7} {:<20} {:<46} {:>10} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
              "threads", "builder", "params", "build_ms", "[min, max]", "vs_emb_m", "nodes", "leaves", "depth",
              "leaf", "sah", "bytes", "valid");
 
@@ -84,7 +85,8 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
       Job& job = jobs[i];
       if (runs[i].is_embree()) {
         job.embree = std::make_shared<EmbreeBuild>(threads);
-        job.source = embree_build(runs[i].label(), job.embree, scene.triangles, runs[i].quality);
+        job.source = embree_build(runs[i].label(), job.embree, scene.triangles, runs[i].quality,
+                                  runs[i].embree_options());
       } else {
         job.tree = std::make_shared<Bvh>();
         job.source = our_build(runs[i].label(), *runs[i].info, runs[i].values, scene.triangles, job.tree);
@@ -107,7 +109,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
 
     std::optional<double> embree_medium_ms;
     for (std::size_t i = 0; i < runs.size(); ++i)
-      if (runs[i].is_embree() && runs[i].quality == EmbreeQuality::kMedium)
+      if (runs[i].is_embree() && runs[i].quality == EmbreeQuality::kMedium && !runs[i].robust)
         embree_medium_ms = jobs[i].source.time().median;
 
     for (std::size_t i = 0; i < runs.size(); ++i) {
@@ -117,7 +119,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
       const std::string spread = fmt::format("[{:.2f}, {:.2f}]", t.min, t.max);
       if (run.is_embree()) {
         fmt::print(out,
-                   "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
+                   "{:>7} {:<20} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
                    threads, short_label(run), run.params_text(), t.median, spread, ratio, "-", "-", "-", "-",
                    "-", jobs[i].embree->scene->bytes(), "-");
         continue;
@@ -127,7 +129,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
       if (!tree.ok()) {
         exit_code = 1;
         fmt::print(out,
-                   "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
+                   "{:>7} {:<20} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>12} {}\n",
                    threads, short_label(run), run.params_text(), t.median, spread, ratio, "-", "-", "-", "-",
                    "-", "-", "INVALID");
         log << short_label(run) << ": invalid tree:\n" << tree.report.summary();
@@ -135,7 +137,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
       }
       const BvhStats& s = tree.stats;
       fmt::print(out,
-                 "{:>7} {:<16} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6.2f} {:>9.3f} {:>12} {}\n",
+                 "{:>7} {:<20} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6.2f} {:>9.3f} {:>12} {}\n",
                  threads, short_label(run), run.params_text(), t.median, spread, ratio, s.nodes, s.leaves,
                  s.max_depth, s.mean_leaf_size, s.sah_cost, s.bytes, "ok");
     }

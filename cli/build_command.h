@@ -12,9 +12,10 @@
 namespace sahbench {
 
 struct BuildCommandOptions {
-  std::string scene;                 ///< file, shared-scene name or procedural spec
-  std::vector<BuilderRun> builders;  ///< parse_builder_run's; Embree's own BVH is "embree" with its quality
-  ParamOverrides params;             ///< applied to every one of our builders
+  std::string scene;  ///< file, shared-scene name or procedural spec
+  /// parse_builder_run's; Embree's own BVH is "embree" with its quality and mode (robust)
+  std::vector<BuilderRun> builders;
+  ParamOverrides params;  ///< applied to every one of our builders
   std::vector<int> threads{1};
   int reps = 5;
   int warmup = 1;

@@ -39,7 +39,9 @@ int main(int argc, char** argv) {
   build_cmd
       ->add_option("--builder", build_builders,
                    "builder NAME or NAME:key=value,...; repeatable; embree:quality=low|medium|high "
-                   "(or embree_low|embree_medium|embree_high) for Embree's rtcCommitScene")
+                   "(or embree_low|embree_medium|embree_high) for Embree's rtcCommitScene, "
+                   "embree:quality=Q,robust=1 in its robust mode; vs_emb_m is the ratio to "
+                   "embree_medium in its default mode")
       ->required();
   build_cmd->add_option("--param", params, "key=value for every one of our builders; repeatable");
   build_cmd->add_option("--threads", build.threads, "thread counts, e.g. 1,2")->delimiter(',');
@@ -54,7 +56,8 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("--resume", run.resume, "skip cells whose rows are already in the output CSV");
   run_cmd->add_option(
       "--only", run.only,
-      "run only cells whose key scene|builder|params|layout|threads|ray_set|frame contains this text");
+      "run only cells whose key scene|builder|params|layout|threads|ray_set|frame contains this text "
+      "(Embree's params: quality=Q, or quality=Q;robust=1 in its robust mode)");
   run_cmd->add_option("--output", run_output, "CSV path instead of the config's");
 
   StressOptions stress;
@@ -85,7 +88,8 @@ int main(int argc, char** argv) {
       ->required();
   trace_cmd
       ->add_option("--builder", trace.builder,
-                   "NAME or NAME:key=value,...; embree:quality=low|medium|high for Embree's own BVH")
+                   "NAME or NAME:key=value,...; embree:quality=low|medium|high[,robust=1] for Embree's "
+                   "own BVH (robust=1: its robust mode, RTC_SCENE_FLAG_ROBUST)")
       ->capture_default_str();
   trace_cmd->add_option(
       "--layout", trace.layout,

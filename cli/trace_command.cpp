@@ -72,7 +72,7 @@ TraceAnswers trace_embree(const BuilderRun& run, std::string_view layout_text, c
   EmbreeDevice device(0);
   if (const auto why = embree_layout_unsupported(device, *layout))
     throw Error("--layout '" + std::string(layout_text) + "': " + *why);
-  const EmbreeScene embree(device, scene.triangles, run.quality);
+  const EmbreeScene embree(device, scene.triangles, run.quality, run.embree_options());
   TraceAnswers out{run.name + ":" + run.params_text(), layout->name, "embree:" + embree_isa(device), {}, {}};
   if (query == TraceQuery::kAny) {
     out.occluded.resize(rays.size());

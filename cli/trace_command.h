@@ -24,7 +24,7 @@ std::string_view to_string(TraceQuery query);
 
 struct TraceCommandOptions {
   std::string scene;
-  std::string builder = "binned_sah";  ///< NAME or NAME:key=value,..., or embree[:quality=Q]
+  std::string builder = "binned_sah";  ///< NAME or NAME:key=value,..., or embree[:quality=Q,robust=1]
   /// A layout spec of ours (traversal/layout.h) for our builders, embree_1/8/16 for Embree's; empty: bvh2
   /// for ours, embree_1 for Embree's.
   std::string layout;

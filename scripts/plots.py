@@ -294,9 +294,10 @@ def refit_base(builder, params):
 
 
 def short_series(builder, params):
-    """A legend label: the builder with only its arity or quality (the full parameters are in the CSV)."""
+    """A legend label: the builder with only its arity, quality or Embree's robust mode (the full parameters
+    are in the CSV)."""
     keep = [kv for kv in str(params if isinstance(params, str) else "").split(";")
-            if kv.split("=")[0] in ("arity", "quality")]
+            if kv.split("=")[0] in ("arity", "quality", "robust")]
     return f"{builder} {','.join(keep)}".strip()
 
 

@@ -34,6 +34,34 @@ const Spellings<ReferencePolicy> kReferencePolicies = {{"auto", ReferencePolicy:
                                                        {"brute_force", ReferencePolicy::kBruteForce},
                                                        {"none", ReferencePolicy::kNone}};
 
+// Embree's robust parameter: a TOML boolean (which reaches here as 1 or 0), or on the command line 1, 0,
+// true or false.
+bool parse_embree_robust(std::string_view text) {
+  if (text == "1" || text == "true") return true;
+  if (text == "0" || text == "false") return false;
+  throw Error("embree: robust = '" + std::string(text) + "' is not one of true, false (or 1, 0)");
+}
+
+// Embree's parameters in their one spelling (BuilderRun::params): quality first, medium unless given,
+// then robust=1 in robust mode only. Every value is checked.
+ParamOverrides embree_params(const ParamOverrides& given) {
+  std::string quality = "medium";
+  bool robust = false;
+  for (const auto& [key, value] : given) {
+    if (key == "quality") {
+      parse_embree_quality(value);
+      quality = value;
+    } else if (key == "robust") {
+      robust = parse_embree_robust(value);
+    } else {
+      throw Error("embree: unknown parameter '" + key + "' (known: quality, robust)");
+    }
+  }
+  ParamOverrides out = {{"quality", quality}};
+  if (robust) out.emplace_back("robust", "1");
+  return out;
+}
+
 // An integer or a non-empty list of distinct integers, each at least 1.
 std::vector<int> read_threads(const Source& src, const toml::node& node) {
   const std::string key = "experiment.threads";
@@ -264,8 +292,8 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
   std::vector<SweepKey> keys;
   for (const auto& [key, node] : in_file_order(table)) {
     if (key == "name") continue;
-    if (embree && key != "quality")
-      src.fail(*node, "embree: unknown parameter '" + key + "' (known: quality)");
+    if (embree && key != "quality" && key != "robust")
+      src.fail(*node, "embree: unknown parameter '" + key + "' (known: quality, robust)");
     if (!embree && node->is_table() && is_source_param(*info, key)) {
       read_source_table(src, *node->as_table(), *info, key, key, keys);
       continue;
@@ -278,7 +306,7 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
               "Embree quality 'refit' applies only to animation experiments (an [animation] table); "
               "a static experiment takes low, medium, high");
         if (embree)
-          parse_embree_quality(text);
+          embree_params({{key, text}});
         else
           resolve_params(info->name, info->params, {{key, text}});
       } catch (const Error& e) {
@@ -287,8 +315,6 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
     }
     keys.push_back(std::move(sweep));
   }
-  // Embree's default build quality, so that every embree run names its quality.
-  if (embree && keys.empty()) keys.push_back({"quality", {{"medium", &table}}});
 
   // Count before expanding: a typo can make the product astronomically large.
   uint64_t count = 1;
@@ -308,6 +334,8 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
     BuilderRun run{name, {}};
     for (size_t k = 0; k < keys.size(); ++k)
       run.params.emplace_back(keys[k].key, keys[k].values[digit[k]].first);
+    // Every embree run names its quality (medium, Embree's default, unless given), and robust only when on.
+    if (embree) run.params = embree_params(run.params);
     runs.push_back(std::move(run));
     for (size_t k = keys.size(); k-- > 0;) {
       if (++digit[k] < keys[k].values.size()) break;
@@ -489,22 +517,20 @@ BuilderRun parse_builder_run(std::string_view text) {
       run.params = {{"quality", quality}};
     }
   if (!run.is_embree()) return run;
-  std::string quality = "medium";
-  for (const auto& [key, value] : run.params) {
-    if (key != "quality")
-      throw Error("builder '" + std::string(text) + "': embree: unknown parameter '" + key +
-                  "' (known: quality)");
-    quality = value;
+  try {
+    run.params = embree_params(run.params);
+  } catch (const Error& e) {
+    throw Error("builder '" + std::string(text) + "': " + e.what());
   }
-  parse_embree_quality(quality);  // names the known qualities
-  run.params = {{"quality", quality}};
   return run;
 }
 
 void resolve(BuilderRun& run) {
   if (run.is_embree()) {
-    for (const auto& [key, value] : run.params)
+    for (const auto& [key, value] : embree_params(run.params)) {
       if (key == "quality") run.quality = parse_embree_quality(value);
+      if (key == "robust") run.robust = parse_embree_robust(value);
+    }
     return;
   }
   run.info = &find_builder(run.name);
@@ -514,25 +540,32 @@ void resolve(BuilderRun& run) {
 }
 
 void require_resolved(const BuilderRun& run) {
-  const bool quality_named =
-      std::any_of(run.params.begin(), run.params.end(), [](const auto& kv) { return kv.first == "quality"; });
-  const bool resolved = run.is_embree()
-                            ? !quality_named || run.params_text() == "quality=" + to_string(run.quality)
-                            : run.info != nullptr;
+  // Embree's: what its parameters say is what resolve() set (the defaults need no resolving).
+  const bool resolved = run.is_embree() ? run.params_text() == "quality=" + to_string(run.quality) +
+                                                                   (run.robust ? ";robust=1" : "")
+                                        : run.info != nullptr;
   if (!resolved) throw Error("builder run '" + run.label() + "' was not resolved against the registry");
 }
 
 std::string BuilderRun::params_text() const {
   if (!is_embree()) return values.to_string();
-  for (const auto& [key, value] : params)
-    if (key == "quality") return "quality=" + value;
-  return "quality=medium";
+  std::string quality = "medium", robust;
+  for (const auto& [key, value] : params) {
+    if (key == "quality") quality = value;
+    if (key == "robust" && (value == "1" || value == "true")) robust = ";robust=1";
+  }
+  return "quality=" + quality + robust;
 }
 
 std::string BuilderRun::label() const {
   if (params.empty()) return name;
   std::string out = name + "[";
-  for (size_t i = 0; i < params.size(); ++i) out += (i ? "," : "") + params[i].first + "=" + params[i].second;
+  for (size_t i = 0; i < params.size(); ++i) {
+    const auto& [key, value] = params[i];
+    // Embree's robust mode reads as a word: "embree[quality=medium,robust]".
+    const bool flag = is_embree() && key == "robust" && value == "1";
+    out += (i ? "," : "") + key + (flag ? "" : "=" + value);
+  }
   return out + "]";
 }
 

@@ -47,8 +47,10 @@
 //
 //   [[builder]]
 //   name = "embree"
-//   quality = ["medium", "high"]      # embree takes only quality: low | medium (default) | high, and
-//                                     # refit in animation experiments
+//   quality = ["medium", "high"]      # embree takes quality: low | medium (default) | high, and refit
+//                                     # in animation experiments; and robust:
+//   robust = false                    # true: Embree's robust mode (RTC_SCENE_FLAG_ROBUST, which also
+//                                     # selects its watertight triangle test); [false, true]: both
 //
 //   [[ray_set]]                       # one table per ray set; at least one
 //   kind = "primary"                  # primary | shadow | diffuse | ao | random
@@ -120,30 +122,41 @@ struct BuilderRun {
   /// A registered builder (find_builder) or "embree" (Embree's own rtcCommitScene BVH).
   std::string name;
   /// key=value strings as the user set them, in file order (integers without a decimal point, floats in
-  /// shortest round-trip form, booleans as 1/0). For "embree" always exactly {"quality", low|medium|high},
-  /// "medium" (Embree's default) when the config does not say.
+  /// shortest round-trip form, booleans as 1/0). For "embree" always {"quality", low|medium|high},
+  /// "medium" (Embree's default) when the config does not say, then {"robust", "1"} in robust mode only:
+  /// Embree's default mode is written as it was before robust mode was a row, so that its cells keep
+  /// their names and builder_params text (the CI baseline's).
   ParamOverrides params;
   /// Our builder's registry entry and every one of its parameters' values, set by resolve(): once, where
   /// the run is read. Null and empty for Embree, and before resolve().
   const BuilderInfo* info = nullptr;
   ParamSet values{};
   /// Also set by resolve(): ours, the arity of its trees (traced only with layouts of that arity);
-  /// Embree's, its build quality.
+  /// Embree's, its build quality and whether its scene is robust (RTC_SCENE_FLAG_ROBUST).
   uint32_t arity = 2;
   EmbreeQuality quality = EmbreeQuality::kMedium;
+  bool robust = false;
 
   bool is_embree() const { return name == "embree"; }
-  /// The CSV's builder_params column: our resolved values (ParamSet::to_string), or "quality=Q".
+  /// Embree's scene flags for this run (embree_scene.h).
+  EmbreeSceneOptions embree_options() const {
+    EmbreeSceneOptions options;
+    options.robust = robust;
+    return options;
+  }
+  /// The CSV's builder_params column: our resolved values (ParamSet::to_string), or Embree's
+  /// "quality=Q", with ";robust=1" after it in robust mode.
   std::string params_text() const;
-  /// "binned_sah[bins=8,max_leaf=4]" or "embree[quality=medium]"; the name alone without parameters.
+  /// "binned_sah[bins=8,max_leaf=4]", "embree[quality=medium]" or "embree[quality=medium,robust]"; the
+  /// name alone without parameters.
   std::string label() const;
   /// The same run: the same name and parameters as set (the resolved values follow from them).
   bool operator==(const BuilderRun& o) const { return name == o.name && params == o.params; }
 };
 
 /// Resolves a builder run: ours against the registry (`info`, `values` by resolve_params, then the
-/// builder's own check, and `arity`), Embree's to its `quality`. An unknown builder, parameter or value
-/// is an Error naming it.
+/// builder's own check, and `arity`), Embree's to its `quality` and `robust`. An unknown builder,
+/// parameter or value is an Error naming it.
 void resolve(BuilderRun& run);
 
 /// An Error naming the run unless it went through resolve(): a config built in code rather than read
@@ -151,10 +164,12 @@ void resolve(BuilderRun& run);
 void require_resolved(const BuilderRun& run);
 
 /// A builder run as the command line writes it: "NAME" or "NAME:key=value,key=value", for one of our
-/// builders or Embree's own BVH ("embree:quality=high"; "embree_low", "embree_medium" and "embree_high"
-/// are short for the three qualities). Embree's run always has exactly its quality (medium by default),
-/// as a config's; malformed text or an unknown Embree parameter or quality is an Error naming it. Our
-/// builders' names and parameters are checked where they are resolved against the registry.
+/// builders or Embree's own BVH ("embree:quality=high", "embree:quality=medium,robust=1"; "embree_low",
+/// "embree_medium" and "embree_high" are short for the three qualities in Embree's default mode).
+/// Embree's run has its parameters as a config's (quality, medium by default, then robust=1 in robust
+/// mode; robust takes 1, 0, true or false); malformed text or an unknown Embree parameter or value is an
+/// Error naming it. Our builders' names and parameters are checked where they are resolved against the
+/// registry.
 BuilderRun parse_builder_run(std::string_view text);
 
 enum class RayKind { kPrimary, kShadow, kDiffuse, kAmbientOcclusion, kRandom };

@@ -292,11 +292,12 @@ class AnimationRunner {
         break;
       case Variant::kEmbreeRebuild:
         job.embree = std::make_shared<EmbreeBuild>(threads);
-        job.source = embree_build(b.label, job.embree, triangles, b.run->quality);
+        job.source = embree_build(b.label, job.embree, triangles, b.run->quality, b.run->embree_options());
         break;
       case Variant::kEmbreeRefit:
         job.embree = std::make_shared<EmbreeBuild>(threads);
-        job.embree->scene = std::make_unique<EmbreeScene>(job.embree->device, first, EmbreeQuality::kRefit);
+        job.embree->scene = std::make_unique<EmbreeScene>(job.embree->device, first, EmbreeQuality::kRefit,
+                                                          b.run->embree_options());
         job.source = embree_refit(b.label, job.embree, triangles);
         break;
     }

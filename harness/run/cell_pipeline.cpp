@@ -54,13 +54,14 @@ TreeSource our_build(std::string label, const BuilderInfo& builder, const ParamS
 }
 
 TreeSource embree_build(std::string label, std::shared_ptr<EmbreeBuild> embree,
-                        std::span<const Triangle> triangles, EmbreeQuality quality) {
+                        std::span<const Triangle> triangles, EmbreeQuality quality,
+                        EmbreeSceneOptions options) {
   TreeSource source;
   source.label = std::move(label);
   source.meter.device = &embree->device;
   source.release = [embree] { embree->scene.reset(); };
-  source.make = [embree, triangles, quality] {
-    embree->scene = std::make_unique<EmbreeScene>(embree->device, triangles, quality);
+  source.make = [embree, triangles, quality, options] {
+    embree->scene = std::make_unique<EmbreeScene>(embree->device, triangles, quality, options);
     return embree->scene->commit_ms();
   };
   return source;

@@ -66,9 +66,11 @@ struct EmbreeBuild {
 TreeSource our_build(std::string label, const BuilderInfo& builder, const ParamSet& params,
                      std::span<const Triangle> triangles, std::shared_ptr<Bvh> tree);
 
-/// Embree's rtcCommitScene on `triangles` at `quality`, into `embree->scene`; the bytes are the device's.
+/// Embree's rtcCommitScene on `triangles` at `quality` with the scene flags of `options`, into
+/// `embree->scene`; the bytes are the device's.
 TreeSource embree_build(std::string label, std::shared_ptr<EmbreeBuild> embree,
-                        std::span<const Triangle> triangles, EmbreeQuality quality);
+                        std::span<const Triangle> triangles, EmbreeQuality quality,
+                        EmbreeSceneOptions options = {});
 
 /// `tree`, built on another frame of an animation, refitted in place to `triangles` (core/refit.h); every
 /// refit recomputes every box, so repeating it on one frame times the same work.

@@ -193,7 +193,7 @@ class ExperimentRunner {
     job.builder = &b;
     if (b.is_embree()) {
       job.embree = std::make_shared<EmbreeBuild>(threads);
-      job.source = embree_build(b.label(), job.embree, scene.triangles, b.quality);
+      job.source = embree_build(b.label(), job.embree, scene.triangles, b.quality, b.embree_options());
     } else {
       job.tree = std::make_shared<Bvh>();
       job.source = our_build(b.label(), *b.info, b.values, scene.triangles, job.tree);

@@ -16,6 +16,7 @@
 #include "harness/embree/embree_bvh_builder.h"
 #include "scenes/load.h"
 #include "tests/support/config_error.h"
+#include "tests/support/error_of.h"
 #include "tests/support/prerequisites.h"
 
 namespace sahbench {
@@ -461,6 +462,88 @@ TEST(HarnessConfigEmbree, OnlyKnownQualities) {
                {"refit", "low, medium, high"});
   expect_error(kBase + "[[builder]]\nname = \"embree\"\n\nbins = 8\n", 13,
                {"embree", "unknown parameter 'bins'", "quality"});
+}
+
+// Embree's robust mode is a row of its own; its default mode keeps the builder_params text it always had,
+// so that the cells of older runs and of the CI baseline keep their names.
+TEST(HarnessConfigEmbree, RobustModeIsARowOfItsOwn) {
+  const auto config = parse_with(R"(
+[[builder]]
+name = "embree"
+robust = [false, true]
+
+[[builder]]
+name = "embree"
+robust = true
+quality = "high"
+)");
+  EXPECT_EQ(labels(config),
+            (std::vector<std::string>{"binned_sah", "embree[quality=medium]", "embree[quality=medium,robust]",
+                                      "embree[quality=high,robust]"}));
+  std::vector<std::string> texts;
+  for (const auto& run : config.builders)
+    if (run.is_embree()) texts.push_back(run.params_text());
+  EXPECT_EQ(texts,
+            (std::vector<std::string>{"quality=medium", "quality=medium;robust=1", "quality=high;robust=1"}))
+      << "quality first, whatever the file's order; robust only when on";
+  ASSERT_EQ(config.builders.size(), 4u);
+  EXPECT_FALSE(config.builders[1].robust);
+  EXPECT_FALSE(config.builders[1].embree_options().robust);
+  EXPECT_TRUE(config.builders[2].robust);
+  EXPECT_TRUE(config.builders[2].embree_options().robust);
+  EXPECT_EQ(config.builders[2].quality, EmbreeQuality::kMedium);
+  EXPECT_EQ(config.builders[3].quality, EmbreeQuality::kHigh);
+  EXPECT_TRUE(config.builders[3].robust);
+
+  // robust = false is Embree's default mode: the same run as a plain embree, with the same text.
+  const auto off = parse_with("[[builder]]\nname = \"embree\"\nrobust = false\n");
+  ASSERT_EQ(off.builders.size(), 2u);
+  EXPECT_EQ(off.builders[1].params_text(), "quality=medium");
+  EXPECT_EQ(off.builders[1].label(), "embree[quality=medium]");
+  EXPECT_FALSE(off.builders[1].robust);
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\nrobust = false\n\n[[builder]]\nname = \"embree\"\n",
+               14, {"embree[quality=medium]", "same parameter values", "line 10"});
+}
+
+TEST(HarnessConfigEmbree, RobustTakesOnlyTrueOrFalse) {
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\nrobust = \"yes\"\n", 12,
+               {"embree: robust = 'yes'", "true, false"});
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\nrobust = 2\n", 12, {"robust = '2'", "true, false"});
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\nrobust = [true,\n  \"maybe\"]\n", 13,
+               {"robust = 'maybe'"});
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\nrobust = []\n", 12, {"robust", "empty list"});
+  expect_error(kBase + "[[builder]]\nname = \"embree\"\nrobustness = true\n", 12,
+               {"unknown parameter 'robustness'", "quality, robust"});
+}
+
+TEST(HarnessConfigEmbree, CommandLineSpellsRobustModeAsTheConfig) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"embree:robust=1", "quality=medium;robust=1"},
+      {"embree:quality=high,robust=true", "quality=high;robust=1"},
+      {"embree:robust=1,quality=low", "quality=low;robust=1"},
+      {"embree:robust=0", "quality=medium"},
+      {"embree:robust=false,quality=medium", "quality=medium"},
+      {"embree_medium", "quality=medium"},
+  };
+  for (const auto& [text, params] : cases) {
+    BuilderRun run = parse_builder_run(text);
+    EXPECT_EQ(run.params_text(), params) << text;
+    resolve(run);
+    EXPECT_NO_THROW(require_resolved(run)) << text;
+    EXPECT_EQ(run.robust, params.ends_with("robust=1")) << text;
+  }
+  // Robust but not resolved: the runner would build Embree's default mode.
+  BuilderRun unresolved = parse_builder_run("embree:robust=1");
+  EXPECT_THROW(require_resolved(unresolved), Error);
+  EXPECT_EQ(unresolved.label(), "embree[quality=medium,robust]");
+
+  for (const auto& [text, part] : {std::pair<std::string, std::string>{"embree:robust=yes", "robust = 'yes'"},
+                                   {"embree:robust", "not of the form key=value"},
+                                   {"embree_high:robust=1", "takes no parameters"},
+                                   {"embree:fast=1", "unknown parameter 'fast' (known: quality, robust)"}}) {
+    const std::string message = test::error_of([&] { parse_builder_run(text); });
+    EXPECT_NE(message.find(part), std::string::npos) << text << ": " << message;
+  }
 }
 
 TEST(HarnessConfigErrors, TomlSyntax) {

@@ -49,6 +49,9 @@ rows = [
     ["bunny", "embree", "quality=medium", "embree_1", 1, "shadow", 10.0 * noise, 100.0 * noise],
     ["bunny", "embree", "quality=medium", "embree_8", 1, "shadow", 30.0 * noise, 100.0 * noise],
     ["bunny", "embree", "quality=medium", "embree_1", 1, "", "", 100.0 * noise],
+    # Embree's robust mode: not the anchor, which stays its default mode (a ratio to it would read 1.6).
+    ["bunny", "embree", "quality=medium;robust=1", "embree_1", 1, "shadow", 5.0 * noise, 200.0 * noise],
+    ["bunny", "embree", "quality=medium;robust=1", "embree_1", 1, "", "", 200.0 * noise],
     ["bunny", "wide_collapse", "arity=8", "bvh8", 1, "shadow", 10.0 * noise * scale, 80.0 * noise],
     ["bunny", "wide_collapse", "arity=8", "", 1, "", "", 100.0 * noise / scale],
 ]

@@ -132,6 +132,8 @@ def main():
     check(plots.short_series("refit(wide_binned_sah)", "arity=8;bins=32;max_leaf=8") == "refit(wide_binned_sah) arity=8",
           "short_series keeps the arity only")
     check(plots.short_series("embree", "quality=refit") == "embree quality=refit", "short_series keeps the quality")
+    check(plots.short_series("embree", "quality=medium;robust=1") == "embree quality=medium,robust=1",
+          "short_series keeps Embree's robust mode")
 
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)

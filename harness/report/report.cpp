@@ -66,34 +66,41 @@ std::vector<std::pair<std::string, std::string>> split_params(const std::string&
 }
 
 /// Short labels for a paper: per builder, only the parameters whose values differ between that
-/// builder's rows of the table; the shared ones are returned (per builder) for the caption.
+/// builder's rows of the table (a parameter some rows lack, as Embree's robust=1, differs); the shared
+/// ones are returned (per builder) for the caption.
 std::map<std::string, std::string> short_labels(const std::vector<const CsvRow*>& rows,
                                                 std::vector<std::string>& shared) {
   std::map<std::string, std::map<std::string, std::vector<std::string>>>
       values;  // builder -> key -> values seen
   std::map<std::string, std::vector<std::string>> key_order;
+  std::map<std::string, std::map<std::string, std::size_t>> rows_with;  // builder -> key -> rows with it
+  std::map<std::string, std::size_t> builder_rows;
   for (const CsvRow* r : rows) {
     const std::string builder = field(*r, "builder");
+    ++builder_rows[builder];
     for (const auto& [k, v] : split_params(field(*r, "builder_params"))) {
+      ++rows_with[builder][k];
       auto& seen = values[builder][k];
       if (std::find(seen.begin(), seen.end(), v) == seen.end()) seen.push_back(v);
       auto& order = key_order[builder];
       if (std::find(order.begin(), order.end(), k) == order.end()) order.push_back(k);
     }
   }
+  auto common_to_all = [&](const std::string& builder, const std::string& k) {
+    return values[builder][k].size() == 1 && rows_with[builder][k] == builder_rows[builder];
+  };
   std::map<std::string, std::string> labels;  // full label -> short label
   for (const CsvRow* r : rows) {
     const std::string builder = field(*r, "builder");
     std::string varying;
     for (const auto& [k, v] : split_params(field(*r, "builder_params")))
-      if (values[builder][k].size() > 1) varying += (varying.empty() ? "" : ";") + k + "=" + v;
+      if (!common_to_all(builder, k)) varying += (varying.empty() ? "" : ";") + k + "=" + v;
     labels[row_label(*r)] = builder + (varying.empty() ? "" : " [" + varying + "]");
   }
   for (const auto& [builder, order] : key_order) {
     std::string common;
     for (const auto& k : order)
-      if (values[builder][k].size() == 1)
-        common += (common.empty() ? "" : ", ") + k + "=" + values[builder][k][0];
+      if (common_to_all(builder, k)) common += (common.empty() ? "" : ", ") + k + "=" + values[builder][k][0];
     if (!common.empty()) shared.push_back(builder + " " + common);
   }
   return labels;
@@ -135,17 +142,47 @@ std::optional<RatioInterval> timing_ratio(const Timings& timings, const CsvRow& 
   }
 }
 
+// The instruction set each row's kernels ran with (the CSV's isa column; isa=auto resolved by
+// traversal/kernel_variant.h's preferred_kernel_isa): "avx2" where every row ran one, else each ISA with
+// its layouts, "scalar for bvh2, bvh2_packed; avx2 for bvh8; embree:avx2 for embree_1, embree_8".
+std::string kernel_isas(const std::vector<const CsvRow*>& group) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> by_isa;  // in order of first appearance
+  for (const CsvRow* row : group) {
+    const std::string isa = field(*row, "isa"), layout = field(*row, "layout");
+    if (isa.empty()) continue;
+    auto it = std::find_if(by_isa.begin(), by_isa.end(), [&](const auto& e) { return e.first == isa; });
+    if (it == by_isa.end()) it = by_isa.insert(by_isa.end(), {isa, {}});
+    if (std::find(it->second.begin(), it->second.end(), layout) == it->second.end())
+      it->second.push_back(layout);
+  }
+  if (by_isa.size() == 1) return by_isa.front().first;
+  std::string out;
+  for (const auto& [isa, layouts] : by_isa) {
+    out += (out.empty() ? "" : "; ") + isa + " for ";
+    for (std::size_t i = 0; i < layouts.size(); ++i) out += (i ? ", " : "") + layouts[i];
+  }
+  return out;
+}
+
 ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& group, const Timings& timings,
                        ReportFormat format) {
   std::vector<std::string> ray_sets;
   for (const CsvRow* r : group)
     if (std::find(ray_sets.begin(), ray_sets.end(), field(*r, "ray_set")) == ray_sets.end())
       ray_sets.push_back(field(*r, "ray_set"));
-  // The anchor: Embree medium, one ray at a time, per ray set.
-  std::map<std::string, const CsvRow*> anchor;
-  for (const CsvRow* r : group)
+  // The anchors, per ray set: Embree medium, one ray at a time, in its default mode; and in its robust
+  // mode where the run has it, for the rows of ours whose kernels are exact (like for like: both
+  // watertight, neither trading exactness for speed).
+  std::map<std::string, const CsvRow*> anchor, robust_anchor;
+  for (const CsvRow* r : group) {
     if (is_anchor(*r)) anchor[field(*r, "ray_set")] = r;
-  const CsvRow* any_anchor = anchor.empty() ? nullptr : anchor.begin()->second;
+    if (is_robust_anchor(*r)) robust_anchor[field(*r, "ray_set")] = r;
+  }
+  auto compared_robust = [&](const CsvRow& r) {
+    return !robust_anchor.empty() && runs_exact_kernels(field(r, "builder"), field(r, "layout"));
+  };
+  const bool any_marked =
+      std::any_of(group.begin(), group.end(), [&](const CsvRow* r) { return compared_robust(*r); });
 
   ReportTable table;
   const CsvRow& first = *group.front();
@@ -168,20 +205,22 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   // below lists them).
   std::string isa = field(first, "build_isa");
   if (isa.empty()) isa = field(first, "isa");
-  std::set<std::string> kernel_isas;
-  for (const auto* row : group)
-    if (const std::string k = field(*row, "isa"); !k.empty()) kernel_isas.insert(k);
-  std::string kernels;
-  for (const auto& k : kernel_isas) kernels += (kernels.empty() ? "" : ", ") + k;
+  const std::string kernels = kernel_isas(group);
+  const std::string anchors =
+      any_marked
+          ? "In parentheses: ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same run, "
+            "like for like: rows marked \u2020 (our exact kernels: watertight triangle test, robust box "
+            "test) to Embree's robust mode (RTC_SCENE_FLAG_ROBUST, with its watertight triangle test), "
+            "the others (faster variants, and Embree's own rows) to its default mode"
+          : "In parentheses: ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same run";
   table.caption = fmt::format(
-      "{}; {}{}, commit {}; medians of {} builds and {} traces; kernels: {}. In parentheses: ratio to Embree "
-      "(quality=medium, rtcIntersect1/rtcOccluded1) in the same run; for build + layout and rays/s the "
-      "geometric mean of the ratios of rounds paired with Embree's, with its 95% interval, and an up (down) "
-      "arrow where the interval lies wholly on the better (worse) side of 1. Best of each column in bold: "
-      "least build time, memory and SAH cost, most rays/s.",
+      "{}; {}{}, commit {}; medians of {} builds and {} traces; kernels: {}. {}; for build + layout and "
+      "rays/s the geometric mean of the ratios of rounds paired with Embree's, with its 95% interval, and "
+      "an up (down) arrow where the interval lies wholly on the better (worse) side of 1. Best of each "
+      "column in bold: least build time, memory and SAH cost, most rays/s.",
       table.title, field(first, "cpu", "unknown CPU"), isa.empty() ? "" : " (built for " + isa + ")",
       field(first, "git_commit", "unknown"), field(first, "build_reps", "?"), field(first, "trace_reps", "?"),
-      kernels.empty() ? "unknown" : kernels);
+      kernels.empty() ? "unknown" : kernels, anchors);
   // The Markdown rows name every parameter; the LaTeX rows only the varying ones, so name the rest here.
   if (format == ReportFormat::kLatex && !shared.empty()) {
     table.caption += " Parameters common to a builder's rows:";
@@ -279,6 +318,9 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
       if (row_label(*r) == label && field(*r, "layout") == layout) by_set[field(*r, "ray_set")] = r;
     const CsvRow& any = *by_set.begin()->second;
     ReportRow row{label, short_label.at(label), layout, {}};
+    row.marked = compared_robust(any);
+    const auto& anchors_of_row = row.marked ? robust_anchor : anchor;
+    const CsvRow* any_anchor = anchors_of_row.empty() ? nullptr : anchors_of_row.begin()->second;
     row.cells.push_back(cell(csv_number(any, "build_ms_median"), std::nullopt));
     // Build plus layout compile against Embree's build, whose rtcCommitScene does both: round r's sum
     // (build_layout_ms_samples) against Embree's build r.
@@ -291,15 +333,15 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     if (row.cells.back().value) row.cells.back().note = model_note(any);
     for (const auto& rs : ray_sets) {
       const auto it = by_set.find(rs);
-      const auto a = anchor.find(rs);
+      const auto a = anchors_of_row.find(rs);
       if (it == by_set.end()) {
         row.cells.push_back(ReportCell{});
         continue;
       }
       const auto mrays = csv_number(*it->second, "trace_mrays_median");
-      row.cells.push_back(
-          timing_cell(mrays, timing_ratio(timings, *it->second, a == anchor.end() ? nullptr : a->second,
-                                          mrays, "trace_mrays_median", &RowTimings::trace_mrays)));
+      row.cells.push_back(timing_cell(
+          mrays, timing_ratio(timings, *it->second, a == anchors_of_row.end() ? nullptr : a->second, mrays,
+                              "trace_mrays_median", &RowTimings::trace_mrays)));
     }
     table.rows.push_back(std::move(row));
   }
@@ -441,12 +483,14 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   for (const CsvRow* r : rows)
     if (std::find(groups.begin(), groups.end(), group_of(*r)) == groups.end()) groups.push_back(group_of(*r));
   const auto others = cells_of_other_runs(all, run, fingerprint);
+  bool any_marked = false;
   for (const auto& key : groups) {
     std::vector<const CsvRow*> group;
     for (const CsvRow* r : rows)
       if (group_of(*r) == key) group.push_back(r);
     ReportTable table = make_table(key, group, timings, options.format);
     table.notes = missing_cell_notes(key, group, others);
+    for (const ReportRow& row : table.rows) any_marked |= row.marked;
     if (latex)
       render_latex(table, out);
     else
@@ -483,6 +527,15 @@ void print_report(const ReportOptions& options, std::ostream& out) {
                "plus the\n"
                "layout compile, against Embree's rtcCommitScene, which does both. Memory and SAH ratios are "
                "exact.\n");
+  if (!latex && any_marked)
+    fmt::print(out,
+               "Like for like: where the run has Embree's robust mode (embree [quality=medium;robust=1], "
+               "which\n"
+               "also selects its watertight triangle test), the rows marked \u2020 (our exact kernels: "
+               "watertight triangle\n"
+               "test and robust box test, the layouts' defaults) have their ratios to its embree_1 "
+               "instead; faster\n"
+               "variants (tri=mt, mt0, mtn or box=fast, fma) and Embree's own rows keep its default mode.\n");
 }
 
 void run_report_command(const ReportOptions& options, std::ostream& out) {

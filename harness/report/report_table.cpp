@@ -93,7 +93,7 @@ void render_markdown(const ReportTable& table, std::ostream& out) {
   for (std::size_t i = 0; i < table.columns.size(); ++i) fmt::print(out, "---:|");
   fmt::print(out, "\n");
   for (const ReportRow& row : table.rows) {
-    fmt::print(out, "| {} | {} |", row.builder, row.layout);
+    fmt::print(out, "| {} | {}{} |", row.builder, row.layout, row.marked ? " \u2020" : "");  // †
     for (std::size_t c = 0; c < table.columns.size(); ++c)
       fmt::print(out, " {} |", c < row.cells.size() ? markdown_cell(row.cells[c], table.columns[c]) : "-");
     fmt::print(out, "\n");
@@ -113,7 +113,8 @@ void render_latex(const ReportTable& table, std::ostream& out) {
   for (const auto& column : table.columns) fmt::print(out, " & {}", column.latex_header);
   fmt::print(out, " \\\\\n    \\midrule\n");
   for (const ReportRow& row : table.rows) {
-    fmt::print(out, "    {} & {}", latex_escape(row.builder_short), latex_escape(row.layout));
+    fmt::print(out, "    {} & {}{}", latex_escape(row.builder_short), latex_escape(row.layout),
+               row.marked ? "$^\\dagger$" : "");
     for (std::size_t c = 0; c < table.columns.size(); ++c)
       fmt::print(out, " & {}", c < row.cells.size() ? latex_cell(row.cells[c], table.columns[c]) : "--");
     fmt::print(out, " \\\\\n");
@@ -127,7 +128,14 @@ void render_latex(const ReportTable& table, std::ostream& out) {
 std::string latex_escape(std::string_view text) {
   std::string out;
   out.reserve(text.size());
-  for (const char c : text) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    // The dagger that marks rows (ReportRow::marked), in UTF-8, as LaTeX's own command.
+    if (text.substr(i).starts_with("\u2020")) {
+      out += "\\textdagger{}";
+      i += std::string_view("\u2020").size() - 1;
+      continue;
+    }
+    const char c = text[i];
     switch (c) {
       case '\\':
         out += "\\textbackslash{}";

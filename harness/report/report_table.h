@@ -39,6 +39,9 @@ struct ReportRow {
   std::string builder_short;  ///< only the parameters that differ between rows of the builder
   std::string layout;
   std::vector<ReportCell> cells;  ///< one per column
+  /// Its ratios are to the table's other anchor, which the caption names: printed with a dagger after
+  /// the layout ("bvh8 †", LaTeX "bvh8$^\dagger$").
+  bool marked = false;
 };
 
 struct ReportTable {
@@ -66,7 +69,8 @@ void render_markdown(const ReportTable& table, std::ostream& out);
 /// the LaTeX kernel since 2020).
 void render_latex(const ReportTable& table, std::ostream& out);
 
-/// `text` with LaTeX's special characters escaped: \ & % $ # _ { } ~ ^ (and < > | outside math mode).
+/// `text` with LaTeX's special characters escaped: \ & % $ # _ { } ~ ^ (and < > | outside math mode),
+/// and the dagger (U+2020) as \textdagger{}.
 std::string latex_escape(std::string_view text);
 
 }  // namespace sahbench

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/text_file.h"
 #include "harness/report/ratio_stats.h"
+#include "traversal/layout.h"
 
 namespace sahbench {
 namespace {
@@ -72,12 +73,34 @@ bool is_anchor(std::string_view builder, std::string_view params, std::string_vi
   return builder == kAnchorBuilder && params == kAnchorParams && layout == kAnchorLayout;
 }
 
+namespace {
+
+std::string_view get(const CsvRow& row, const char* column) {
+  const auto it = row.find(column);
+  return it == row.end() ? std::string_view() : std::string_view(it->second);
+}
+
+}  // namespace
+
 bool is_anchor(const CsvRow& row) {
-  auto get = [&](const char* column) {
-    const auto it = row.find(column);
-    return it == row.end() ? std::string_view() : std::string_view(it->second);
-  };
-  return is_anchor(get("builder"), get("builder_params"), get("layout"));
+  return is_anchor(get(row, "builder"), get(row, "builder_params"), get(row, "layout"));
+}
+
+bool is_robust_anchor(const CsvRow& row) {
+  return get(row, "builder") == kAnchorBuilder && get(row, "builder_params") == kRobustAnchorParams &&
+         get(row, "layout") == kAnchorLayout;
+}
+
+bool runs_exact_kernels(std::string_view builder, std::string_view layout) {
+  if (builder == kAnchorBuilder || layout.empty()) return false;
+  LayoutSpec spec;
+  try {
+    spec = parse_layout_spec(layout);
+  } catch (const Error&) {
+    return false;
+  }
+  const KernelVariant exact;
+  return spec.variant.triangle == exact.triangle && spec.variant.box == exact.box;
 }
 
 std::string ResultFile::where(std::size_t i) const {

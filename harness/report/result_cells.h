@@ -26,6 +26,21 @@ bool is_anchor(std::string_view builder, std::string_view params, std::string_vi
 /// The same for a CSV row; absent fields count as empty.
 bool is_anchor(const CsvRow& row);
 
+/// The like-for-like anchor of our exact kernels, where a run has it: Embree's robust mode
+/// (RTC_SCENE_FLAG_ROBUST, which also selects its watertight triangle test) at medium quality, one ray
+/// at a time, in the same run, scene, threads, ray set and frame as the row.
+inline constexpr std::string_view kRobustAnchorParams = "quality=medium;robust=1";
+
+/// Whether a CSV row is the robust anchor (builder embree, kRobustAnchorParams, kAnchorLayout).
+bool is_robust_anchor(const CsvRow& row);
+
+/// Whether a row of ours runs exact kernels, to be compared with Embree's robust mode rather than its
+/// default: its layout's triangle test is watertight and its box test robust (the defaults,
+/// traversal/kernel_variant.h), whatever its any-hit order or ISA. False for Embree's rows, for any
+/// faster variant (tri=mt, mt0, mtn or box=fast, fma), and for a layout this build does not know (an
+/// older CSV's), which keep Embree's default mode as their anchor.
+bool runs_exact_kernels(std::string_view builder, std::string_view layout);
+
 /// One result CSV: read_csv's rows, and the line each starts on (the header is line 1; a quoted field
 /// may span lines, and blank lines are skipped, so the line is not the row's index + 2).
 struct ResultFile {

@@ -143,6 +143,127 @@ TEST(Report, MarkdownMarksTheBestOfEachColumnWithRatiosAndCaption) {
       << md;
 }
 
+// Embree in both modes, and wide_collapse through exact and fast kernels: like for like, the exact ones
+// (the layouts' default tests, whatever their any-hit order or ISA) against Embree robust, every faster
+// variant against Embree's default mode. `with_robust` false: the same run without Embree robust.
+std::filesystem::path write_like_for_like(const std::string& name, bool with_robust) {
+  const auto path = temp_csv(name);
+  CsvWriter w(path, columns_with_samples());
+  for (const std::string rs : {"primary", "shadow"}) {
+    const double k = rs == "primary" ? 2.0 : 1.0;  // every row twice as fast on primary rays
+    w.append(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 4.0 * (1 << 20), "", 4.0 * k));
+    if (with_robust)
+      w.append(
+          make_row("embree", "quality=medium;robust=1", "embree_1", rs, 20.0, 8.0 * (1 << 20), "", 2.0 * k));
+    w.append(make_row("embree", "quality=medium", "embree_8", rs, 10.0, 4.0 * (1 << 20), "", 6.0 * k));
+    for (const std::string layout :
+         {"bvh8", "bvh8:anyhit=stored,isa=avx2", "bvh8:tri=mtn,box=fma", "bvh8:box=fast", "bvh8:tri=mt0"})
+      w.append(make_row("wide_collapse", "c_trav=1", layout, rs, 5.0, 2.0 * (1 << 20), "30.0", 3.0 * k));
+  }
+  return path;
+}
+
+TEST(Report, ExactKernelsAreComparedWithEmbreeRobustAndFastOnesWithItsDefault) {
+  std::ostringstream out;
+  print_report({{write_like_for_like("like_for_like.csv", true)}, ""}, out);
+  const std::string md = out.str();
+  // Exact kernels against Embree robust: rays/s 3/2 = 1.5 on both sets, build + layout 6 / 20, memory 2 / 8.
+  for (const std::string layout : {"bvh8", "bvh8:anyhit=stored,isa=avx2"})
+    EXPECT_NE(md.find("| wide_collapse [c_trav=1] | " + layout +
+                      " \u2020 | **5.0** | **6.0** (0.30 [0.30, 0.30] \u25B2) | **2.0** (0.25x) | **30.00** "
+                      "| 6.00 (1.50 [1.50, "
+                      "1.50] \u25B2) | 3.00 (1.50 [1.50, 1.50] \u25B2) |"),
+              std::string::npos)
+        << layout << "\n"
+        << md;
+  // Faster variants against Embree's default mode: 3/4, build + layout 6 / 10, memory 2 / 4.
+  for (const std::string layout : {"bvh8:tri=mtn,box=fma", "bvh8:box=fast", "bvh8:tri=mt0"})
+    EXPECT_NE(md.find("| wide_collapse [c_trav=1] | " + layout +
+                      " | **5.0** | **6.0** (0.60 [0.60, 0.60] \u25B2) | **2.0** (0.50x) | **30.00** | 6.00 "
+                      "(0.75 [0.75, 0.75] "
+                      "\u25BC) | 3.00 (0.75 [0.75, 0.75] \u25BC) |"),
+              std::string::npos)
+        << layout << "\n"
+        << md;
+  // Embree's own rows, robust mode included, against its default mode: what robustness costs it.
+  EXPECT_NE(
+      md.find("| embree [quality=medium;robust=1] | embree_1 | 20.0 | 20.0 (2.00 [2.00, 2.00] \u25BC) | "
+              "8.0 (2.00x) | - | 4.00 (0.50 [0.50, 0.50] \u25BC) |"),
+      std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| embree [quality=medium] | embree_8 | 10.0 | 10.0 (1.00 [1.00, 1.00]) |"),
+            std::string::npos)
+      << md;
+  EXPECT_EQ(md.find("embree_1 \u2020"), std::string::npos) << md;
+  EXPECT_NE(
+      md.find("like for like: rows marked \u2020 (our exact kernels: watertight triangle test, robust box "
+              "test) to Embree's robust mode (RTC_SCENE_FLAG_ROBUST"),
+      std::string::npos)
+      << md;
+  EXPECT_NE(md.find("Like for like: where the run has Embree's robust mode"), std::string::npos) << md;
+
+  std::ostringstream tex;
+  print_report({{write_like_for_like("like_for_like_tex.csv", true)}, "", ReportFormat::kLatex}, tex);
+  EXPECT_NE(tex.str().find("wide\\_collapse & bvh8$^\\dagger$ & "), std::string::npos) << tex.str();
+  // Only the robust row has robust=1: it is no parameter common to Embree's rows.
+  EXPECT_NE(tex.str().find("    embree [robust=1] & embree\\_1 & 20.0"), std::string::npos) << tex.str();
+  EXPECT_NE(tex.str().find("    embree & embree\\_1 & 10.0"), std::string::npos) << tex.str();
+  EXPECT_NE(tex.str().find("common to a builder's rows: embree quality=medium; wide"), std::string::npos)
+      << tex.str();
+  EXPECT_NE(tex.str().find("wide\\_collapse & bvh8:tri=mtn,box=fma & "), std::string::npos) << tex.str();
+  EXPECT_NE(tex.str().find("rows marked \\textdagger{} (our exact kernels"), std::string::npos) << tex.str();
+  EXPECT_EQ(tex.str().find("\u2020"), std::string::npos) << "LaTeX gets \\textdagger\n" << tex.str();
+}
+
+TEST(Report, WithoutEmbreeRobustEveryRowKeepsEmbreesDefaultMode) {
+  std::ostringstream out;
+  print_report({{write_like_for_like("default_only.csv", false)}, ""}, out);
+  const std::string md = out.str();
+  for (const std::string layout : {"bvh8", "bvh8:anyhit=stored,isa=avx2", "bvh8:tri=mtn,box=fma"})
+    EXPECT_NE(md.find("| wide_collapse [c_trav=1] | " + layout +
+                      " | **5.0** | **6.0** (0.60 [0.60, 0.60] \u25B2) | **2.0** (0.50x) | **30.00** | 6.00 "
+                      "(0.75 [0.75, 0.75] "
+                      "\u25BC) |"),
+              std::string::npos)
+        << layout << "\n"
+        << md;
+  EXPECT_EQ(md.find("\u2020"), std::string::npos) << md;
+  EXPECT_EQ(md.find("robust"), std::string::npos) << md;
+  EXPECT_NE(
+      md.find("In parentheses: ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same "
+              "run; for build + layout"),
+      std::string::npos)
+      << md;
+}
+
+TEST(Report, TheCaptionNamesTheIsaOfEachLayoutWhereTheyDiffer) {
+  const auto path = temp_csv("isas.csv");
+  {
+    CsvWriter w(path, columns_with_samples());
+    auto on = [](CsvRow row, const std::string& isa) {
+      row["isa"] = isa;
+      return row;
+    };
+    w.append(on(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0),
+                "embree:avx2"));
+    w.append(on(make_row("embree", "quality=medium", "embree_8", "primary", 10.0, 1 << 20, "", 8.0),
+                "embree:avx2"));
+    w.append(on(make_row("binned_sah", "bins=8", "bvh2", "primary", 5.0, 1 << 20, "40", 2.0), "scalar"));
+    w.append(
+        on(make_row("binned_sah", "bins=8", "bvh2_packed", "primary", 5.0, 1 << 20, "40", 2.0), "scalar"));
+    w.append(on(make_row("wide_collapse", "", "bvh8", "primary", 5.0, 1 << 20, "30", 9.0), "avx2"));
+    w.append(
+        on(make_row("wide_collapse", "", "bvh8:isa=avx512", "primary", 5.0, 1 << 20, "30", 9.0), "avx512"));
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  EXPECT_NE(
+      out.str().find("kernels: embree:avx2 for embree_1, embree_8; scalar for bvh2, bvh2_packed; avx2 for "
+                     "bvh8; avx512 for bvh8:isa=avx512."),
+      std::string::npos)
+      << out.str();
+}
+
 TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {
   // Two rows costed with c_trav = 1 and one with c_trav = 2, whose larger constants make its cost
   // incomparable (here it is even the lowest): it gets its constants as a note and no bold.

@@ -338,6 +338,49 @@ TEST(HarnessRun, ReportPrintsATablePerSceneAndThreadCount) {
   EXPECT_NE(md.find("(1.00x)"), std::string::npos) << md;  // the anchor against itself
 }
 
+// Embree in its default and its robust mode: a row each per layout, cell names that --only tells apart,
+// robust answers that agree with the watertight reference on a closed mesh, and a report that compares
+// our exact layouts with the robust mode.
+TEST(HarnessRun, EmbreeRobustModeIsARowOfItsOwnAndTheAnchorOfOurExactLayouts) {
+  const auto config = write_config("run_robust", "[[builder]]\nname = \"embree\"\nrobust = [false, true]\n");
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+  const auto csv = temp_dir() / "run_robust.csv";
+  std::map<std::string, std::size_t> embree_rows;  // builder_params|layout -> rows
+  for (const auto& row : read_csv(csv)) {
+    if (row.at("builder") != "embree") continue;
+    ++embree_rows[row.at("builder_params") + "|" + row.at("layout")];
+    EXPECT_EQ(row.at("isa").rfind("embree:", 0), 0u) << row.at("isa");
+    // On the closed sphere a ray through an edge hits a triangle of either side at the same t, which is
+    // no mismatch; on the soup's separate triangles a test may take an edge that another leaves.
+    if (row.at("builder_params") == "quality=medium;robust=1" && row.at("scene").starts_with("proc:sphere")) {
+      EXPECT_EQ(row.at("mismatches"), "0")
+          << "robust mode is watertight: " << row.at("layout") << " " << row.at("ray_set");
+    }
+  }
+  // 2 scenes x 2 thread counts x 2 ray sets per mode and Embree layout.
+  EXPECT_EQ(embree_rows["quality=medium|embree_1"], 8u);
+  EXPECT_EQ(embree_rows["quality=medium;robust=1|embree_1"], 8u);
+  for (const auto& [key, rows] : embree_rows)
+    EXPECT_TRUE(key.starts_with("quality=medium|") || key.starts_with("quality=medium;robust=1|")) << key;
+
+  std::ostringstream out;
+  print_report({{csv}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("| embree [quality=medium;robust=1] | embree_1 |"), std::string::npos) << md;
+  EXPECT_NE(md.find(" | bvh2 \u2020 | "), std::string::npos) << md;
+  EXPECT_NE(md.find(" | bvh2_packed \u2020 | "), std::string::npos) << md;
+
+  // The robust cells alone, by their name.
+  const auto only = write_config("run_robust_only", "[[builder]]\nname = \"embree\"\nrobust = true\n");
+  std::ostringstream only_log;
+  ASSERT_EQ(run_experiment({only, false, "|quality=medium;robust=1|embree_1|", std::nullopt}, only_log), 0)
+      << only_log.str();
+  const auto rows = read_csv(temp_dir() / "run_robust_only.csv");
+  EXPECT_EQ(rows.size(), 8u);
+  for (const auto& row : rows) EXPECT_EQ(row.at("builder_params"), "quality=medium;robust=1");
+}
+
 TEST(HarnessTrace, OutputMatchesBruteForceLineByLine) {
   const auto dir = temp_dir();
   const auto rays_path = dir / "rays.txt", out_path = dir / "hits.csv";
@@ -476,9 +519,11 @@ TEST(HarnessTrace, AnyHitMatchesBruteForceAndReportsOnlyTheFlag) {
   }
 }
 
-// Every Embree layout this CPU runs, both queries, against brute force; one it cannot run is an error
-// naming the layout. Embree's default triangle test is not watertight, so a few disagreements on rays
-// through edges are rounding (test_embree.cpp's kDefaultModeMismatchLimit); more would be a wrong answer.
+// Every Embree layout this CPU runs, both queries and both modes, against brute force; one it cannot run
+// is an error naming the layout. On a soup of separate triangles a ray through an edge hits whichever
+// triangle's test takes the edge, and Embree's tests (Moeller-Trumbore, or Pluecker in robust mode) and
+// our watertight one part on a few such rays (test_embree.cpp's kDefaultModeMismatchLimit); more would
+// be a wrong answer.
 TEST(HarnessTrace, EmbreeLayoutsMatchBruteForceOrAreRefusedByName) {
   const auto dir = temp_dir();
   const std::string scene_spec = "proc:soup:tris=600";
@@ -487,33 +532,37 @@ TEST(HarnessTrace, EmbreeLayoutsMatchBruteForceOrAreRefusedByName) {
   const auto rays = write_ray_file(rays_path, scene.triangles, 1500);
   const EmbreeDevice device(1);
   std::size_t traced = 0;
-  for (const EmbreeLayout& layout : kEmbreeLayouts) {
-    for (const TraceQuery query : {TraceQuery::kClosest, TraceQuery::kAny}) {
-      SCOPED_TRACE(std::string(layout.name) + " " + std::string(to_string(query)));
-      const TraceCommandOptions options{scene_spec, "embree:quality=high", layout.name, rays_path, out_path,
-                                        query};
-      std::ostringstream log;
-      if (const auto why = embree_layout_unsupported(device, layout)) {
-        const std::string what = test::error_of([&] { run_trace_command(options, log); });
-        EXPECT_NE(what.find(std::string("--layout '") + layout.name + "'"), std::string::npos) << what;
-        EXPECT_NE(what.find("packets"), std::string::npos) << what;
-        continue;
+  for (const bool robust : {false, true}) {
+    for (const EmbreeLayout& layout : kEmbreeLayouts) {
+      for (const TraceQuery query : {TraceQuery::kClosest, TraceQuery::kAny}) {
+        SCOPED_TRACE(std::string(layout.name) + " " + std::string(to_string(query)) +
+                     (robust ? " robust" : ""));
+        const std::string builder = robust ? "embree:quality=high,robust=1" : "embree:quality=high";
+        const TraceCommandOptions options{scene_spec, builder, layout.name, rays_path, out_path, query};
+        std::ostringstream log;
+        if (const auto why = embree_layout_unsupported(device, layout)) {
+          const std::string what = test::error_of([&] { run_trace_command(options, log); });
+          EXPECT_NE(what.find(std::string("--layout '") + layout.name + "'"), std::string::npos) << what;
+          EXPECT_NE(what.find("packets"), std::string::npos) << what;
+          continue;
+        }
+        run_trace_command(options, log);
+        ++traced;
+        const std::string named = std::string("# builder=embree:quality=high") + (robust ? ";robust=1" : "") +
+                                  " layout=" + std::string(layout.name) +
+                                  " isa=embree:" + embree_isa(device) +
+                                  " query=" + std::string(to_string(query));
+        EXPECT_EQ(first_line(out_path), named);
+        EXPECT_NE(log.str().find(named.substr(2)), std::string::npos) << log.str();
+        const TraceCheck c = check_trace_output(out_path, rays, scene.triangles, query);
+        EXPECT_LE(static_cast<double>(c.mismatches), 0.001 * static_cast<double>(rays.size()))
+            << c.first_mismatch;
+        EXPECT_GT(c.hits, rays.size() / 10);
+        EXPECT_GT(c.misses, rays.size() / 10);
       }
-      run_trace_command(options, log);
-      ++traced;
-      const std::string named = "# builder=embree:quality=high layout=" + std::string(layout.name) +
-                                " isa=embree:" + embree_isa(device) +
-                                " query=" + std::string(to_string(query));
-      EXPECT_EQ(first_line(out_path), named);
-      EXPECT_NE(log.str().find(named.substr(2)), std::string::npos) << log.str();
-      const TraceCheck c = check_trace_output(out_path, rays, scene.triangles, query);
-      EXPECT_LE(static_cast<double>(c.mismatches), 0.001 * static_cast<double>(rays.size()))
-          << c.first_mismatch;
-      EXPECT_GT(c.hits, rays.size() / 10);
-      EXPECT_GT(c.misses, rays.size() / 10);
     }
   }
-  EXPECT_GE(traced, 2u) << "embree_1 runs on every CPU";
+  EXPECT_GE(traced, 4u) << "embree_1 runs on every CPU, in both modes";
 }
 
 TEST(HarnessTrace, OutputNamesBuilderLayoutAndIsaAndKeepsItsColumns) {

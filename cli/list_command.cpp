@@ -38,6 +38,9 @@ void print_catalogue(std::ostream& out) {
   fmt::print(out, "  {:<14} {}\n", "embree_medium", "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_MEDIUM");
   fmt::print(out, "  {:<14} {}\n", "embree_high",
              "Embree 3 rtcCommitScene, RTC_BUILD_QUALITY_HIGH (spatial splits)");
+  fmt::print(out, "  {:<14} {}\n", "embree:robust=1",
+             "any of them in Embree's robust mode (RTC_SCENE_FLAG_ROBUST, watertight Pluecker test); "
+             "config: robust = true");
 
   fmt::print(out,
              "\nlayouts (config: layouts = "

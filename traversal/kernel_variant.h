@@ -72,7 +72,7 @@ KernelIsa best_kernel_isa(KernelIsa widest = KernelIsa::kAuto);
 /// model 207) it traced 0-8% faster than the AVX2 build in every scene, ray set and thread count of
 /// configs/wide.toml's four scenes (medians of 4 interleaved runs, 24 cells, none below 0.997). On an AMD
 /// EPYC (Zen 4) an earlier version of the kernels traced 0-5% slower with it. isa=avx2 and isa=avx512 select
-/// either.
+/// either. The README's table lists the choice by CPU family.
 KernelIsa preferred_kernel_isa();
 
 }  // namespace sahbench

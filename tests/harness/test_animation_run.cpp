@@ -125,7 +125,7 @@ std::filesystem::path write_config(const std::string& name) {
       << "[repetitions]\nbuild = 2\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
       << "[animation]\nframes = 3\n"
       << "[[builder]]\nname = \"binned_sah\"\n"
-      << "[[builder]]\nname = \"embree\"\nquality = [\"refit\", \"medium\"]\n"
+      << "[[builder]]\nname = \"embree\"\nquality = [\"refit\", \"medium\"]\nrobust = [false, true]\n"
       << "[[ray_set]]\nkind = \"primary\"\nwidth = 20\nheight = 20\n"
       << "[[ray_set]]\nkind = \"shadow\"\nwidth = 20\nheight = 20\n";
   return path;
@@ -140,7 +140,7 @@ TEST(HarnessAnimationRun, RowsPerFrameForRefitAndRebuildWithoutMismatches) {
   const auto rows = read_csv(csv);
 
   std::map<std::string, std::size_t> per_builder;
-  std::set<std::string> frames, keys;
+  std::set<std::string> frames, keys, embree_params;
   std::map<std::string, std::string> sah;  // builder|frame|threads -> SAH cost
   for (const auto& row : rows) {
     const std::string what = row.at("builder") + " " + row.at("builder_params") + " " + row.at("layout") +
@@ -151,6 +151,7 @@ TEST(HarnessAnimationRun, RowsPerFrameForRefitAndRebuildWithoutMismatches) {
     EXPECT_GT(std::stod(row.at("trace_mrays_median")), 0.0) << what;
     EXPECT_GE(std::stod(row.at("build_ms_median")), 0.0) << what;
     ++per_builder[row.at("builder")];
+    if (row.at("builder") == "embree") embree_params.insert(row.at("builder_params"));
     frames.insert(row.at("frame") + "@" + row.at("frame_time"));
     EXPECT_TRUE(
         keys.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"), row.at("layout"),
@@ -165,8 +166,11 @@ TEST(HarnessAnimationRun, RowsPerFrameForRefitAndRebuildWithoutMismatches) {
   // 3 frames x 2 thread counts x 2 layouts x 2 ray sets, for the rebuild and for the refit.
   EXPECT_EQ(per_builder["binned_sah"], 24u);
   EXPECT_EQ(per_builder["refit(binned_sah)"], 24u);
-  EXPECT_EQ(per_builder["embree"] % 24, 0u);  // 2 qualities x as many Embree layouts as the CPU has
-  EXPECT_GE(per_builder["embree"], 24u);
+  // 2 qualities x 2 modes x as many Embree layouts as the CPU has; the refit in robust mode too.
+  EXPECT_EQ(per_builder["embree"] % 48, 0u);
+  EXPECT_GE(per_builder["embree"], 48u);
+  EXPECT_EQ(embree_params, (std::set<std::string>{"quality=refit", "quality=refit;robust=1", "quality=medium",
+                                                  "quality=medium;robust=1"}));
   EXPECT_EQ(frames, (std::set<std::string>{"0@0", "1@0.5", "2@1"}));
   // On the first frame the refitted tree is the built one; later its cost departs from a fresh build's.
   EXPECT_EQ(sah["refit(binned_sah)|0|1"], sah["binned_sah|0|1"]);

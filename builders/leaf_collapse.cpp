@@ -37,7 +37,8 @@ class DepthBound {
   void run() {
     std::vector<std::pair<uint32_t, uint32_t>> stack{{tree_.root, 0}};  // (tag, depth)
     while (!stack.empty()) {
-      const auto [tag, depth] = stack.back();
+      const uint32_t tag = stack.back().first;
+      const uint32_t depth = stack.back().second;  // clang 14 cannot capture a structured binding
       stack.pop_back();
       if (is_leaf_tag(tag)) continue;
       const ClusterNode& node = tree_.nodes[tag];

@@ -32,6 +32,13 @@ struct BuilderVariant {
   }
 };
 
+/// `tris` built by the registered `builder` with its defaults under `overrides`.
+inline Bvh build_tree(const std::string& builder, const std::vector<Triangle>& tris,
+                      const ParamOverrides& overrides = {}) {
+  const BuilderInfo& info = find_builder(builder);
+  return info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, overrides));
+}
+
 /// Every registered builder with its defaults, plus the parameter extremes.
 inline std::vector<BuilderVariant> builder_variants() {
   std::vector<BuilderVariant> out;

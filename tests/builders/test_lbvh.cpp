@@ -25,12 +25,6 @@
 namespace sahbench {
 namespace {
 
-Bvh build(const std::string& builder, const std::vector<Triangle>& tris,
-          const ParamOverrides& overrides = {}) {
-  const BuilderInfo& info = find_builder(builder);
-  return info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, overrides));
-}
-
 void expect_same_hits_as_brute_force(const Bvh& bvh, const std::vector<Triangle>& tris, std::size_t count) {
   const auto rays = test::random_rays(tris, count, 17);
   for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -64,7 +58,7 @@ int key_delta(const HugePageArray<Code>& codes, uint32_t i, uint32_t j) {
 template <class Code>
 void expect_radix_tree(const std::vector<Triangle>& tris, const std::string& bits) {
   SCOPED_TRACE(bits);
-  const Bvh bvh = build("lbvh", tris, {{"bits", bits}, {"max_leaf", "1"}});
+  const Bvh bvh = test::build_tree("lbvh", tris, {{"bits", bits}, {"max_leaf", "1"}});
   const BuildInput input = BuildInput::from_triangles(tris);
   const MortonOrder<Code> sorted = sort_by_morton<Code>(input.bounds.span());
   // Leaves left to right are the primitives in Morton order.
@@ -98,7 +92,7 @@ TEST(Lbvh, IdenticalCentresGiveABalancedTree) {
   // One Morton code for all: the positions appended to the keys split the run in halves by their bits.
   const std::vector<Triangle> tris(10000, around({1, 2, 3}, 0.5f));
   for (const char* bits : {"30", "63"}) {
-    const Bvh bvh = build("lbvh", tris, {{"bits", bits}, {"max_leaf", "1"}});
+    const Bvh bvh = test::build_tree("lbvh", tris, {{"bits", bits}, {"max_leaf", "1"}});
     ASSERT_TRUE(validate(bvh, tris).ok());
     const BvhStats stats = compute_stats(bvh, tris.size(), SahCost{});
     EXPECT_EQ(stats.max_depth, uint32_t(std::bit_width(tris.size() - 1))) << bits;
@@ -109,7 +103,7 @@ TEST(Lbvh, IdenticalCentresGiveABalancedTree) {
 TEST(Lbvh, TwoClustersOfEqualCodesSplitAtTheRoot) {
   std::vector<Triangle> tris(5000, around({-50, 0, 0}, 0.5f));
   tris.insert(tris.end(), 3000, around({50, 10, 0}, 0.5f));
-  const Bvh bvh = build("lbvh", tris);
+  const Bvh bvh = test::build_tree("lbvh", tris);
   ASSERT_TRUE(validate(bvh, tris).ok());
   const Node& root = bvh.root();
   ASSERT_EQ(root.child_count, 2u);
@@ -159,7 +153,7 @@ TEST(Lbvh, DeepRadixTreesAreRebuiltWithinTheDepthLimit) {
   ASSERT_GT(height, kClusterDepthLimit) << "the scene no longer tests the depth bound";
   for (const char* max_leaf : {"1", "8"}) {
     SCOPED_TRACE(max_leaf);
-    const Bvh bvh = build("lbvh", tris, {{"bits", "63"}, {"max_leaf", max_leaf}});
+    const Bvh bvh = test::build_tree("lbvh", tris, {{"bits", "63"}, {"max_leaf", max_leaf}});
     const ValidationReport report = validate(bvh, tris);
     ASSERT_TRUE(report.ok()) << report.summary();
     const BvhStats stats = compute_stats(bvh, tris.size(), SahCost{});
@@ -169,7 +163,7 @@ TEST(Lbvh, DeepRadixTreesAreRebuiltWithinTheDepthLimit) {
     expect_same_hits_as_brute_force(bvh, tris, 2000);
   }
   // With 30-bit codes the same centres fall into few cells, and the tree stays shallow.
-  EXPECT_TRUE(validate(build("lbvh", tris), tris).ok());
+  EXPECT_TRUE(validate(test::build_tree("lbvh", tris), tris).ok());
 }
 
 TEST(Lbvh, ApetreisPassFindsKarrasTree) {
@@ -181,7 +175,8 @@ TEST(Lbvh, ApetreisPassFindsKarrasTree) {
         const ParamOverrides common{{"bits", bits}, {"max_leaf", max_leaf}};
         ParamOverrides apetrei = common;
         apetrei.push_back({"hierarchy", "apetrei"});
-        EXPECT_TRUE(build("lbvh", tris, common) == build("lbvh", tris, apetrei)) << bits << " " << max_leaf;
+        EXPECT_TRUE(test::build_tree("lbvh", tris, common) == test::build_tree("lbvh", tris, apetrei))
+            << bits << " " << max_leaf;
       }
     }
   }
@@ -193,8 +188,8 @@ TEST(Lbvh, LeafCollapseNeverRaisesTheSah) {
   for (const auto& tris : {test::random_triangles(30000, 8), test::cube_grid(30, 1.0f)}) {
     for (const char* builder : {"lbvh", "ploc"}) {
       const SahCost cost;
-      const double fine = sah_cost(build(builder, tris, {{"max_leaf", "1"}}), cost);
-      const double collapsed = sah_cost(build(builder, tris), cost);
+      const double fine = sah_cost(test::build_tree(builder, tris, {{"max_leaf", "1"}}), cost);
+      const double collapsed = sah_cost(test::build_tree(builder, tris), cost);
       EXPECT_LE(collapsed, fine * (1 + 1e-6)) << builder;
       EXPECT_LT(collapsed, fine) << builder << ": nothing was collapsed";
     }
@@ -206,7 +201,7 @@ TEST(Lbvh, SameTreeForAnyThreadCount) {
   for (const char* bits : {"30", "63"}) {
     auto with = [&](int threads) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-      return build("lbvh", tris, {{"bits", bits}});
+      return test::build_tree("lbvh", tris, {{"bits", bits}});
     };
     const Bvh one = with(1), two = with(2);
     ASSERT_EQ(one.nodes.size(), two.nodes.size());

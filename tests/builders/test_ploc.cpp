@@ -17,6 +17,7 @@
 #include "builders/registry.h"
 #include "core/bvh_stats.h"
 #include "core/validate.h"
+#include "tests/builders/builder_cases.h"
 #include "tests/support/hit_check.h"
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
@@ -24,11 +25,6 @@
 
 namespace sahbench {
 namespace {
-
-Bvh build(const std::vector<Triangle>& tris, const ParamOverrides& overrides = {}) {
-  const BuilderInfo& info = find_builder("ploc");
-  return info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, overrides));
-}
 
 // The tree under a node as nested pairs of primitive indices, "(a,(b,c))".
 std::string shape(const Bvh& bvh, uint32_t index = 0) {
@@ -103,7 +99,8 @@ TEST(Ploc, ClustersAsTheSerialAlgorithmDoes) {
       {"identical r=16", std::vector<Triangle>(500, test::random_triangles(1, 9)[0]), 16}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
-    const Bvh bvh = build(c.tris, {{"radius", std::to_string(c.radius)}, {"max_leaf", "1"}});
+    const Bvh bvh =
+        test::build_tree("ploc", c.tris, {{"radius", std::to_string(c.radius)}, {"max_leaf", "1"}});
     ASSERT_TRUE(validate(bvh, c.tris).ok());
     EXPECT_EQ(shape(bvh), reference_shape(c.tris, c.radius));
   }
@@ -115,7 +112,7 @@ TEST(Ploc, SameTreeByteForByteOnOneAndTwoThreads) {
   for (const char* radius : {"1", "16"}) {
     auto with = [&](int threads) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-      return build(tris, {{"radius", radius}});
+      return test::build_tree("ploc", tris, {{"radius", radius}});
     };
     const Bvh one = with(1), two = with(2);
     ASSERT_EQ(one.nodes.size(), two.nodes.size());
@@ -130,7 +127,7 @@ TEST(Ploc, SameTreeByteForByteOnOneAndTwoThreads) {
 TEST(Ploc, IdenticalBoxesPairUpIntoABalancedTree) {
   // Every distance equal: the even-odd rule halves the clusters each round.
   const std::vector<Triangle> tris(4096, test::random_triangles(1, 4)[0]);
-  const Bvh bvh = build(tris, {{"max_leaf", "1"}});
+  const Bvh bvh = test::build_tree("ploc", tris, {{"max_leaf", "1"}});
   ASSERT_TRUE(validate(bvh, tris).ok());
   EXPECT_EQ(compute_stats(bvh, tris.size(), SahCost{}).max_depth, 12u);
 }
@@ -145,7 +142,7 @@ TEST(Ploc, ChainsOfExponentiallySpacedTrianglesAreRebuiltWithinTheDepthLimit) {
   }
   for (const char* max_leaf : {"1", "8"}) {
     SCOPED_TRACE(max_leaf);
-    const Bvh bvh = build(tris, {{"max_leaf", max_leaf}});
+    const Bvh bvh = test::build_tree("ploc", tris, {{"max_leaf", max_leaf}});
     const ValidationReport report = validate(bvh, tris);
     ASSERT_TRUE(report.ok()) << report.summary();
     const BvhStats stats = compute_stats(bvh, tris.size(), SahCost{});

@@ -21,12 +21,6 @@
 namespace sahbench {
 namespace {
 
-Bvh build(const std::string& builder, const std::vector<Triangle>& tris,
-          const ParamOverrides& overrides = {}) {
-  const BuilderInfo& info = find_builder(builder);
-  return info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, overrides));
-}
-
 // Long thin triangles in random directions (aspect 1000): boxes that overlap everything, what splitting
 // is for; and a soup of small triangles, which gain little from it.
 std::vector<Triangle> needles_in_soup() {
@@ -40,7 +34,7 @@ TEST(Presplit, ReferencesStayWithinTheBudget) {
   const auto tris = needles_in_soup();
   for (const char* budget : {"0.01", "0.3", "1", "4"}) {
     SCOPED_TRACE(budget);
-    const Bvh bvh = build("presplit", tris, {{"split_budget", budget}});
+    const Bvh bvh = test::build_tree("presplit", tris, {{"split_budget", budget}});
     const ValidationReport report = validate(bvh, tris);
     ASSERT_TRUE(report.ok()) << report.summary();
     ASSERT_TRUE(test::leaves_hold_parts_of_their_triangles(bvh, tris));
@@ -53,10 +47,10 @@ TEST(Presplit, ReferencesStayWithinTheBudget) {
 TEST(Presplit, SplitsLowerTheSahWhereLargeTrianglesOverlap) {
   const auto tris = needles_in_soup();
   const SahCost cost;
-  const double binned = sah_cost(build("binned_sah", tris), cost);
-  const Bvh split = build("presplit", tris);
+  const double binned = sah_cost(test::build_tree("binned_sah", tris), cost);
+  const Bvh split = test::build_tree("presplit", tris);
   EXPECT_LT(sah_cost(split, cost), 0.97 * binned);
-  EXPECT_LT(sah_cost(build("presplit", tris, {{"split_budget", "1"}}), cost), 0.85 * binned);
+  EXPECT_LT(sah_cost(test::build_tree("presplit", tris, {{"split_budget", "1"}}), cost), 0.85 * binned);
   const auto rays = test::random_rays(tris, 2000, 13);
   std::size_t hits = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -71,7 +65,7 @@ TEST(Presplit, SplitsLowerTheSahWhereLargeTrianglesOverlap) {
 TEST(Presplit, LeavesHoldEachTriangleOnce) {
   // A large budget puts several pieces of a triangle next to each other; a leaf keeps one reference.
   const auto tris = needles_in_soup();
-  const Bvh bvh = build("presplit", tris, {{"split_budget", "4"}, {"max_leaf", "16"}});
+  const Bvh bvh = test::build_tree("presplit", tris, {{"split_budget", "4"}, {"max_leaf", "16"}});
   for (const Node& node : bvh.nodes) {
     if (!node.is_leaf()) continue;
     std::vector<uint32_t> refs(bvh.prim_refs.begin() + node.first,
@@ -83,8 +77,8 @@ TEST(Presplit, LeavesHoldEachTriangleOnce) {
 
 TEST(Presplit, NoBudgetIsTheBinnedSahTree) {
   const auto tris = needles_in_soup();
-  EXPECT_TRUE(build("presplit", tris, {{"split_budget", "0"}, {"bins", "16"}}) ==
-              build("binned_sah", tris, {{"bins", "16"}}));
+  EXPECT_TRUE(test::build_tree("presplit", tris, {{"split_budget", "0"}, {"bins", "16"}}) ==
+              test::build_tree("binned_sah", tris, {{"bins", "16"}}));
 }
 
 TEST(Presplit, RejectsBadParametersAndMissingTriangles) {

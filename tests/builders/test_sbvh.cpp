@@ -32,12 +32,6 @@ constexpr bool kSanitized = true;
 constexpr bool kSanitized = false;
 #endif
 
-Bvh build(const std::string& builder, const std::vector<Triangle>& tris,
-          const ParamOverrides& overrides = {}) {
-  const BuilderInfo& info = find_builder(builder);
-  return info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, overrides));
-}
-
 // Needles (aspect 100): boxes of long diagonal triangles overlap everything, the case of Stich et al.'s
 // Figure 1. Deterministic from the seed.
 const std::vector<Triangle>& needles() {
@@ -47,8 +41,8 @@ const std::vector<Triangle>& needles() {
 
 TEST(Sbvh, NeedlesSameHitsAsBruteForceWithSplitsWithinBudget) {
   const auto& tris = needles();
-  const Bvh sbvh = build("sbvh", tris);
-  const Bvh binned = build("binned_sah", tris);
+  const Bvh sbvh = test::build_tree("sbvh", tris);
+  const Bvh binned = test::build_tree("binned_sah", tris);
   const ValidationReport report = validate(sbvh, std::span<const Triangle>(tris));
   ASSERT_TRUE(report.ok()) << report.summary();
   EXPECT_TRUE(test::leaves_hold_parts_of_their_triangles(sbvh, tris));
@@ -58,7 +52,8 @@ TEST(Sbvh, NeedlesSameHitsAsBruteForceWithSplitsWithinBudget) {
   EXPECT_LE(sbvh.prim_refs.size(), static_cast<std::size_t>(std::floor(1.5 * double(tris.size()))));
   const SahCost cost;
   EXPECT_LT(sah_cost(sbvh, cost), 0.95 * sah_cost(binned, cost));
-  EXPECT_LT(sah_cost(build("sbvh", tris, {{"max_dup", "1"}}), cost), 0.75 * sah_cost(binned, cost));
+  EXPECT_LT(sah_cost(test::build_tree("sbvh", tris, {{"max_dup", "1"}}), cost),
+            0.75 * sah_cost(binned, cost));
 
   const auto rays = test::random_rays(tris, kSanitized ? 300 : 1000, 11);
   std::size_t hits = 0;
@@ -76,7 +71,7 @@ TEST(Sbvh, DuplicatesStayWithinTheBudget) {
   for (const char* max_dup : {"0", "0.05", "1"}) {
     SCOPED_TRACE(std::string("max_dup ") + max_dup);
     // alpha 0: spatial splits are tried at every node, so the budget is what stops them.
-    const Bvh bvh = build("sbvh", tris, {{"max_dup", max_dup}, {"alpha", "0"}});
+    const Bvh bvh = test::build_tree("sbvh", tris, {{"max_dup", max_dup}, {"alpha", "0"}});
     ASSERT_TRUE(validate(bvh, std::span<const Triangle>(tris)).ok());
     const double budget = (1.0 + std::stod(max_dup)) * double(tris.size());
     EXPECT_LE(bvh.prim_refs.size(), static_cast<std::size_t>(std::floor(budget)));
@@ -99,8 +94,8 @@ TEST(Sbvh, CountsLeafBlocksSoThatItsWideCollapseFillsThem) {
   // source does. Costed per triangle it made small leaves, which collapsed to 2.5 references per wide
   // leaf against the binned source's 4.6 on these needles (and traced 5-13% slower on the shared scenes).
   const auto& tris = needles();
-  const Bvh from_sbvh = build("wide_collapse", tris, {{"source", "sbvh"}});
-  const Bvh from_binned = build("wide_collapse", tris, {{"source", "binned_sah"}});
+  const Bvh from_sbvh = test::build_tree("wide_collapse", tris, {{"source", "sbvh"}});
+  const Bvh from_binned = test::build_tree("wide_collapse", tris, {{"source", "binned_sah"}});
   ASSERT_TRUE(validate(from_sbvh, std::span<const Triangle>(tris)).ok());
   ASSERT_TRUE(validate(from_binned, std::span<const Triangle>(tris)).ok());
   SahCost cost;
@@ -111,7 +106,7 @@ TEST(Sbvh, CountsLeafBlocksSoThatItsWideCollapseFillsThem) {
 
 TEST(Sbvh, AlphaOneTurnsSpatialSplitsOff) {
   for (const auto& tris : {needles(), test::random_triangles(5000, 3, 10.0f, 8.0f)}) {
-    const Bvh bvh = build("sbvh", tris, {{"alpha", "1"}});
+    const Bvh bvh = test::build_tree("sbvh", tris, {{"alpha", "1"}});
     ASSERT_TRUE(validate(bvh, std::span<const Triangle>(tris)).ok());
     EXPECT_EQ(bvh.prim_refs.size(), tris.size());
   }
@@ -149,8 +144,8 @@ TEST(Sbvh, SharedScenesSameHitsAsBinnedSah) {
     if (!skips.have_scene(name)) continue;
     const Scene scene = load_scene(name);
     const auto& tris = scene.triangles;
-    const Bvh sbvh = build("sbvh", tris);
-    const Bvh binned = build("binned_sah", tris);
+    const Bvh sbvh = test::build_tree("sbvh", tris);
+    const Bvh binned = test::build_tree("binned_sah", tris);
     const ValidationReport report = validate(sbvh, std::span<const Triangle>(tris));
     ASSERT_TRUE(report.ok()) << report.summary();
     EXPECT_GT(sbvh.prim_refs.size(), tris.size());
@@ -201,8 +196,8 @@ TEST(Sbvh, VerticesOnPlanesThatRoundingMadeEqualStayInTheirParts) {
     uint32_t k = 0;
     for (Triangle& t : tris)
       for (Vec3* v : {&t.v0, &t.v1, &t.v2}) v->z = 88.0f + static_cast<float>(k++ % 5) * 0x1p-17f;
-    const Bvh bvh = build("sbvh", tris,
-                          {{"alpha", "0"}, {"max_dup", "1"}, {"spatial_bins", "16"}, {"node_overlap", "0"}});
+    const Bvh bvh = test::build_tree(
+        "sbvh", tris, {{"alpha", "0"}, {"max_dup", "1"}, {"spatial_bins", "16"}, {"node_overlap", "0"}});
     const ValidationReport report = validate(bvh, std::span<const Triangle>(tris));
     ASSERT_TRUE(report.ok()) << report.summary();
     EXPECT_GT(bvh.prim_refs.size(), tris.size());

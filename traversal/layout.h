@@ -53,11 +53,18 @@ class CompiledLayout {
 ///   box = robust | fast | fma           (ray/box test)
 ///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto: kernel_variant.h's
 ///                                                preferred_kernel_isa, AVX-512 on Intel, else up to AVX2)
-/// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2".
+///   packet = 1 | 8                      (SIMD layouts only: rays traced one at a time, or eight at a
+///                                        time by the packet kernels of wide_packets.inl, avx2 and avx512)
+/// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2", "bvh8:packet=8".
+/// The rays of a packet in the packet kernels (layout option packet=8).
+inline constexpr uint32_t kWidePacket = 8;
+
 struct LayoutSpec {
   std::string name;
   KernelVariant variant;
   KernelIsa isa = KernelIsa::kAuto;
+  /// Rays per packet: 1 (single-ray kernels) or kWidePacket.
+  uint32_t packet = 1;
 
   /// The canonical text: the name, then the options that differ from the defaults, in the order above.
   /// This is what the CSV's layout column holds, so "bvh2:tri=watertight" and "bvh2" are one cell.
@@ -71,7 +78,7 @@ struct LayoutInfo {
   /// The arity of the trees this layout is meant for; the harness pairs a builder only with the
   /// layouts of its arity (a layout may still compile narrower trees, e.g. in tests).
   uint32_t arity = 2;
-  /// Whether the `isa` option applies (the SIMD layouts).
+  /// Whether the `isa` and `packet` options apply (the SIMD layouts).
   bool has_isa = false;
   /// Compiles `bvh` over `triangles` (which must outlive the result). Throws Error when the tree does
   /// not suit the layout (e.g. arity too large) or the ISA is not available, naming both.

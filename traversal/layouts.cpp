@@ -224,6 +224,7 @@ std::string LayoutSpec::text() const {
   if (variant.box != defaults.box) add("box", to_string(variant.box));
   if (variant.any_hit != defaults.any_hit) add("anyhit", to_string(variant.any_hit));
   if (isa != KernelIsa::kAuto) add("isa", to_string(isa));
+  if (packet != 1) add("packet", std::to_string(packet));
   return name + options;
 }
 
@@ -243,7 +244,8 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     const auto eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0)
       throw Error(where + ": option '" + std::string(item) +
-                  "' is not of the form key=value (keys: tri, box, anyhit" + (info.has_isa ? ", isa)" : ")"));
+                  "' is not of the form key=value (keys: tri, box, anyhit" +
+                  (info.has_isa ? ", isa, packet)" : ")"));
     const std::string key(item.substr(0, eq));
     const std::string value(item.substr(eq + 1));
     if (std::find(seen.begin(), seen.end(), key) != seen.end())
@@ -266,9 +268,16 @@ LayoutSpec parse_layout_spec(std::string_view text) {
       const auto isa = parse_kernel_isa(value);
       if (!isa) throw Error(where + ": isa = '" + value + "' is not one of auto, scalar, sse, avx2, avx512");
       spec.isa = *isa;
+    } else if (key == "packet" && info.has_isa) {
+      if (value == "1")
+        spec.packet = 1;
+      else if (value == std::to_string(kWidePacket))
+        spec.packet = kWidePacket;
+      else
+        throw Error(where + ": packet = '" + value + "' is not one of 1, " + std::to_string(kWidePacket));
     } else {
       throw Error(where + ": unknown option '" + key + "' (known: tri, box, anyhit" +
-                  (info.has_isa ? ", isa)" : ")"));
+                  (info.has_isa ? ", isa, packet)" : ")"));
     }
     if (comma == std::string_view::npos) break;
     rest = rest.substr(comma + 1);

@@ -6,17 +6,24 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <cstddef>
 
 #include "traversal/layout.h"
 
 namespace sahbench {
 
-/// Calls `body(begin, end)` on chunks of at most `chunk` rays that cover [0, count), in parallel.
+/// Calls `body(begin, end)` on the chunks [i * chunk, (i + 1) * chunk) that cover [0, count) (the last one
+/// shorter), in parallel. Chunks start at multiples of `chunk`, so that a packet kernel's packets (a
+/// divisor of it) hold the rays the ray set put side by side, as Embree's packet calls get them.
 template <class Body>
 void for_each_ray_chunk(std::size_t count, std::size_t chunk, Body body) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, chunk),
-                    [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+  const std::size_t chunks = (count + chunk - 1) / chunk;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i)
+                        body(i * chunk, std::min(count, (i + 1) * chunk));
+                    });
 }
 
 /// The sum of `counts(begin, end)` (the TraceCounts of rays [begin, end)) over chunks of at most

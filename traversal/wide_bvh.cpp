@@ -401,6 +401,17 @@ WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& 
   return nullptr;
 }
 
+WideKernel find_wide_packet_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant,
+                                   bool any_hit) {
+#if defined(SAHBENCH_HAVE_X86_KERNELS)
+  if (isa == KernelIsa::kAvx2)
+    return detail::wide_packet_kernel_avx2(width, variant.triangle, variant.box, any_hit);
+  if (isa == KernelIsa::kAvx512)
+    return detail::wide_packet_kernel_avx512(width, variant.triangle, variant.box, any_hit);
+#endif
+  return nullptr;
+}
+
 WideBenchLoops find_wide_bench_loops(KernelIsa isa, uint32_t width, const KernelVariant& v) {
   switch (isa) {
     case KernelIsa::kScalar:

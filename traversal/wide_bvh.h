@@ -250,6 +250,10 @@ using WideKernel = void (*)(const WideBatch&);
 WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit,
                             bool counting);
 
+/// The packet kernel (wide_packets.inl: eight rays at a time) for a width, variant and query, compiled for
+/// `isa`: kAvx2 or kAvx512. Null for another instruction set or a combination not compiled in.
+WideKernel find_wide_packet_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit);
+
 /// Micro-benchmark loops (bench/): `ray_count` rays each against `count` nodes (of the width asked) or
 /// triangle blocks in turn, returning a checksum.
 struct WideBenchLoops {

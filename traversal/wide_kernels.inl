@@ -1008,68 +1008,79 @@ SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t 
   return {node.child[i], node.count[i], t_entry[i]};
 }
 
+// The blocks of a leaf against one ray. Closest hit: hits closer than best_t (or as close with a lower
+// primitive index) go into `best`, and false is returned. Any hit: true on the first hit, in `best`.
+template <TriangleTestKind kTri, bool kAnyHit, bool kCount>
+SAHBENCH_KERNEL_INLINE bool intersect_leaf(const BlockOf<kTri>* blocks, uint32_t count, const WideRay& r,
+                                           Hit& best, float& best_t, [[maybe_unused]] WideCounts* counts) {
+  uint32_t b = 0;
+#if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
+  if constexpr (kTri != TriangleTestKind::kWatertight && !kAnyHit && !kCount) {
+    // Closest hit with Möller–Trumbore: two blocks at a time, 8 lanes. The test compares t with tmax
+    // only at its end, so testing the second block against the same tmax as the first finds the same
+    // closest hit (and tie) as testing it after the first. Any hit keeps one block at a time: the
+    // first block often ends the ray, and the second's test was then wasted (-1% on two scenes).
+    for (; b + 1 < count; b += 2) {
+      alignas(32) float t[8], u[8], v[8];
+      uint32_t lanes;
+      if constexpr (kTri == TriangleTestKind::kMollerTrumboreNormal) {
+        lanes = intersect_block_pair_mtn(blocks + b, r, r.tmin, best_t, t, u, v);
+      } else {
+        const float eps = kTri == TriangleTestKind::kMollerTrumbore ? kWideMtEpsilon : 0.0f;
+        lanes = intersect_block_pair_mt(blocks + b, r, r.tmin, best_t, eps, t, u, v);
+      }
+      for (; lanes; lanes &= lanes - 1) {
+        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
+        const uint32_t prim = tri_part(blocks[b + i / 4]).prim[i % 4];
+        if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
+          best = {prim, t[i], u[i], v[i]};
+          best_t = t[i];
+        }
+      }
+    }
+  }
+#endif
+  for (; b < count; ++b) {
+    alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
+    uint32_t lanes = intersect_block<kTri, kAnyHit>(blocks[b], r, r.tmin, best_t, t, u, v);
+    const TriangleBlock& block = tri_part(blocks[b]);
+    if constexpr (kCount) counts->prim_tests += occupied_lanes(block);
+    if constexpr (kAnyHit) {
+      if (lanes) {
+        best = {block.prim[__builtin_ctz(lanes)], t[__builtin_ctz(lanes)], 0.0f, 0.0f};
+        return true;
+      }
+    } else {
+      // Closer, or as close with a lower primitive index (the tie rule of bvh2_traversal.h).
+      for (; lanes; lanes &= lanes - 1) {
+        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
+        const uint32_t prim = block.prim[i];
+        if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
+          best = {prim, t[i], u[i], v[i]};
+          best_t = t[i];
+        }
+      }
+    }
+  }
+  return false;
+}
+
+// One ray through the subtree at `entry` (a node or a leaf it enters at entry.t_entry), starting from the
+// closest hit so far in `best` and `best_t`, which it updates. Returns true when any hit has found one.
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
           IntOrder kInt>
-inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const WideRay& r, WideCounts* counts) {
-  Hit best;
-  float t_root;
-  if (!intersect_root<kBox>(root_planes, r, t_root)) return best;
+SAHBENCH_KERNEL_INLINE bool trace_subtree(const WideUnit* arena, const WideRay& r, WideStackEntry entry,
+                                          Hit& best, float& best_t, WideCounts* counts) {
   static_assert(kWideStackCapacity >= (N - 1) * kMaxDepth + 1, "wide traversal stack too small");
   WideStackEntry stack[kWideStackCapacity];
   uint32_t size = 0;
-  float best_t = r.tmax;
-  WideStackEntry entry{0, 0, t_root};
   const RaySlabs slabs = ray_slabs(r);
   while (true) {
     if (entry.count != 0) {
       if constexpr (kCount) ++counts->leaf_visits;
-      const BlockOf<kTri>* blocks = &at<BlockOf<kTri>>(arena, entry.child);
-      uint32_t b = 0;
-#if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
-      if constexpr (kTri != TriangleTestKind::kWatertight && !kAnyHit && !kCount) {
-        // Closest hit with Möller–Trumbore: two blocks at a time, 8 lanes. The test compares t with tmax
-        // only at its end, so testing the second block against the same tmax as the first finds the same
-        // closest hit (and tie) as testing it after the first. Any hit keeps one block at a time: the
-        // first block often ends the ray, and the second's test was then wasted (-1% on two scenes).
-        for (; b + 1 < entry.count; b += 2) {
-          alignas(32) float t[8], u[8], v[8];
-          uint32_t lanes;
-          if constexpr (kTri == TriangleTestKind::kMollerTrumboreNormal) {
-            lanes = intersect_block_pair_mtn(blocks + b, r, r.tmin, best_t, t, u, v);
-          } else {
-            const float eps = kTri == TriangleTestKind::kMollerTrumbore ? kWideMtEpsilon : 0.0f;
-            lanes = intersect_block_pair_mt(blocks + b, r, r.tmin, best_t, eps, t, u, v);
-          }
-          for (; lanes; lanes &= lanes - 1) {
-            const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
-            const uint32_t prim = tri_part(blocks[b + i / 4]).prim[i % 4];
-            if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
-              best = {prim, t[i], u[i], v[i]};
-              best_t = t[i];
-            }
-          }
-        }
-      }
-#endif
-      for (; b < entry.count; ++b) {
-        alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
-        uint32_t lanes = intersect_block<kTri, kAnyHit>(blocks[b], r, r.tmin, best_t, t, u, v);
-        const TriangleBlock& block = tri_part(blocks[b]);
-        if constexpr (kCount) counts->prim_tests += occupied_lanes(block);
-        if constexpr (kAnyHit) {
-          if (lanes) return {block.prim[__builtin_ctz(lanes)], t[__builtin_ctz(lanes)], 0.0f, 0.0f};
-        } else {
-          // Closer, or as close with a lower primitive index (the tie rule of bvh2_traversal.h).
-          for (; lanes; lanes &= lanes - 1) {
-            const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
-            const uint32_t prim = block.prim[i];
-            if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
-              best = {prim, t[i], u[i], v[i]};
-              best_t = t[i];
-            }
-          }
-        }
-      }
+      if (intersect_leaf<kTri, kAnyHit, kCount>(&at<BlockOf<kTri>>(arena, entry.child), entry.count, r, best,
+                                                best_t, counts))
+        return true;
     } else {
       const WideNode<N>& node = at<WideNode<N>>(arena, entry.child);
       // The child and count line is read only after the box test has picked a child: ask for it now, so
@@ -1087,10 +1098,21 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
     // The next entry, skipping those entered beyond the closest hit so far (nothing inside can be closer;
     // equal is kept for the tie rule).
     do {
-      if (size == 0) return best;
+      if (size == 0) return false;
       entry = stack[--size];
     } while (!kAnyHit && entry.t_entry > best_t);
   }
+}
+
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
+          IntOrder kInt>
+inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const WideRay& r, WideCounts* counts) {
+  Hit best;
+  float t_root;
+  if (!intersect_root<kBox>(root_planes, r, t_root)) return best;
+  float best_t = r.tmax;
+  trace_subtree<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(arena, r, {0, 0, t_root}, best, best_t, counts);
+  return best;
 }
 
 // The integer order (kInt) is chosen for a whole batch, the lowest of its rays' (WideBatch::int_order):

@@ -8,12 +8,17 @@
 
 namespace sahbench::wide_avx2 {
 #include "traversal/wide_kernels.inl"
+#include "traversal/wide_packets.inl"
 }  // namespace sahbench::wide_avx2
 
 namespace sahbench::detail {
 
 WideKernel wide_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
   return wide_avx2::select_kernel<false>(width, tri, box, any_hit);
+}
+
+WideKernel wide_packet_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
+  return wide_avx2::select_packet_kernel(width, tri, box, any_hit);
 }
 
 WideBenchLoops wide_bench_loops_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box) {

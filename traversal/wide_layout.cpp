@@ -15,12 +15,13 @@ namespace {
 // Rays per kernel call: their WideRay set-ups (80 bytes each) stay in L1 and one task amortises the
 // scheduling, as kRayChunk does for the binary layouts.
 constexpr std::size_t kWideChunk = 256;
+static_assert(kWideChunk % kWidePacket == 0, "chunks hold whole packets");
 
 template <uint32_t N>
 class WideLayout final : public CompiledLayout {
  public:
   WideLayout(WideBvh<N> bvh, std::size_t triangle_count, KernelIsa isa, const KernelVariant& variant,
-             AnyHitOrder any_hit_order)
+             AnyHitOrder any_hit_order, uint32_t packet)
       : bvh_(std::move(bvh)),
         triangle_count_(triangle_count),
         isa_(isa),
@@ -30,13 +31,18 @@ class WideLayout final : public CompiledLayout {
     if (bvh_.form != block_form_for(variant.triangle))
       throw Error("layout bvh" + std::to_string(N) + ": blocks compiled in the wrong form for the " +
                   std::string(to_string(variant.triangle)) + " test");
-    closest_ = find_wide_kernel(isa, N, variant, false, false);
-    any_ = find_wide_kernel(isa, N, variant, true, false);
+    // The counting kernels are the single-ray ones for packets too: the counts describe the tree and the
+    // rays, not the order in which a packet visits nodes.
+    closest_ = packet == 1 ? find_wide_kernel(isa, N, variant, false, false)
+                           : find_wide_packet_kernel(isa, N, variant, false);
+    any_ = packet == 1 ? find_wide_kernel(isa, N, variant, true, false)
+                       : find_wide_packet_kernel(isa, N, variant, true);
     count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
     count_any_ = find_wide_kernel(KernelIsa::kScalar, N, variant, true, true);
     if (!closest_ || !any_ || !count_closest_ || !count_any_)
       throw Error("layout bvh" + std::to_string(N) + ": no " + std::string(to_string(isa)) +
-                  " kernels compiled in");
+                  (packet == 1 ? "" : " packet") + " kernels compiled in" +
+                  (packet == 1 ? "" : " (packet kernels: isa avx2 or avx512)"));
   }
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
@@ -126,10 +132,10 @@ std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& b
   const BlockForm form = block_form_for(spec.variant.triangle);
   if (width == 4)
     return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles, form), triangles.size(), isa,
-                                           spec.variant, any_hit_order);
+                                           spec.variant, any_hit_order, spec.packet);
   if (width == 8)
     return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles, form), triangles.size(), isa,
-                                           spec.variant, any_hit_order);
+                                           spec.variant, any_hit_order, spec.packet);
   throw Error("no " + std::to_string(width) + "-wide layout");
 }
 

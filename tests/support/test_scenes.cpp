@@ -102,4 +102,29 @@ std::vector<Ray> random_rays(const std::vector<Triangle>& scene, std::size_t cou
   return rays;
 }
 
+std::vector<Ray> coherent_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
+                               std::size_t group) {
+  const std::vector<Ray> leaders = random_rays(scene, (count + group - 1) / group, seed);
+  Aabb box;
+  for (const auto& t : scene) box.extend(t.bounds());
+  const float spread = length(box.extent()) * 0.01f + 1e-3f;
+  std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
+  std::uniform_real_distribution<float> jitter(-1.0f, 1.0f);
+  std::vector<Ray> rays;
+  rays.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Ray& lead = leaders[i / group];
+    Ray ray = lead;
+    if (i % group != 0) {
+      for (int axis = 0; axis < 3; ++axis) {
+        ray.org[axis] += jitter(rng) * spread;
+        const float d = lead.dir[axis];
+        ray.dir[axis] = d == 0.0f ? d : std::copysign(std::fabs(d * (1.0f + 0.05f * jitter(rng))), d);
+      }
+    }
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
 }  // namespace sahbench::test

@@ -21,4 +21,10 @@ std::vector<Triangle> cube_grid(int quads_per_side, float half_size);
 /// rays whose direction has +0 and -0 components (axis-parallel and in coordinate planes).
 std::vector<Ray> random_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed);
 
+/// random_rays in groups of `group` that a packet kernel traces together: each group's first ray is one
+/// of random_rays, the others start near it and point nearly its way, with the same sign bit in each
+/// direction component (so zero components stay +0 or -0 across the group) and the same interval.
+std::vector<Ray> coherent_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
+                               std::size_t group = 8);
+
 }  // namespace sahbench::test

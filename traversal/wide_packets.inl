@@ -1,0 +1,297 @@
+// Packet kernels on the wide layouts: eight rays traverse the tree together, each node fetched once for
+// all of them and each child box tested against the eight rays in one 8-lane slab test (Wald, Slusallek,
+// Benthin and Wagner 2001, "Interactive Rendering with Coherent Ray Tracing"; on wide nodes, Embree's
+// BVHNIntersectorK, Wald et al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing").
+// Compiled for AVX2 and AVX-512 only (wide_kernels_avx2.cpp, wide_kernels_avx512.cpp include it after
+// wide_kernels.inl, whose helpers it uses).
+//
+// Packets are the batch's rays eight at a time, in the ray set's own order, as Embree's rtcIntersect8 is
+// fed (primary rays in rows of pixels). A packet goes down the tree together only when its rays agree on
+// the sign of each direction component, so that one near and one far plane per axis serve all eight, and
+// (box=fma) every ray is in that test's domain; otherwise its rays are traced one at a time by the
+// single-ray kernel. Each lane computes the slab test of intersect_children with the same operations in
+// the same order, and leaves are tested ray by ray with intersect_leaf, so every ray gets the hit the
+// single-ray kernel returns; only the order in which nodes are visited differs.
+
+inline constexpr uint32_t kPacketWidth = 8;
+// A packet's rays go on one at a time below a node that this many or fewer of them enter: a packet's
+// node visit tests every child against all eight lanes, which costs about what a single ray's visits of
+// the node would cost for each active ray.
+inline constexpr int kPacketSwitch = 3;
+
+// The eight rays' slab constants, one lane each, and the planes they share.
+struct alignas(32) PacketRays {
+  __m256 org[3];
+  __m256 inv[3];
+  __m256 org_inv[3];
+  __m256 tmin;
+  uint32_t near_plane[3];
+  uint32_t far_plane[3];
+};
+
+// A child slot entered by some of the packet's rays: their entry distances, NaN in the other lanes (a
+// NaN entry compares false with everything, so those lanes never take the entry up again).
+struct alignas(32) PacketEntry {
+  __m256 t_entry;
+  uint32_t child;
+  uint32_t count;  // 0: inner node `child`; else a leaf of `count` blocks from `child`
+};
+
+// Whether rays [0, n) can go down the tree as one packet (the file's opening comment).
+template <BoxTestKind kBox>
+SAHBENCH_KERNEL_INLINE bool packet_coherent(const WideRay* rays, uint32_t n) {
+  for (uint32_t j = 0; j < n; ++j) {
+    if constexpr (kBox == BoxTestKind::kFma) {
+      if (rays[j].robust_box) return false;
+    }
+    for (uint32_t axis = 0; axis < 3; ++axis)
+      if (rays[j].near_plane[axis] != rays[0].near_plane[axis]) return false;
+  }
+  return true;
+}
+
+SAHBENCH_KERNEL_INLINE PacketRays make_packet(const WideRay* rays, uint32_t n) {
+  alignas(32) float lanes[10][kPacketWidth];
+  for (uint32_t j = 0; j < kPacketWidth; ++j) {
+    const WideRay& r = rays[j < n ? j : 0];  // unused lanes copy ray 0 and are never active
+    for (uint32_t axis = 0; axis < 3; ++axis) {
+      lanes[axis][j] = r.org[axis];
+      lanes[3 + axis][j] = r.inv_dir[axis];
+      lanes[6 + axis][j] = r.org_inv[axis];
+    }
+    lanes[9][j] = r.tmin;
+  }
+  PacketRays p;
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    p.org[axis] = _mm256_load_ps(lanes[axis]);
+    p.inv[axis] = _mm256_load_ps(lanes[3 + axis]);
+    p.org_inv[axis] = _mm256_load_ps(lanes[6 + axis]);
+    p.near_plane[axis] = rays[0].near_plane[axis];
+    p.far_plane[axis] = rays[0].far_plane[axis];
+  }
+  p.tmin = _mm256_load_ps(lanes[9]);
+  return p;
+}
+
+// One box, given as six planes `stride` floats apart (min x, max x, min y, ...), against the packet's
+// rays within [tmin, tmax] per lane: the entry distances, and in `mask` the lanes that enter it. A lane
+// whose tmax is NaN enters nothing.
+template <BoxTestKind kBox>
+SAHBENCH_KERNEL_INLINE __m256 packet_enter(const float* planes, uint32_t stride, const PacketRays& p,
+                                           __m256 tmax, uint32_t& mask) {
+  __m256 t_near = p.tmin, t_far = tmax;
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    const __m256 near = _mm256_broadcast_ss(planes + p.near_plane[axis] * stride);
+    const __m256 far = _mm256_broadcast_ss(planes + p.far_plane[axis] * stride);
+    __m256 t0, t1;
+    if constexpr (kBox == BoxTestKind::kFma) {
+      t0 = _mm256_fmsub_ps(near, p.inv[axis], p.org_inv[axis]);
+      t1 = _mm256_fmsub_ps(far, p.inv[axis], p.org_inv[axis]);
+    } else {
+      t0 = _mm256_mul_ps(_mm256_sub_ps(near, p.org[axis]), p.inv[axis]);
+      t1 = _mm256_mul_ps(_mm256_sub_ps(far, p.org[axis]), p.inv[axis]);
+      if constexpr (kBox == BoxTestKind::kRobust) t1 = _mm256_mul_ps(t1, _mm256_set1_ps(kWideFarScale));
+    }
+    t_near = _mm256_max_ps(t0, t_near);
+    t_far = _mm256_min_ps(t1, t_far);
+  }
+  mask = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(t_near, t_far, _CMP_LE_OQ)));
+  return t_near;
+}
+
+// The lanes of `mask` as an all-ones vector mask.
+SAHBENCH_KERNEL_INLINE __m256 lane_mask(uint32_t mask) {
+  const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256i m = _mm256_and_si256(_mm256_set1_epi32(static_cast<int>(mask)), bits);
+  return _mm256_castsi256_ps(_mm256_cmpeq_epi32(m, bits));
+}
+
+// The smallest of `t`'s lanes (no NaN among them).
+SAHBENCH_KERNEL_INLINE float horizontal_min(__m256 t) {
+  __m256 m = _mm256_min_ps(t, _mm256_permute2f128_ps(t, t, 1));
+  m = _mm256_min_ps(m, _mm256_permute_ps(m, _MM_SHUFFLE(1, 0, 3, 2)));
+  m = _mm256_min_ps(m, _mm256_permute_ps(m, _MM_SHUFFLE(2, 3, 0, 1)));
+  return _mm256_cvtss_f32(m);
+}
+
+// Rays [0, n) of `rays` as one packet, answers into hits[0, n) or occluded[0, n). Closest hit visits the
+// children the packet enters nearest first by their nearest ray's entry (ties to the higher slot), and
+// skips, per lane, entries beyond that ray's closest hit so far; any hit visits them in kOrder as
+// descend() does, kNearestStored taken as kStored (the nearest of eight rays is not one child), and
+// drops each ray from the packet at its first hit.
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, AnyHitOrder kOrder>
+inline void trace_packet(const float* root_planes, const WideUnit* arena, const WideRay* rays, uint32_t n,
+                         Hit* hits, uint8_t* occluded) {
+  const PacketRays p = make_packet(rays, n);
+  const __m256 nan = _mm256_set1_ps(__builtin_nanf(""));
+  alignas(32) float best_t[kPacketWidth];
+  for (uint32_t j = 0; j < kPacketWidth; ++j) best_t[j] = j < n ? rays[j].tmax : __builtin_nanf("");
+  Hit best[kPacketWidth];
+  uint32_t root_mask;
+  __m256 t_root = packet_enter<kBox>(root_planes, 1, p, _mm256_load_ps(best_t), root_mask);
+  if (root_mask == 0) {
+    for (uint32_t j = 0; j < n; ++j) {
+      if constexpr (kAnyHit)
+        occluded[j] = 0;
+      else
+        hits[j] = Hit{};
+    }
+    return;
+  }
+  PacketEntry stack[kWideStackCapacity];
+  uint32_t size = 0;
+  PacketEntry entry{_mm256_blendv_ps(nan, t_root, lane_mask(root_mask)), 0, 0};
+  while (true) {
+    // The lanes for which the entry is still worth visiting: entered, and (closest hit) not beyond the
+    // closest hit so far; equal is kept for the tie rule. A ray dropped by any hit has a NaN best_t.
+    const __m256 tmax = _mm256_load_ps(best_t);
+    const uint32_t lanes =
+        static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(entry.t_entry, tmax, _CMP_LE_OQ)));
+    if (lanes != 0) {
+      if (entry.count == 0 && __builtin_popcount(lanes) <= kPacketSwitch) {
+        // Few rays left in this subtree: each goes on alone (Embree's hybrid traversal), with its own
+        // stack, from its entry into the node.
+        alignas(32) float t_entry[kPacketWidth];
+        _mm256_store_ps(t_entry, entry.t_entry);
+        for (uint32_t m = lanes; m; m &= m - 1) {
+          const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
+          if (trace_subtree<N, kTri, kBox, kAnyHit, false, kOrder, IntOrder::kNone>(
+                  arena, rays[j], {entry.child, 0, t_entry[j]}, best[j], best_t[j], nullptr))
+            best_t[j] = __builtin_nanf("");
+        }
+      } else if (entry.count != 0) {
+        const BlockOf<kTri>* blocks = &at<BlockOf<kTri>>(arena, entry.child);
+        for (uint32_t m = lanes; m; m &= m - 1) {
+          const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
+          if (intersect_leaf<kTri, kAnyHit, false>(blocks, entry.count, rays[j], best[j], best_t[j], nullptr))
+            best_t[j] = __builtin_nanf("");
+        }
+        if constexpr (kAnyHit) {
+          if (_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(best_t), _mm256_load_ps(best_t), _CMP_ORD_Q)) ==
+              0)
+            break;
+        }
+      } else {
+        const WideNode<N>& node = at<WideNode<N>>(arena, entry.child);
+        const __m256 active_tmax = _mm256_blendv_ps(nan, tmax, lane_mask(lanes));
+        PacketEntry entered[N];
+        uint64_t keys[N < 4 ? 4 : N];
+        uint32_t k = 0;
+        for (uint32_t i = 0; i < N; ++i) {
+          if (node.child[i] == 0 && node.count[i] == 0) break;  // the empty slots come last
+          uint32_t mask;
+          const __m256 t = packet_enter<kBox>(&node.planes[0][i], N, p, active_tmax, mask);
+          if (mask == 0) continue;
+          const __m256 inside = lane_mask(mask);
+          entered[k] = {_mm256_blendv_ps(nan, t, inside), node.child[i], node.count[i]};
+          if constexpr (kAnyHit && kOrder != AnyHitOrder::kNearest) {
+            keys[k] = k;
+          } else {
+            const float nearest =
+                horizontal_min(_mm256_blendv_ps(_mm256_set1_ps(__builtin_inff()), t, inside));
+            keys[k] = (static_cast<uint64_t>(ordered_bits(nearest + 0.0f)) << 32) | (N - 1 - k);
+          }
+          ++k;
+        }
+        if (k != 0) {
+          if (k > 1) {
+            if constexpr (!kAnyHit || kOrder == AnyHitOrder::kNearest) {
+              for (uint32_t j = k; j < (N < 4 ? 4 : N); ++j) keys[j] = kLastKey;
+              sort_keys<N>(keys, k);
+            }
+            for (uint32_t j = k - 1; j > 0; --j) {
+              const uint32_t i = (!kAnyHit || kOrder == AnyHitOrder::kNearest)
+                                     ? N - 1 - static_cast<uint32_t>(keys[j])
+                                     : static_cast<uint32_t>(keys[j]);
+              stack[size++] = entered[i];
+            }
+          }
+          const uint32_t i = (!kAnyHit || kOrder == AnyHitOrder::kNearest)
+                                 ? N - 1 - static_cast<uint32_t>(keys[0])
+                                 : static_cast<uint32_t>(keys[0]);
+          entry = entered[i];
+          continue;
+        }
+      }
+    }
+    if (size == 0) break;
+    entry = stack[--size];
+  }
+  for (uint32_t j = 0; j < n; ++j) {
+    if constexpr (kAnyHit)
+      occluded[j] = best[j].prim != kInvalidPrim;
+    else
+      hits[j] = best[j];
+  }
+}
+
+// A batch in packets of kPacketWidth rays; the packets that are not coherent go ray by ray through the
+// single-ray kernel (trace_ray), with the robust box test for the rays box=fma does not take.
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>
+void trace_packet_batch(const WideBatch& batch) {
+  auto run = [&]<AnyHitOrder kOrder>() {
+    for (std::size_t first = 0; first < batch.count; first += kPacketWidth) {
+      const uint32_t n =
+          static_cast<uint32_t>(batch.count - first < kPacketWidth ? batch.count - first : kPacketWidth);
+      const WideRay* rays = batch.rays + first;
+      if (packet_coherent<kBox>(rays, n)) {
+        trace_packet<N, kTri, kBox, kAnyHit, kOrder>(batch.root_planes, batch.arena, rays, n,
+                                                     kAnyHit ? nullptr : batch.hits + first,
+                                                     kAnyHit ? batch.occluded + first : nullptr);
+        continue;
+      }
+      for (uint32_t j = 0; j < n; ++j) {
+        const Hit hit =
+            kBox == BoxTestKind::kFma && rays[j].robust_box
+                ? trace_ray<N, kTri, BoxTestKind::kRobust, kAnyHit, false, kOrder, IntOrder::kNone>(
+                      batch.root_planes, batch.arena, rays[j], nullptr)
+                : trace_ray<N, kTri, kBox, kAnyHit, false, kOrder, IntOrder::kNone>(
+                      batch.root_planes, batch.arena, rays[j], nullptr);
+        if constexpr (kAnyHit)
+          batch.occluded[first + j] = hit.prim != kInvalidPrim;
+        else
+          batch.hits[first + j] = hit;
+      }
+    }
+  };
+  if constexpr (kAnyHit) {
+    if (batch.any_hit_order == AnyHitOrder::kStored) return run.template operator()<AnyHitOrder::kStored>();
+    if (batch.any_hit_order == AnyHitOrder::kNearestStored)
+      return run.template operator()<AnyHitOrder::kNearestStored>();
+  }
+  run.template operator()<AnyHitOrder::kNearest>();
+}
+
+// The packet kernels of this instruction set: [width 4, 8][triangle test][box test][closest, any].
+inline WideKernel select_packet_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
+  auto pick = [&]<uint32_t N, TriangleTestKind kTri>() -> WideKernel {
+    auto with_box = [&]<BoxTestKind kBox>() -> WideKernel {
+      return any_hit ? &trace_packet_batch<N, kTri, kBox, true> : &trace_packet_batch<N, kTri, kBox, false>;
+    };
+    switch (box) {
+      case BoxTestKind::kRobust:
+        return with_box.template operator()<BoxTestKind::kRobust>();
+      case BoxTestKind::kFast:
+        return with_box.template operator()<BoxTestKind::kFast>();
+      case BoxTestKind::kFma:
+        return with_box.template operator()<BoxTestKind::kFma>();
+    }
+    return nullptr;
+  };
+  auto by_tri = [&]<uint32_t N>() -> WideKernel {
+    switch (tri) {
+      case TriangleTestKind::kWatertight:
+        return pick.template operator()<N, TriangleTestKind::kWatertight>();
+      case TriangleTestKind::kMollerTrumbore:
+        return pick.template operator()<N, TriangleTestKind::kMollerTrumbore>();
+      case TriangleTestKind::kMollerTrumboreNoEpsilon:
+        return pick.template operator()<N, TriangleTestKind::kMollerTrumboreNoEpsilon>();
+      case TriangleTestKind::kMollerTrumboreNormal:
+        return pick.template operator()<N, TriangleTestKind::kMollerTrumboreNormal>();
+    }
+    return nullptr;
+  };
+  if (width == 4) return by_tri.template operator()<4>();
+  if (width == 8) return by_tri.template operator()<8>();
+  return nullptr;
+}

@@ -99,6 +99,19 @@ SAHBENCH_KERNEL_INLINE __m256 packet_enter(const float* planes, uint32_t stride,
   return t_near;
 }
 
+// The slots of `node` that hold a child: an empty slot's box is inverted, its min x +inf (wide_bvh.h).
+// Read from the planes, which the box tests load anyway, rather than from the child line.
+template <uint32_t N>
+SAHBENCH_KERNEL_INLINE uint32_t occupied_slots(const WideNode<N>& node) {
+  const __m256 inf = _mm256_set1_ps(__builtin_inff());
+  if constexpr (N == 8)
+    return static_cast<uint32_t>(
+        _mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(node.planes[0]), inf, _CMP_NEQ_UQ)));
+  else
+    return static_cast<uint32_t>(
+        _mm_movemask_ps(_mm_cmp_ps(_mm_load_ps(node.planes[0]), _mm256_castps256_ps128(inf), _CMP_NEQ_UQ)));
+}
+
 // The lanes of `mask` as an all-ones vector mask.
 SAHBENCH_KERNEL_INLINE __m256 lane_mask(uint32_t mask) {
   const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
@@ -177,8 +190,8 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
         PacketEntry entered[N];
         uint64_t keys[N < 4 ? 4 : N];
         uint32_t k = 0;
-        for (uint32_t i = 0; i < N; ++i) {
-          if (node.child[i] == 0 && node.count[i] == 0) break;  // the empty slots come last
+        for (uint32_t slots = occupied_slots(node); slots; slots &= slots - 1) {
+          const uint32_t i = static_cast<uint32_t>(__builtin_ctz(slots));
           uint32_t mask;
           const __m256 t = packet_enter<kBox>(&node.planes[0][i], N, p, active_tmax, mask);
           if (mask == 0) continue;

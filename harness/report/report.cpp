@@ -173,16 +173,30 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   // The anchors, per ray set: Embree medium, one ray at a time, in its default mode; and in its robust
   // mode where the run has it, for the rows of ours whose kernels are exact (like for like: both
   // watertight, neither trading exactness for speed).
-  std::map<std::string, const CsvRow*> anchor, robust_anchor;
+  // Our packet rows are compared with Embree's packets, the faster width of the cell (by median).
+  std::map<std::string, const CsvRow*> anchor, robust_anchor, packet_anchor, robust_packet_anchor;
+  auto keep_faster = [](const CsvRow*& kept, const CsvRow* r) {
+    if (!kept || csv_number(*r, "trace_mrays_median").value_or(0) >
+                     csv_number(*kept, "trace_mrays_median").value_or(0))
+      kept = r;
+  };
   for (const CsvRow* r : group) {
     if (is_anchor(*r)) anchor[field(*r, "ray_set")] = r;
     if (is_robust_anchor(*r)) robust_anchor[field(*r, "ray_set")] = r;
+    if (is_packet_anchor(*r, false)) keep_faster(packet_anchor[field(*r, "ray_set")], r);
+    if (is_packet_anchor(*r, true)) keep_faster(robust_packet_anchor[field(*r, "ray_set")], r);
   }
   auto compared_robust = [&](const CsvRow& r) {
     return !robust_anchor.empty() && runs_exact_kernels(field(r, "builder"), field(r, "layout"));
   };
   const bool any_marked =
       std::any_of(group.begin(), group.end(), [&](const CsvRow* r) { return compared_robust(*r); });
+  auto compared_to_packets = [&](const CsvRow& r) {
+    return runs_packets(field(r, "builder"), field(r, "layout")) &&
+           !(compared_robust(r) ? robust_packet_anchor : packet_anchor).empty();
+  };
+  const bool any_packets =
+      std::any_of(group.begin(), group.end(), [&](const CsvRow* r) { return compared_to_packets(*r); });
 
   ReportTable table;
   const CsvRow& first = *group.front();
@@ -213,14 +227,18 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
             "test) to Embree's robust mode (RTC_SCENE_FLAG_ROBUST, with its watertight triangle test), "
             "the others (faster variants, and Embree's own rows) to its default mode"
           : "In parentheses: ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same run";
+  const std::string packets =
+      any_packets ? ". Our packet layouts (packet=8) against Embree's packets instead (rtcIntersect8/16, "
+                    "rtcOccluded8/16, whichever width is faster in the cell), in the same mode"
+                  : "";
   table.caption = fmt::format(
-      "{}; {}{}, commit {}; medians of {} builds and {} traces; kernels: {}. {}; for build + layout and "
+      "{}; {}{}, commit {}; medians of {} builds and {} traces; kernels: {}. {}{}; for build + layout and "
       "rays/s the geometric mean of the ratios of rounds paired with Embree's, with its 95% interval, and "
       "an up (down) arrow where the interval lies wholly on the better (worse) side of 1. Best of each "
       "column in bold: least build time, memory and SAH cost, most rays/s.",
       table.title, field(first, "cpu", "unknown CPU"), isa.empty() ? "" : " (built for " + isa + ")",
       field(first, "git_commit", "unknown"), field(first, "build_reps", "?"), field(first, "trace_reps", "?"),
-      kernels.empty() ? "unknown" : kernels, anchors);
+      kernels.empty() ? "unknown" : kernels, anchors, packets);
   // The Markdown rows name every parameter; the LaTeX rows only the varying ones, so name the rest here.
   if (format == ReportFormat::kLatex && !shared.empty()) {
     table.caption += " Parameters common to a builder's rows:";
@@ -319,7 +337,10 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     const CsvRow& any = *by_set.begin()->second;
     ReportRow row{label, short_label.at(label), layout, {}};
     row.marked = compared_robust(any);
-    const auto& anchors_of_row = row.marked ? robust_anchor : anchor;
+    const auto& anchors_of_row = compared_to_packets(any)
+                                     ? (row.marked ? robust_packet_anchor : packet_anchor)
+                                 : row.marked ? robust_anchor
+                                              : anchor;
     const CsvRow* any_anchor = anchors_of_row.empty() ? nullptr : anchors_of_row.begin()->second;
     row.cells.push_back(cell(csv_number(any, "build_ms_median"), std::nullopt));
     // Build plus layout compile against Embree's build, whose rtcCommitScene does both: round r's sum

@@ -91,16 +91,36 @@ bool is_robust_anchor(const CsvRow& row) {
          get(row, "layout") == kAnchorLayout;
 }
 
-bool runs_exact_kernels(std::string_view builder, std::string_view layout) {
-  if (builder == kAnchorBuilder || layout.empty()) return false;
-  LayoutSpec spec;
+bool is_packet_anchor(const CsvRow& row, bool robust) {
+  const std::string_view layout = get(row, "layout");
+  return get(row, "builder") == kAnchorBuilder &&
+         get(row, "builder_params") == (robust ? kRobustAnchorParams : kAnchorParams) &&
+         (layout == "embree_8" || layout == "embree_16");
+}
+
+namespace {
+
+// Our layout spec of a row, if it is one this build knows.
+std::optional<LayoutSpec> our_layout(std::string_view builder, std::string_view layout) {
+  if (builder == kAnchorBuilder || layout.empty()) return std::nullopt;
   try {
-    spec = parse_layout_spec(layout);
+    return parse_layout_spec(layout);
   } catch (const Error&) {
-    return false;
+    return std::nullopt;
   }
+}
+
+}  // namespace
+
+bool runs_exact_kernels(std::string_view builder, std::string_view layout) {
+  const auto spec = our_layout(builder, layout);
   const KernelVariant exact;
-  return spec.variant.triangle == exact.triangle && spec.variant.box == exact.box;
+  return spec && spec->variant.triangle == exact.triangle && spec->variant.box == exact.box;
+}
+
+bool runs_packets(std::string_view builder, std::string_view layout) {
+  const auto spec = our_layout(builder, layout);
+  return spec && spec->packet > 1;
 }
 
 std::string ResultFile::where(std::size_t i) const {

@@ -41,6 +41,14 @@ bool is_robust_anchor(const CsvRow& row);
 /// older CSV's), which keep Embree's default mode as their anchor.
 bool runs_exact_kernels(std::string_view builder, std::string_view layout);
 
+/// Whether a CSV row is Embree medium traced in packets (a layout embree_8 or embree_16), in its robust
+/// mode (`robust`) or its default one: the anchors of our packet layouts, which are compared with the
+/// fastest of Embree's packet widths in the same cell.
+bool is_packet_anchor(const CsvRow& row, bool robust);
+
+/// Whether a row of ours traces packets (a layout with packet=8).
+bool runs_packets(std::string_view builder, std::string_view layout);
+
 /// One result CSV: read_csv's rows, and the line each starts on (the header is line 1; a quoted field
 /// may span lines, and blank lines are skipped, so the line is not the row's index + 2).
 struct ResultFile {

@@ -236,6 +236,52 @@ TEST(Report, WithoutEmbreeRobustEveryRowKeepsEmbreesDefaultMode) {
       << md;
 }
 
+// Our packet layouts against Embree's packets: the faster of its widths in the cell (embree_16 on
+// primary rays, embree_8 on shadow rays here), in the mode the row's kernels are compared with.
+TEST(Report, PacketLayoutsAreComparedWithEmbreesFastestPacketWidth) {
+  const auto path = temp_csv("packets.csv");
+  {
+    CsvWriter w(path, columns_with_samples());
+    for (const std::string rs : {"primary", "shadow"}) {
+      const bool primary = rs == "primary";
+      w.append(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 4.0 * (1 << 20), "", 4.0));
+      w.append(make_row("embree", "quality=medium", "embree_8", rs, 10.0, 4.0 * (1 << 20), "",
+                        primary ? 5.0 : 8.0));
+      w.append(make_row("embree", "quality=medium", "embree_16", rs, 10.0, 4.0 * (1 << 20), "",
+                        primary ? 6.0 : 2.0));
+      w.append(make_row("embree", "quality=medium;robust=1", "embree_1", rs, 20.0, 8.0 * (1 << 20), "", 2.0));
+      w.append(make_row("embree", "quality=medium;robust=1", "embree_8", rs, 20.0, 8.0 * (1 << 20), "", 4.0));
+      w.append(make_row("wide_collapse", "c_trav=1", "bvh8:tri=mtn,box=fma,packet=8", rs, 5.0,
+                        2.0 * (1 << 20), "30.0", 3.0));
+      w.append(make_row("wide_collapse", "c_trav=1", "bvh8:packet=8", rs, 5.0, 2.0 * (1 << 20), "30.0", 3.0));
+      w.append(make_row("wide_collapse", "c_trav=1", "bvh8", rs, 5.0, 2.0 * (1 << 20), "30.0", 3.0));
+    }
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  // Fast variant in packets: 3 / 6 (embree_16) on primary rays, 3 / 8 (embree_8) on shadow rays.
+  EXPECT_NE(
+      md.find("| bvh8:tri=mtn,box=fma,packet=8 | **5.0** | **6.0** (0.60 [0.60, 0.60] \u25B2) | **2.0** "
+              "(0.50x) | **30.00** | 3.00 (0.50 [0.50, 0.50] \u25BC) | 3.00 (0.38 [0.38, 0.38] \u25BC) |"),
+      std::string::npos)
+      << md;
+  // Exact kernels in packets against Embree robust's packets: 3 / 4.
+  EXPECT_NE(
+      md.find("| bvh8:packet=8 \u2020 | **5.0** | **6.0** (0.30 [0.30, 0.30] \u25B2) | **2.0** (0.25x) | "
+              "**30.00** | 3.00 (0.75 [0.75, 0.75] \u25BC) | 3.00 (0.75 [0.75, 0.75] \u25BC) |"),
+      std::string::npos)
+      << md;
+  // One ray at a time stays against Embree robust 1-ray: 3 / 2.
+  EXPECT_NE(
+      md.find("| bvh8 \u2020 | **5.0** | **6.0** (0.30 [0.30, 0.30] \u25B2) | **2.0** (0.25x) | **30.00** | "
+              "3.00 (1.50 [1.50, 1.50] \u25B2) | 3.00 (1.50 [1.50, 1.50] \u25B2) |"),
+      std::string::npos)
+      << md;
+  EXPECT_NE(md.find("Our packet layouts (packet=8) against Embree's packets instead"), std::string::npos)
+      << md;
+}
+
 TEST(Report, TheCaptionNamesTheIsaOfEachLayoutWhereTheyDiffer) {
   const auto path = temp_csv("isas.csv");
   {

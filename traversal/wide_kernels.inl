@@ -714,15 +714,33 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, 
 #endif
 
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
-// MollerTrumboreNormalTest on 4 or 8 lanes (V = __m128 or __m256, the lanes loaded by `load`): mtn_lane
-// lane for lane, with FMA instructions where it calls fmaf. The division waits for a lane to pass, so a
-// ray that hits nothing in the block divides nothing; t is checked again once divided.
+// A ray's origin, direction and interval in every lane (one ray against several triangles), or eight
+// rays' in theirs (a packet against one triangle, wide_packets.inl).
+template <class V>
+struct RayLanes {
+  V org[3];
+  V dir[3];
+  V tmin, tmax;
+};
+
+template <class V, class Ops>
+SAHBENCH_KERNEL_INLINE RayLanes<V> ray_lanes(const WideRay& r, float tmin, float tmax) {
+  return {{Ops::set1(r.org[0]), Ops::set1(r.org[1]), Ops::set1(r.org[2])},
+          {Ops::set1(r.dir[0]), Ops::set1(r.dir[1]), Ops::set1(r.dir[2])},
+          Ops::set1(tmin),
+          Ops::set1(tmax)};
+}
+
+// MollerTrumboreNormalTest on 4 or 8 lanes (V = __m128 or __m256, the triangles' lanes loaded by `load`,
+// the rays' in `r`): mtn_lane lane for lane, with FMA instructions where it calls fmaf. The division
+// waits for a lane to pass, so a ray that hits nothing in the block divides nothing; t is checked again
+// once divided.
 template <class V, class Ops, class Load>
-SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const WideRay& r, float tmin,
-                                                    float tmax, float* t_out, float* u_out, float* v_out) {
-  const V dx = Ops::set1(r.dir[0]), dy = Ops::set1(r.dir[1]), dz = Ops::set1(r.dir[2]);
-  const V cx = Ops::sub(load(0, 0), Ops::set1(r.org[0])), cy = Ops::sub(load(0, 1), Ops::set1(r.org[1])),
-          cz = Ops::sub(load(0, 2), Ops::set1(r.org[2]));
+SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const RayLanes<V>& r, float* t_out,
+                                                    float* u_out, float* v_out) {
+  const V dx = r.dir[0], dy = r.dir[1], dz = r.dir[2];
+  const V cx = Ops::sub(load(0, 0), r.org[0]), cy = Ops::sub(load(0, 1), r.org[1]),
+          cz = Ops::sub(load(0, 2), r.org[2]);
   const V nx = load(3, 0), ny = load(3, 1), nz = load(3, 2);
   const V rx = Ops::fmsub(dy, cz, Ops::mul(dz, cy)), ry = Ops::fmsub(dz, cx, Ops::mul(dx, cz)),
           rz = Ops::fmsub(dx, cy, Ops::mul(dy, cx));
@@ -739,12 +757,12 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const Wi
                                      Ops::and_(Ops::ge(su, zero), Ops::ge(sv, zero))));
   hit = Ops::and_(hit, Ops::le(Ops::add(su, sv), abs_det));
   const V st = Ops::xor_(Ops::fmadd(cx, nx, Ops::fmadd(cy, ny, Ops::mul(cz, nz))), sign);
-  hit = Ops::and_(hit, Ops::and_(Ops::ge(st, Ops::mul(abs_det, Ops::set1(tmin))),
-                                 Ops::le(st, Ops::mul(abs_det, Ops::set1(tmax)))));
+  hit = Ops::and_(hit,
+                  Ops::and_(Ops::ge(st, Ops::mul(abs_det, r.tmin)), Ops::le(st, Ops::mul(abs_det, r.tmax))));
   if (!Ops::movemask(hit)) return 0;
   const V inv_det = Ops::div(Ops::set1(1.0f), abs_det);
   const V t = Ops::mul(st, inv_det);
-  hit = Ops::and_(hit, Ops::and_(Ops::ge(t, Ops::set1(tmin)), Ops::le(t, Ops::set1(tmax))));
+  hit = Ops::and_(hit, Ops::and_(Ops::ge(t, r.tmin), Ops::le(t, r.tmax)));
   Ops::store(t_out, t);
   Ops::store(u_out, Ops::mul(su, inv_det));
   Ops::store(v_out, Ops::mul(sv, inv_det));
@@ -797,8 +815,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const 
   auto load = [&](int part, int axis) __attribute__((always_inline)) {
     return _mm_load_ps(mtn_part(b, part)[axis]);
   };
-  const uint32_t hits =
-      intersect_mtn_lanes<__m128, Ops128>(lanes_valid(b.tri), load, r, tmin, tmax, t_out, u_out, v_out);
+  const uint32_t hits = intersect_mtn_lanes<__m128, Ops128>(
+      lanes_valid(b.tri), load, ray_lanes<__m128, Ops128>(r, tmin, tmax), t_out, u_out, v_out);
   const uint32_t in_double = mtn_double_lanes(b, r);
   if (in_double) [[unlikely]]
     return mtn_lanes_in_double(&b, in_double, hits, r, tmin, tmax, t_out, u_out, v_out);
@@ -812,8 +830,9 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, c
   auto load = [&](int part, int axis) __attribute__((always_inline)) {
     return load_pair(mtn_part(b[0], part)[axis], mtn_part(b[1], part)[axis]);
   };
-  const uint32_t hits = intersect_mtn_lanes<__m256, Ops256>(pair_lanes_valid(b[0].tri, b[1].tri), load, r,
-                                                            tmin, tmax, t_out, u_out, v_out);
+  const uint32_t hits =
+      intersect_mtn_lanes<__m256, Ops256>(pair_lanes_valid(b[0].tri, b[1].tri), load,
+                                          ray_lanes<__m256, Ops256>(r, tmin, tmax), t_out, u_out, v_out);
   const uint32_t in_double = mtn_double_lanes(b[0], r) | mtn_double_lanes(b[1], r) << kBlockWidth;
   if (in_double) [[unlikely]]
     return mtn_lanes_in_double(b, in_double, hits, r, tmin, tmax, t_out, u_out, v_out);

@@ -10,8 +10,9 @@
 // the sign of each direction component, so that one near and one far plane per axis serve all eight, and
 // (box=fma) every ray is in that test's domain; otherwise its rays are traced one at a time by the
 // single-ray kernel. Each lane computes the slab test of intersect_children with the same operations in
-// the same order, and leaves are tested ray by ray with intersect_leaf, so every ray gets the hit the
-// single-ray kernel returns; only the order in which nodes are visited differs.
+// the same order, and leaves are tested ray by ray with intersect_leaf (tri=mtn: a triangle against all
+// the rays at once where most of the packet enters the leaf, packet_leaf_mtn), so every ray gets a hit of
+// the single-ray tests; only the order in which nodes and triangles are visited differs.
 
 inline constexpr uint32_t kPacketWidth = 8;
 // A packet's rays go on one at a time below a node that this many or fewer of them enter: a packet's
@@ -22,11 +23,13 @@ inline constexpr int kPacketSwitch = 3;
 // The eight rays' slab constants, one lane each, and the planes they share.
 struct alignas(32) PacketRays {
   __m256 org[3];
+  __m256 dir[3];
   __m256 inv[3];
   __m256 org_inv[3];
   __m256 tmin;
   uint32_t near_plane[3];
   uint32_t far_plane[3];
+  uint32_t mtn_in_double;  // tri=mtn: the lanes whose ray the float test cannot take (WideRay::mtn_in_double)
 };
 
 // A child slot entered by some of the packet's rays: their entry distances, NaN in the other lanes (a
@@ -51,25 +54,29 @@ SAHBENCH_KERNEL_INLINE bool packet_coherent(const WideRay* rays, uint32_t n) {
 }
 
 SAHBENCH_KERNEL_INLINE PacketRays make_packet(const WideRay* rays, uint32_t n) {
-  alignas(32) float lanes[10][kPacketWidth];
+  alignas(32) float lanes[13][kPacketWidth];
+  PacketRays p;
+  p.mtn_in_double = 0;
   for (uint32_t j = 0; j < kPacketWidth; ++j) {
     const WideRay& r = rays[j < n ? j : 0];  // unused lanes copy ray 0 and are never active
     for (uint32_t axis = 0; axis < 3; ++axis) {
       lanes[axis][j] = r.org[axis];
-      lanes[3 + axis][j] = r.inv_dir[axis];
-      lanes[6 + axis][j] = r.org_inv[axis];
+      lanes[3 + axis][j] = r.dir[axis];
+      lanes[6 + axis][j] = r.inv_dir[axis];
+      lanes[9 + axis][j] = r.org_inv[axis];
     }
-    lanes[9][j] = r.tmin;
+    lanes[12][j] = r.tmin;
+    p.mtn_in_double |= static_cast<uint32_t>(r.mtn_in_double) << j;
   }
-  PacketRays p;
   for (uint32_t axis = 0; axis < 3; ++axis) {
     p.org[axis] = _mm256_load_ps(lanes[axis]);
-    p.inv[axis] = _mm256_load_ps(lanes[3 + axis]);
-    p.org_inv[axis] = _mm256_load_ps(lanes[6 + axis]);
+    p.dir[axis] = _mm256_load_ps(lanes[3 + axis]);
+    p.inv[axis] = _mm256_load_ps(lanes[6 + axis]);
+    p.org_inv[axis] = _mm256_load_ps(lanes[9 + axis]);
     p.near_plane[axis] = rays[0].near_plane[axis];
     p.far_plane[axis] = rays[0].far_plane[axis];
   }
-  p.tmin = _mm256_load_ps(lanes[9]);
+  p.tmin = _mm256_load_ps(lanes[12]);
   return p;
 }
 
@@ -127,6 +134,50 @@ SAHBENCH_KERNEL_INLINE float horizontal_min(__m256 t) {
   return _mm256_cvtss_f32(m);
 }
 
+// tri=mtn: the triangles of a leaf against the packet's rays in `lanes`, one triangle at a time in eight
+// lanes (intersect_mtn_lanes with the rays in the lanes), as Embree's packet intersectors test their
+// Triangle4 against K rays. Each lane computes mtn_lane's operations, so a ray's hit is a hit of the
+// single-ray test; a triangle the float test cannot take (NormalBlock::in_double) goes through mtn_lane
+// ray by ray. Updates best and best_t as intersect_leaf does (any hit: a ray that hits gets a NaN
+// best_t).
+template <bool kAnyHit>
+SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const NormalBlock* blocks, uint32_t count, const WideRay* rays,
+                                            const PacketRays& p, uint32_t lanes, Hit* best, float* best_t) {
+  for (uint32_t b = 0; b < count && lanes; ++b) {
+    const NormalBlock& block = blocks[b];
+    for (uint32_t i = 0; i < kBlockWidth && lanes; ++i) {
+      const uint32_t prim = block.tri.prim[i];
+      if (prim == kInvalidPrim) continue;
+      alignas(32) float t[kPacketWidth], u[kPacketWidth], v[kPacketWidth];
+      uint32_t hits = 0;
+      if (block.in_double >> i & 1u) [[unlikely]] {
+        for (uint32_t m = lanes; m; m &= m - 1) {
+          const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
+          if (mtn_lane(block, i, rays[j], rays[j].tmin, best_t[j], t[j], u[j], v[j])) hits |= 1u << j;
+        }
+      } else {
+        auto load = [&](int part, int axis) __attribute__((always_inline)) {
+          return _mm256_broadcast_ss(&mtn_part(block, part)[axis][i]);
+        };
+        const RayLanes<__m256> r{
+            {p.org[0], p.org[1], p.org[2]}, {p.dir[0], p.dir[1], p.dir[2]}, p.tmin, _mm256_load_ps(best_t)};
+        hits = intersect_mtn_lanes<__m256, Ops256>(lane_mask(lanes), load, r, t, u, v);
+      }
+      for (; hits; hits &= hits - 1) {
+        const uint32_t j = static_cast<uint32_t>(__builtin_ctz(hits));
+        if constexpr (kAnyHit) {
+          best[j] = {prim, t[j], 0.0f, 0.0f};
+          best_t[j] = __builtin_nanf("");
+          lanes &= ~(1u << j);
+        } else if (t[j] < best_t[j] || (t[j] == best_t[j] && prim < best[j].prim)) {
+          best[j] = {prim, t[j], u[j], v[j]};
+          best_t[j] = t[j];
+        }
+      }
+    }
+  }
+}
+
 // Rays [0, n) of `rays` as one packet, answers into hits[0, n) or occluded[0, n). Closest hit visits the
 // children the packet enters nearest first by their nearest ray's entry (ties to the higher slot), and
 // skips, per lane, entries beyond that ray's closest hit so far; any hit visits them in kOrder as
@@ -174,7 +225,17 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
         }
       } else if (entry.count != 0) {
         const BlockOf<kTri>* blocks = &at<BlockOf<kTri>>(arena, entry.child);
-        for (uint32_t m = lanes; m; m &= m - 1) {
+        uint32_t alone = lanes;  // the rays that test the leaf one at a time
+        if constexpr (kTri == TriangleTestKind::kMollerTrumboreNormal) {
+          // A triangle against eight lanes costs about what one ray against a block of four does, so the
+          // packet test pays where more than half the packet is in the leaf.
+          const uint32_t together = lanes & ~p.mtn_in_double;
+          if (__builtin_popcount(together) > static_cast<int>(kPacketWidth / 2)) {
+            packet_leaf_mtn<kAnyHit>(blocks, entry.count, rays, p, together, best, best_t);
+            alone = lanes & p.mtn_in_double;
+          }
+        }
+        for (uint32_t m = alone; m; m &= m - 1) {
           const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
           if (intersect_leaf<kTri, kAnyHit, false>(blocks, entry.count, rays[j], best[j], best_t[j], nullptr))
             best_t[j] = __builtin_nanf("");

@@ -1,5 +1,5 @@
-// The builders' passes: one binning split search, one full-sweep split search, the collapse to 8-wide
-// (greedy and SAH-optimal), the wide layout compile and refit. Items are primitives per second.
+// The builders' passes: one binning split search, one full-sweep split search, the EPO cost, the collapse
+// to 8-wide (greedy and SAH-optimal), the wide layout compile and refit. Items are primitives per second.
 
 #include <benchmark/benchmark.h>
 
@@ -9,6 +9,7 @@
 #include "builders/binned_sah.h"
 #include "builders/collapse.h"
 #include "builders/sweep_sah.h"
+#include "core/epo.h"
 #include "core/refit.h"
 #include "traversal/wide_bvh.h"
 
@@ -43,6 +44,15 @@ void BM_SweepPass(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * n));
 }
 BENCHMARK(BM_SweepPass)->Name("sweep_pass")->Unit(benchmark::kMillisecond);
+
+// The EPO cost (core/epo.h) of a binned SAH tree over a 100k soup: a walk of the tree per triangle.
+void BM_Epo(benchmark::State& state) {
+  const Bvh& tree = binary_tree(100'000);
+  const auto& triangles = soup(100'000);
+  for (auto _ : state) benchmark::DoNotOptimize(epo_cost(tree, triangles, SahCost{}));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 100'000));
+}
+BENCHMARK(BM_Epo)->Name("epo")->Unit(benchmark::kMillisecond);
 
 void BM_CollapseGreedy(benchmark::State& state) {
   const Bvh& tree = binary_tree(100'000);

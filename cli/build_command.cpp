@@ -125,7 +125,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
         continue;
       }
       // The statistics of a valid tree only: compute_stats walks nodes[] unchecked.
-      const CheckedTree tree = check_tree(*jobs[i].tree, scene.triangles, run.values);
+      const CheckedTree tree = check_tree(*jobs[i].tree, scene.triangles, run.values, /*with_epo=*/false);
       if (!tree.ok()) {
         exit_code = 1;
         fmt::print(out,

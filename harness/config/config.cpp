@@ -101,7 +101,7 @@ void read_experiment(const Source& src, const toml::table& root, ExperimentConfi
   const auto& table = as_table(src, *node, "[experiment]");
   check_keys(src, table, "[experiment]",
              {"name", "output", "seed", "threads", "scenes", "optional_scenes", "layouts", "reference",
-              "brute_force_max_triangles"});
+              "brute_force_max_triangles", "epo"});
 
   const auto* name = table.get("name");
   if (!name) src.fail(table, "[experiment] has no name (name = \"...\")");
@@ -144,6 +144,11 @@ void read_experiment(const Source& src, const toml::table& root, ExperimentConfi
       src.fail(*n, "experiment.brute_force_max_triangles applies only with reference = \"auto\"");
     config.brute_force_max_triangles =
         read_int(src, *n, "experiment.brute_force_max_triangles", 0, kMaxInt64);
+  }
+  if (const auto* n = table.get("epo")) {
+    const auto* value = n->as_boolean();
+    if (value == nullptr) src.fail(*n, "experiment.epo must be true or false, not " + type_name(*n));
+    config.epo = value->get();
   }
 }
 

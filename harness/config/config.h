@@ -16,6 +16,9 @@
 //   layouts = ["bvh2"]                # default ["bvh2"]
 //   reference = "auto"                # auto | embree | brute_force | none
 //   brute_force_max_triangles = 20000 # auto only: brute force up to this many triangles, else Embree
+//   epo = false                       # true: each tree of ours also gets its EPO cost (core/epo.h) in
+//                                     # epo_cost and sah_epo_cost; untimed, but a walk of the tree per
+//                                     # triangle, so off unless a config studies tree quality
 //
 //   [repetitions]                     # timed runs >= 1, warm-up runs >= 0
 //   build = 5
@@ -262,6 +265,8 @@ struct ExperimentConfig {
   Repetitions reps;
   ReferencePolicy reference = ReferencePolicy::kAuto;
   uint64_t brute_force_max_triangles = 20000;
+  /// experiment.epo: compute every tree's EPO cost (core/epo.h) for its rows.
+  bool epo = false;
   /// Present for an animation experiment ([animation] table).
   std::optional<AnimationConfig> animation;
 

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "harness/report/predictors.h"
 #include "harness/report/ratio_stats.h"
 #include "harness/report/report_table.h"
 #include "harness/report/result_cells.h"
@@ -516,6 +517,7 @@ void print_report(const ReportOptions& options, std::ostream& out) {
       render_latex(table, out);
     else
       render_markdown(table, out);
+    render_predictors(key.text(), predictor_rows(group), options.format, out);
   }
   // Groups another run of the same fingerprint had and this one lacks altogether have no table to note.
   std::vector<std::string> lost;

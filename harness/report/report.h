@@ -5,8 +5,10 @@
 // samples paired by round, with a 95% interval and a mark where it excludes 1 (harness/report/ratio_stats.h).
 // The best value of each column is marked, a caption names the machine, commit, thread count,
 // repetitions and the share of rays that hit, and a note names the cells that another run of the same
-// fingerprint has and this one lacks. A CSV that is not sahbench's, or a run whose rows carry two
-// fingerprints, is an Error. Markdown (the default) or LaTeX (booktabs) for papers.
+// fingerprint has and this one lacks. Each table is followed by how well the costs (SAH, EPO, their blend,
+// the measured cost per ray) rank its builders by rays/s (harness/report/predictors.h). A CSV that is not
+// sahbench's, or a run whose rows carry two fingerprints, is an Error. Markdown (the default) or LaTeX
+// (booktabs) for papers.
 
 #include <filesystem>
 #include <iosfwd>

@@ -399,7 +399,7 @@ class AnimationRunner {
     const AnimatedBuilder& b = *job.builder;
     const Scene& scene = frame.scene;
     const Bvh& bvh = job.refit ? job.refit->tree : *job.tree;
-    const CheckedTree checked = check_tree(bvh, scene.triangles, b.run->values);
+    const CheckedTree checked = check_tree(bvh, scene.triangles, b.run->values, cfg_.epo);
     if (!checked.ok()) {
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {} frame {}:\n{}", b.label, scene.name, frame.index,
@@ -452,8 +452,8 @@ class AnimationRunner {
         row[job.refit ? "layout_refit_ms" : "layout_ms"] = fmt::format("{:.4f}", layout_t.median);
         if (!job.refit) put_build_layout_ms(row, job.source.time(), layout_t);
         put_our_layout(row, *compiled, bvh, checked, scene.triangles.size(), job.source.peak);
-        cells.push_back(
-            our_cell(std::move(row), label(frame, job, threads, layout.name, rs), compiled, rs, s));
+        cells.push_back(our_cell(std::move(row), label(frame, job, threads, layout.name, rs), compiled, rs, s,
+                                 checked.cost));
       }
     }
   }

@@ -5,6 +5,7 @@
 #include <algorithm>
 
 #include "builders/registry.h"
+#include "core/epo.h"
 #include "core/memory_tracker.h"
 #include "core/refit.h"
 #include "harness/embree/embree_trace.h"
@@ -105,11 +106,13 @@ void time_sources(std::span<TreeSource* const> sources, const Repetitions& reps,
     for (const std::size_t k : round_order(seed, sources.size(), r)) make_timed(*sources[k], before_each);
 }
 
-CheckedTree check_tree(const Bvh& bvh, std::span<const Triangle> triangles, const ParamSet& params) {
+CheckedTree check_tree(const Bvh& bvh, std::span<const Triangle> triangles, const ParamSet& params,
+                       bool with_epo) {
   CheckedTree out;
   out.report = validate(bvh, triangles);
   out.cost = sah_cost_of(params);
   if (out.ok()) out.stats = compute_stats(bvh, triangles.size(), out.cost);
+  if (out.ok() && with_epo) out.epo_ms = time_ms([&] { out.epo = epo_cost(bvh, triangles, out.cost); });
   return out;
 }
 
@@ -131,6 +134,7 @@ void put_our_layout(CsvRow& row, const CompiledLayout& layout, const Bvh& bvh, c
   row["bytes_per_tri"] = bytes_per_triangle(layout.bytes(), scene_triangles);
   row["mem_peak_bytes"] = tracking_enabled() ? std::to_string(peak) : "";
   put_tree_stats(row, tree.stats, tree.cost);
+  if (tree.epo) put_epo(row, *tree.epo, tree.stats.sah_cost);
   if (tree.source_sah) row["source_sah_cost"] = fmt::format("{:.6f}", *tree.source_sah);
   row["arity"] = std::to_string(bvh.arity);
 }
@@ -172,8 +176,9 @@ TraceCell new_cell(CsvRow row, std::string label, const RaySet& rs, std::size_t 
 }  // namespace
 
 TraceCell our_cell(CsvRow row, std::string label, std::shared_ptr<const CompiledLayout> layout,
-                   const RaySet& rs, std::size_t set_index) {
+                   const RaySet& rs, std::size_t set_index, std::optional<SahCost> cost) {
   TraceCell cell = new_cell(std::move(row), std::move(label), rs, set_index);
+  cell.cost = cost;
   const CompiledLayout* l = layout.get();
   const RaySet* set = &rs;
   cell.trace = [l, set, hits = cell.hits, occluded = cell.occluded] {
@@ -227,7 +232,7 @@ void time_cells(std::vector<TraceCell>& cells, const Repetitions& reps, uint64_t
 
 void finish_cell(TraceCell& cell, const Reference& ref, float scene_diagonal) {
   put_timing(cell.row, "trace_mrays", summarize(cell.mrays));
-  if (cell.count) put_per_ray_counts(cell.row, cell.count());
+  if (cell.count) put_per_ray_counts(cell.row, cell.count(), cell.cost);
   put_hit_fraction(cell.row, *cell.hits, *cell.occluded);
   put_mismatches(cell.row, ref, *cell.set, scene_diagonal, *cell.hits, *cell.occluded);
 }

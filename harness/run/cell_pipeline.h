@@ -95,12 +95,17 @@ struct CheckedTree {
   ValidationReport report;
   SahCost cost;
   BvhStats stats;  ///< zero for an invalid tree
+  /// The EPO cost by `cost` (core/epo.h), where asked for and the tree is valid, and the time it took (ms).
+  std::optional<double> epo;
+  double epo_ms = 0.0;
   /// A pass's: the SAH cost, by `cost`, of the tree it started from (source_sah_cost), for the row's
   /// source_sah_cost column.
   std::optional<double> source_sah;
   bool ok() const { return report.ok(); }
 };
-CheckedTree check_tree(const Bvh& bvh, std::span<const Triangle> triangles, const ParamSet& params);
+/// `with_epo`: also the EPO cost, a walk of the tree per triangle (the config's experiment.epo).
+CheckedTree check_tree(const Bvh& bvh, std::span<const Triangle> triangles, const ParamSet& params,
+                       bool with_epo);
 
 /// The SAH cost, by the constants of `params`, of the tree a pass starts from: its tree source built again
 /// here (untimed) on `triangles`. Nullopt for a builder without a source of its own (not a pass, or
@@ -112,7 +117,8 @@ std::optional<double> source_sah_cost(std::span<const Triangle> triangles, const
 void put_invalid_tree(CsvRow& row, const Bvh& bvh, const ValidationReport& report);
 
 /// The columns of a cell traced with a layout of ours: isa, mem_bytes, bytes_per_tri, mem_peak_bytes (the
-/// tree source's `peak`, where the heap is tracked), arity and the tree's statistics.
+/// tree source's `peak`, where the heap is tracked), arity and the tree's statistics (with epo_cost and
+/// sah_epo_cost where the tree has an EPO cost).
 void put_our_layout(CsvRow& row, const CompiledLayout& layout, const Bvh& bvh, const CheckedTree& tree,
                     std::size_t scene_triangles, int64_t peak);
 
@@ -140,6 +146,8 @@ struct TraceCell {
   std::size_t set_index = 0;  ///< into the plan's ray sets and references
   std::function<void()> trace;
   std::function<TraceCounts()> count;
+  /// The tree's cost model, for cost_per_ray from the counting pass; empty for Embree's cells.
+  std::optional<SahCost> cost;
   std::shared_ptr<std::vector<Hit>> hits;
   std::shared_ptr<std::vector<uint8_t>> occluded;
   std::shared_ptr<const void> keep_alive;
@@ -147,9 +155,10 @@ struct TraceCell {
 };
 
 /// A cell tracing `rs` with a layout of ours (trace_closest or trace_any, and the matching count). `rs`
-/// and `keep_alive`, which must keep `layout` alive, outlive the cell.
+/// and `keep_alive`, which must keep `layout` alive, outlive the cell. `cost`: the tree's cost model, for
+/// the row's cost_per_ray (empty where the CSV has no such column).
 TraceCell our_cell(CsvRow row, std::string label, std::shared_ptr<const CompiledLayout> layout,
-                   const RaySet& rs, std::size_t set_index);
+                   const RaySet& rs, std::size_t set_index, std::optional<SahCost> cost);
 
 /// A cell tracing `rs` with Embree's `layout` (rtcIntersect1/rtcOccluded1, or packets of its width) in
 /// `scene`, which `keep_alive` keeps alive with its device.
@@ -164,7 +173,8 @@ void time_cells(std::vector<TraceCell>& cells, const Repetitions& reps, uint64_t
                 const std::function<void()>& before_each, const std::function<void(int round)>& on_round);
 
 /// Completes a timed cell's row: trace_mrays (median, min, max, samples), nodes and primitives per ray
-/// from the counting pass, hit_fraction, and the mismatches of its last pass against `ref`.
+/// from the counting pass (and cost_per_ray, by the cell's cost model), hit_fraction, and the mismatches of
+/// its last pass against `ref`.
 void finish_cell(TraceCell& cell, const Reference& ref, float scene_diagonal);
 
 }  // namespace sahbench

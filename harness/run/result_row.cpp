@@ -5,6 +5,8 @@
 
 #include <algorithm>
 
+#include "core/epo.h"
+
 namespace sahbench {
 namespace {
 
@@ -22,7 +24,10 @@ const std::vector<std::string>& extra_columns() {
                                                    "sah_block",
                                                    "fingerprint_parts",
                                                    "build_layout_ms_samples",
-                                                   "source_sah_cost"};
+                                                   "source_sah_cost",
+                                                   "epo_cost",
+                                                   "sah_epo_cost",
+                                                   "cost_per_ray"};
   return columns;
 }
 
@@ -90,10 +95,20 @@ void put_ray_set(CsvRow& row, const RaySet& rs) {
   row["query"] = rs.occlusion ? "any" : "closest";
 }
 
-void put_per_ray_counts(CsvRow& row, const TraceCounts& counts) {
+void put_epo(CsvRow& row, double epo, double sah) {
+  row["epo_cost"] = fmt::format("{:.6f}", epo);
+  row["sah_epo_cost"] = fmt::format("{:.6f}", sah_epo_cost(sah, epo));
+}
+
+void put_per_ray_counts(CsvRow& row, const TraceCounts& counts, const std::optional<SahCost>& cost) {
   const auto rays = static_cast<double>(std::max<uint64_t>(1, counts.rays));
-  row["nodes_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.nodes_visited) / rays);
-  row["prims_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.prims_tested) / rays);
+  const double nodes = static_cast<double>(counts.nodes_visited) / rays;
+  const double prims = static_cast<double>(counts.prims_tested) / rays;
+  row["nodes_per_ray"] = fmt::format("{:.3f}", nodes);
+  row["prims_per_ray"] = fmt::format("{:.3f}", prims);
+  if (cost)
+    row["cost_per_ray"] = fmt::format(
+        "{:.3f}", static_cast<double>(cost->c_trav) * nodes + static_cast<double>(cost->c_isect) * prims);
 }
 
 void put_mismatches(CsvRow& row, const Reference& ref, const RaySet& rs, float scene_diagonal,

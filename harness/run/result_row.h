@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 
@@ -20,7 +21,7 @@ namespace sahbench {
 
 /// The CSV columns of a run: DESIGN.md's (csv.h), then config, seed, scene_source, scene_removed, query,
 /// embree_version, notes, build_isa, bytes_per_tri, sah_block, fingerprint_parts,
-/// build_layout_ms_samples and source_sah_cost.
+/// build_layout_ms_samples, source_sah_cost, epo_cost, sah_epo_cost and cost_per_ray.
 std::vector<std::string> result_columns();
 
 /// The key that identifies a cell, in the form `scene|builder|builder_params|layout|threads|ray_set|frame`,
@@ -51,8 +52,16 @@ std::string bytes_per_triangle(std::size_t bytes, std::size_t triangles);
 /// The ray set of a cell: ray_set (its name), ray_count and query ("closest", or "any" for occlusion).
 void put_ray_set(CsvRow& row, const RaySet& rs);
 
-/// nodes_per_ray and prims_per_ray (3 decimals) from a counting pass.
-void put_per_ray_counts(CsvRow& row, const TraceCounts& counts);
+/// epo_cost (core/epo.h) and sah_epo_cost, the paper's blend of `sah` and `epo` (6 decimals each).
+void put_epo(CsvRow& row, double epo, double sah);
+
+/// nodes_per_ray and prims_per_ray (3 decimals) from a counting pass; with the tree's `cost` model also
+/// cost_per_ray = c_trav * nodes_per_ray + c_isect * prims_per_ray, the SAH's cost measured on the rays.
+/// nodes_per_ray counts inner nodes and leaves whose contents were examined (TraceCounts), so unlike the
+/// SAH, which charges a leaf only for its primitives, the measured cost charges each leaf visit c_trav
+/// too; prims_per_ray counts ray/triangle tests, not SahCost's blocks. Empty `cost` (Embree's rows and
+/// the stress CSV, which has no such column): no cost_per_ray.
+void put_per_ray_counts(CsvRow& row, const TraceCounts& counts, const std::optional<SahCost>& cost);
 
 /// reference (its name), and mismatches: the answers in `hits` or `occluded` that differ from `ref`'s
 /// (count_mismatches), empty where there is no reference.

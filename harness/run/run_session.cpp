@@ -112,7 +112,7 @@ Fingerprint fingerprint_of(const ExperimentConfig& cfg, const std::vector<std::s
   std::vector<std::string> layouts;
   for (const LayoutSpec& l : cfg.layouts) layouts.push_back(l.text());
   // Part name -> the text it hashes.
-  const std::vector<std::pair<std::string, std::string>> text = {
+  std::vector<std::pair<std::string, std::string>> text = {
       {"seed", std::to_string(cfg.seed)},
       {"repetitions", fmt::format("build {} warmup {}, trace {} warmup {}, interleave {}", r.build,
                                   r.build_warmup, r.trace, r.trace_warmup, r.interleave)},
@@ -128,6 +128,8 @@ Fingerprint fingerprint_of(const ExperimentConfig& cfg, const std::vector<std::s
                                   : "static"},
       {"build", env.git_commit + " " + env.compiler + " " + env.isa + " " + env.cpu + " " + env.embree},
   };
+  // Only where it is on, so that the fingerprints of runs without it stay as they were.
+  if (cfg.epo) text.emplace_back("metrics", "epo");
 
   Fingerprint fp;
   uint64_t whole = kFnvOffset;

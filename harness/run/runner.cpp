@@ -256,7 +256,7 @@ class ExperimentRunner {
     const Scene& scene = group.scene;
     const Bvh& bvh = *job.tree;
     const TimingSummary build_t = job.source.time();
-    CheckedTree checked = check_tree(bvh, scene.triangles, b.values);
+    CheckedTree checked = check_tree(bvh, scene.triangles, b.values, cfg_.epo);
     if (!checked.ok()) {
       exit_code_ = 1;
       log_ << fmt::format("INVALID tree from {} on {}:\n{}", b.label(), scene.name, checked.report.summary());
@@ -273,6 +273,9 @@ class ExperimentRunner {
       return;
     }
     checked.source_sah = source_sah_cost(scene.triangles, b.values);
+    if (checked.epo)
+      log_ << fmt::format("{} on {}: EPO cost {:.4f} in {:.0f} ms (untimed)\n", b.label(), scene.name,
+                          *checked.epo, checked.epo_ms);
     for (const CellLayout& layout : layouts_for(b)) {
       bool any = false;
       for (const auto& rs : group.sets) any |= group.wanted(b, layout.name, rs);
@@ -289,7 +292,8 @@ class ExperimentRunner {
         row["layout_ms"] = fmt::format("{:.4f}", compiled.time.median);
         put_build_layout_ms(row, build_t, compiled.time);
         put_our_layout(row, *kept, bvh, checked, scene.triangles.size(), job.source.peak);
-        cells.push_back(our_cell(std::move(row), label(group, b, layout.name, rs), kept, rs, s));
+        cells.push_back(
+            our_cell(std::move(row), label(group, b, layout.name, rs), kept, rs, s, checked.cost));
       }
     }
   }

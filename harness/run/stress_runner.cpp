@@ -272,7 +272,7 @@ class StressRunner {
     row["t_err_ulps_mean"] = fmt::format("{:.3f}", m.t_err_ulps_mean);
     row["t_err_ulps_max_clear"] = std::to_string(m.t_err_ulps_max_clear);
     row["leaks"] = std::to_string(m.leaks);
-    if (cell.count) put_per_ray_counts(row, cell.count());
+    if (cell.count) put_per_ray_counts(row, cell.count(), std::nullopt);
     return m;
   }
 
@@ -334,7 +334,7 @@ class StressRunner {
     const uint64_t nan_bounds = count_nan_bounds(bvh);
     row["nan_bounds"] = std::to_string(nan_bounds);
     row["arity"] = std::to_string(bvh.arity);
-    const CheckedTree checked = check_tree(bvh, *ctx.triangles, params);
+    const CheckedTree checked = check_tree(bvh, *ctx.triangles, params, /*with_epo=*/false);
     if (!checked.ok() || nan_bounds) {
       row["build_failed"] = "1";
       row["notes"] = "invalid tree, not traced: " +
@@ -362,7 +362,8 @@ class StressRunner {
             fmt::format("{:.4f}", time_ms([&] { compiled = compile_layout(layout, bvh, *ctx.triangles); }));
         r["isa"] = compiled->isa();
         r["mem_bytes"] = std::to_string(compiled->bytes());
-        TraceCell cell = our_cell({}, label, compiled, ctx.rays, 0);
+        // The stress CSV has no cost_per_ray column.
+        TraceCell cell = our_cell({}, label, compiled, ctx.rays, 0, std::nullopt);
         const ErrorMetrics m = put_trace(r, cell, ctx);
         log_ << fmt::format("  {} {}: {} Mrays/s; {}\n", info->name, r["layout"], r["trace_mrays_median"],
                             metrics_summary(m));

@@ -89,15 +89,15 @@ TEST(CellPipeline, ABrokenTreeIsRefusedBeforeItsStatistics) {
   const BuilderInfo& builder = find_builder("binned_sah");
   const ParamSet params = resolve_params(builder.name, builder.params, {});
   Bvh bvh = builder.build(BuildInput::from_triangles(triangles), params);
-  ASSERT_TRUE(check_tree(bvh, triangles, params).ok());
-  EXPECT_GT(check_tree(bvh, triangles, params).stats.sah_cost, 0.0);
+  ASSERT_TRUE(check_tree(bvh, triangles, params, false).ok());
+  EXPECT_GT(check_tree(bvh, triangles, params, false).stats.sah_cost, 0.0);
   // A child index far out of range: compute_stats would read past nodes[].
   for (Node& n : bvh.nodes)
     if (!n.is_leaf()) {
       n.first = 1u << 30;
       break;
     }
-  const CheckedTree broken = check_tree(bvh, triangles, params);
+  const CheckedTree broken = check_tree(bvh, triangles, params, false);
   EXPECT_FALSE(broken.ok());
   EXPECT_EQ(broken.stats.sah_cost, 0.0);
   CsvRow row;
@@ -133,7 +133,7 @@ TEST(CellPipeline, CellsOfOursAndEmbreeAreTimedCountedAndChecked) {
       compile_layout(parse_layout_spec("bvh2"), *tree, scene.triangles);
   std::vector<TraceCell> cells;
   for (std::size_t s = 0; s < sets.size(); ++s) {
-    cells.push_back(our_cell({}, "ours", layout, *sets[s], s));
+    cells.push_back(our_cell({}, "ours", layout, *sets[s], s, SahCost{}));
     cells.push_back(embree_cell({}, "embree", *embree->scene, kEmbreeLayouts[0], *sets[s], s, embree));
   }
   int rounds = 0;

@@ -646,6 +646,20 @@ TEST(HarnessConfigErrors, CountsBelowMinimum) {
   EXPECT_EQ(ok.reps, (Repetitions{5, 0, 5, 0}));
 }
 
+// experiment.epo turns on the EPO cost of every tree (core/epo.h); off unless set, and only a boolean.
+TEST(HarnessConfigErrors, EpoIsABooleanOffByDefault) {
+  EXPECT_FALSE(parse_with("").epo);
+  const auto experiment = [](const std::string& line) {
+    return "[experiment]\nname = \"t\"\nscenes = [\"s\"]\n" + line +
+           "\n[[builder]]\nname = \"binned_sah\"\n[[ray_set]]\nkind = \"primary\"\n";
+  };
+  EXPECT_TRUE(parse_experiment_config(experiment("epo = true"), "t.toml").epo);
+  EXPECT_FALSE(parse_experiment_config(experiment("epo = false"), "t.toml").epo);
+  expect_error(experiment("epo = \"yes\""), 4, {"experiment.epo must be true or false, not a string"});
+  expect_error(experiment("epo = 1"), 4, {"experiment.epo must be true or false, not an integer"});
+  expect_error(experiment("epos = true"), 4, {"epos"});
+}
+
 TEST(HarnessConfigErrors, ExperimentNameAndRequiredTables) {
   expect_error("[experiment]\nscenes = [\"s\"]\n", 1, {"[experiment] has no name"});
   expect_error("[experiment]\nname = \"my run\"\nscenes = [\"s\"]\n", 2,

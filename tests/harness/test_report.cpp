@@ -6,11 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "core/error.h"
+#include "harness/report/predictors.h"
 #include "harness/report/ratio_stats.h"
 #include "harness/report/report.h"
 #include "harness/report/report_table.h"
@@ -653,6 +655,63 @@ TEST(Report, FewerCellsThanAnotherRunOfTheSameFingerprintAreNoted) {
   std::ostringstream full;
   print_report({{path}, "r0"}, full);
   EXPECT_EQ(full.str().find("Note:"), std::string::npos) << full.str();
+}
+
+}  // namespace
+}  // namespace sahbench
+
+namespace sahbench {
+namespace {
+
+TEST(ReportPredictors, SpearmanOfPerfectReversedAndTiedOrders) {
+  const std::vector<double> x = {1, 2, 3, 4, 5};
+  EXPECT_DOUBLE_EQ(*spearman(x, std::vector<double>{10, 20, 30, 40, 50}), 1.0);
+  EXPECT_DOUBLE_EQ(*spearman(x, std::vector<double>{5, 4, 3, 2, 1}), -1.0);
+  // Monotone but not linear: ranks agree exactly.
+  EXPECT_DOUBLE_EQ(*spearman(x, std::vector<double>{1, 8, 27, 64, 1000}), 1.0);
+  // Ties take the mean rank: y ranks 1.5 1.5 3 4 5 against 1..5.
+  EXPECT_NEAR(*spearman(x, std::vector<double>{1, 1, 2, 3, 4}), 9.5 / std::sqrt(10.0 * 9.5), 1e-12);
+  // Nothing to order: a constant side, fewer than two pairs, or sizes that differ.
+  EXPECT_FALSE(spearman(x, std::vector<double>{2, 2, 2, 2, 2}));
+  EXPECT_FALSE(spearman(std::vector<double>{1}, std::vector<double>{1}));
+  EXPECT_FALSE(spearman(x, std::vector<double>{1, 2}));
+}
+
+// Four builders whose SAH orders them exactly as their speed on bvh2, whose cost per ray orders them in
+// reverse, and whose EPO only two have; two builders on bvh4, too few to rank; Embree takes no part.
+TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
+  const auto path = temp_csv("predictors.csv");
+  std::vector<std::string> columns = columns_with_samples();
+  for (const char* c : {"epo_cost", "sah_epo_cost", "cost_per_ray"}) columns.push_back(c);
+  {
+    CsvWriter w(path, columns);
+    w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 9.0));
+    const std::vector<double> speed = {4.0, 1.0, 3.0, 2.0};
+    for (std::size_t i = 0; i < speed.size(); ++i) {
+      CsvRow row = make_row("binned_sah", "bins=" + std::to_string(8 << i), "bvh2", "primary", 5.0, 1 << 20,
+                            std::to_string(100.0 - 10.0 * speed[i]), speed[i]);
+      row["cost_per_ray"] = std::to_string(10.0 * speed[i]);
+      if (i < 2) row["epo_cost"] = std::to_string(1.0 / speed[i]);
+      w.append(row);
+    }
+    for (const std::string bins : {"8", "16"})
+      w.append(make_row("wide_binned_sah", "bins=" + bins, "bvh4", "primary", 5.0, 1 << 20, "30.0", 3.0));
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("### How well the costs predict rays/s: proc:soup at 2 threads"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| layout | ray set | builders | SAH | EPO | SAH+EPO | cost/ray |"), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| bvh2 | primary | 4 | 1.00 | - | - | -1.00 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("Not ranked, fewer than 3 builders (layout, ray set, builders): bvh4 primary (2)."),
+            std::string::npos)
+      << md;
+
+  std::ostringstream tex;
+  print_report({{path}, "", ReportFormat::kLatex}, tex);
+  EXPECT_NE(tex.str().find("bvh2 & primary & 4 & 1.00 & - & - & -1.00 \\\\"), std::string::npos) << tex.str();
 }
 
 }  // namespace

@@ -128,6 +128,56 @@ TEST(HarnessRun, PassRowsRecordTheirSourcesSah) {
   EXPECT_EQ(passes, 16u);
 }
 
+// experiment.epo: our rows carry the tree's EPO cost and its blend with SAH; every row of ours the cost per
+// ray from its counting pass (c_trav nodes + c_isect primitives); Embree's rows, whose tree is not in the
+// common format and which have no counting pass, neither.
+TEST(HarnessRun, EpoAndCostPerRayColumns) {
+  for (const bool epo : {true, false}) {
+    const std::string name = epo ? "run_epo" : "run_no_epo";
+    const auto dir = temp_dir();
+    const auto csv = dir / (name + ".csv");
+    std::filesystem::remove(csv);
+    const auto config = dir / (name + ".toml");
+    std::ofstream(config) << "[experiment]\nname = \"" << name << "\"\noutput = \"" << csv.string()
+                          << "\"\nscenes = [\"proc:soup:tris=2000\"]\nlayouts = [\"bvh2\", \"bvh4\"]\n"
+                          << "reference = \"none\"\nepo = " << (epo ? "true" : "false") << "\n"
+                          << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+                          << "[[builder]]\nname = \"binned_sah\"\nc_trav = 1.5\n"
+                          << "[[builder]]\nname = \"sbvh\"\n"
+                          << "[[builder]]\nname = \"wide_binned_sah\"\narity = 4\n"
+                          << "[[builder]]\nname = \"embree\"\n"
+                          << "[[ray_set]]\nkind = \"primary\"\nwidth = 24\nheight = 24\n";
+    std::ostringstream log;
+    ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+    const auto rows = read_csv(csv);
+    ASSERT_FALSE(rows.empty());
+    std::size_t ours = 0;
+    for (const auto& row : rows) {
+      const std::string what = row.at("builder") + " " + row.at("layout");
+      if (row.at("builder") == "embree") {
+        EXPECT_EQ(row.at("epo_cost"), "") << what;
+        EXPECT_EQ(row.at("sah_epo_cost"), "") << what;
+        EXPECT_EQ(row.at("cost_per_ray"), "") << what;
+        continue;
+      }
+      ++ours;
+      const double expected = std::stod(row.at("sah_c_trav")) * std::stod(row.at("nodes_per_ray")) +
+                              std::stod(row.at("sah_c_isect")) * std::stod(row.at("prims_per_ray"));
+      // Each count is printed to 3 decimals, and so is the cost.
+      EXPECT_NEAR(std::stod(row.at("cost_per_ray")), expected, 0.002 * std::stod(row.at("sah_c_trav")))
+          << what;
+      if (!epo) {
+        EXPECT_EQ(row.at("epo_cost"), "") << what;
+        continue;
+      }
+      const double e = std::stod(row.at("epo_cost")), sah = std::stod(row.at("sah_cost"));
+      EXPECT_GT(e, 0.0) << what;
+      EXPECT_NEAR(std::stod(row.at("sah_epo_cost")), 0.29 * sah + 0.71 * e, 2e-6) << what;
+    }
+    EXPECT_EQ(ours, 3u);
+  }
+}
+
 TEST(HarnessRun, InterleavedAndBackToBackRepetitionsGiveTheSameCellsAndCounts) {
   // Interleaving changes only when each repetition runs: the same cells, each timed `trace` times, with
   // the same counts and reference checks, and (Embree's cells included) every structure alive until its

@@ -1,0 +1,144 @@
+#include "harness/report/predictors.h"
+
+#include <fmt/format.h>
+#include <fmt/ostream.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <ostream>
+
+#include "core/epo.h"
+#include "harness/report/report_table.h"
+
+namespace sahbench {
+namespace {
+
+// Ranks from 1, ties given the mean of the ranks they span.
+std::vector<double> ranks(std::span<const double> v) {
+  std::vector<std::size_t> order(v.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+  std::vector<double> out(v.size());
+  for (std::size_t i = 0; i < order.size();) {
+    std::size_t j = i;
+    while (j + 1 < order.size() && v[order[j + 1]] == v[order[i]]) ++j;
+    const double mean_rank = (static_cast<double>(i) + static_cast<double>(j)) / 2.0 + 1.0;
+    for (std::size_t k = i; k <= j; ++k) out[order[k]] = mean_rank;
+    i = j + 1;
+  }
+  return out;
+}
+
+std::string field(const CsvRow& row, const std::string& column) {
+  const auto it = row.find(column);
+  return it == row.end() ? "" : it->second;
+}
+
+// "0.83", or "-" where there is no correlation.
+std::string rho_text(const std::optional<double>& rho) {
+  return rho ? fmt::format("{:.2f}", *rho) : "-";
+}
+
+}  // namespace
+
+std::optional<double> spearman(std::span<const double> x, std::span<const double> y) {
+  if (x.size() != y.size() || x.size() < 2) return std::nullopt;
+  const std::vector<double> rx = ranks(x), ry = ranks(y);
+  const double mean = (static_cast<double>(x.size()) + 1.0) / 2.0;
+  double sxy = 0.0, sxx = 0.0, syy = 0.0;
+  for (std::size_t i = 0; i < rx.size(); ++i) {
+    sxy += (rx[i] - mean) * (ry[i] - mean);
+    sxx += (rx[i] - mean) * (rx[i] - mean);
+    syy += (ry[i] - mean) * (ry[i] - mean);
+  }
+  if (!(sxx > 0.0) || !(syy > 0.0)) return std::nullopt;
+  return sxy / std::sqrt(sxx * syy);
+}
+
+std::vector<PredictorRow> predictor_rows(const std::vector<const CsvRow*>& group) {
+  std::vector<PredictorRow> out;
+  std::vector<std::vector<const CsvRow*>> members;
+  for (const CsvRow* r : group) {
+    // Our traced rows: Embree's have no SAH cost, an invalid tree's no rays/s.
+    if (!csv_number(*r, "sah_cost") || !csv_number(*r, "trace_mrays_median")) continue;
+    const std::string layout = field(*r, "layout"), ray_set = field(*r, "ray_set");
+    auto it = std::find_if(out.begin(), out.end(),
+                           [&](const PredictorRow& p) { return p.layout == layout && p.ray_set == ray_set; });
+    if (it == out.end()) {
+      it = out.insert(out.end(), PredictorRow{layout, ray_set});
+      members.emplace_back();
+    }
+    members[static_cast<std::size_t>(it - out.begin())].push_back(r);
+  }
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i].builders = members[i].size();
+    for (std::size_t p = 0; p < kPredictorColumns.size(); ++p) {
+      std::vector<double> speed, negated_cost;
+      for (const CsvRow* r : members[i])
+        if (const auto cost = csv_number(*r, kPredictorColumns[p])) {
+          speed.push_back(*csv_number(*r, "trace_mrays_median"));
+          negated_cost.push_back(-*cost);
+        }
+      if (speed.size() >= kMinRankedBuilders) out[i].rho[p] = spearman(speed, negated_cost);
+    }
+  }
+  return out;
+}
+
+void render_predictors(const std::string& title, const std::vector<PredictorRow>& rows, ReportFormat format,
+                       std::ostream& out) {
+  if (rows.empty()) return;
+  std::vector<const PredictorRow*> ranked;
+  std::string too_few;
+  for (const PredictorRow& r : rows) {
+    if (r.builders >= kMinRankedBuilders)
+      ranked.push_back(&r);
+    else
+      too_few += fmt::format("{}{} {} ({})", too_few.empty() ? "" : "; ", r.layout, r.ray_set, r.builders);
+  }
+  const std::string explanation = fmt::format(
+      "Spearman rank correlation across builders between rays/s and each cost, negated: 1 where the cost "
+      "orders the builders exactly as their speed, -1 in reverse. SAH+EPO is (1 - w) SAH + w EPO with w = "
+      "{} (Aila, Karras and Laine 2013); cost/ray is c_trav nodes_per_ray + c_isect prims_per_ray from "
+      "the counting kernel; '-' where fewer than {} rows have the cost or it orders nothing.",
+      kEpoWeight, kMinRankedBuilders);
+  const std::string skipped =
+      too_few.empty() ? ""
+                      : fmt::format("Not ranked, fewer than {} builders (layout, ray set, builders): {}.",
+                                    kMinRankedBuilders, too_few);
+  const bool latex = format == ReportFormat::kLatex;
+  // Nothing to rank in this table: one line rather than an empty section.
+  if (ranked.empty()) {
+    fmt::print(out, "{}Costs against rays/s, {}: {}\n\n", latex ? "% " : "", title, skipped);
+    return;
+  }
+  if (latex) {
+    fmt::print(
+        out,
+        "\\begin{{table}}[htbp]\n\\centering\n\\caption{{How well the costs predict rays/s: {}. {}}}\n"
+        "\\begin{{tabular}}{{llrrrrr}}\n\\toprule\nLayout & Ray set & Builders & SAH & EPO & SAH+EPO & "
+        "Cost/ray \\\\\n\\midrule\n",
+        latex_escape(title), latex_escape(explanation));
+    for (const PredictorRow* r : ranked)
+      fmt::print(out, "{} & {} & {} & {} & {} & {} & {} \\\\\n", latex_escape(r->layout),
+                 latex_escape(r->ray_set), r->builders, rho_text(r->rho[0]), rho_text(r->rho[1]),
+                 rho_text(r->rho[2]), rho_text(r->rho[3]));
+    fmt::print(out, "\\bottomrule\n\\end{{tabular}}\n");
+    if (!skipped.empty()) fmt::print(out, "\n\\par\\small {}\n", latex_escape(skipped));
+    fmt::print(out, "\\end{{table}}\n\n");
+    return;
+  }
+  fmt::print(out,
+             "### How well the costs predict rays/s: {}\n\n"
+             "| layout | ray set | builders | SAH | EPO | SAH+EPO | cost/ray |\n"
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: |\n",
+             title);
+  for (const PredictorRow* r : ranked)
+    fmt::print(out, "| {} | {} | {} | {} | {} | {} | {} |\n", r->layout, r->ray_set, r->builders,
+               rho_text(r->rho[0]), rho_text(r->rho[1]), rho_text(r->rho[2]), rho_text(r->rho[3]));
+  fmt::print(out, "\n{}\n\n", explanation);
+  if (!skipped.empty()) fmt::print(out, "{}\n\n", skipped);
+}
+
+}  // namespace sahbench

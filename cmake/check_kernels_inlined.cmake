@@ -1,16 +1,17 @@
 # Fails when a helper of the SIMD wide kernels (traversal/wide_kernels.inl) was compiled out of line.
 # The kernels depend on GCC inlining every helper into the traversal loop; SAHBENCH_KERNEL_INLINE forces
 # it. Without it, a new kernel variant pushed the translation units over GCC's inline-unit-growth limit
-# and the kernels lost 6-15% with nothing else to show for it (issue 4's note, stop 12).
+# and the kernels lost 6-15% with nothing else to show for it.
 # Usage: cmake -DNM=nm -DLIBRARY=libsahbench_traversal.a -P check_kernels_inlined.cmake
 execute_process(COMMAND ${NM} -C ${LIBRARY} OUTPUT_VARIABLE symbols RESULT_VARIABLE status)
 if(NOT status EQUAL 0)
   message(FATAL_ERROR "${NM} -C ${LIBRARY} failed (${status})")
 endif()
 # Functions of the SIMD kernels' namespaces that are meant to be called: the entry points, the
-# per-ray loop body, the benchmark loops, the tests' one-node test and the watertight block test (kept
-# as a call on purpose).
-set(allowed "trace_batch|trace_ray|node_test_loop|node_test_one|block_test_loop|intersect_block_watertight")
+# per-ray and per-packet loop bodies, the benchmark loops, the tests' one-node test and the watertight
+# block test (kept as a call on purpose).
+set(allowed
+    "trace_batch|trace_packet_batch|trace_ray|trace_packet|node_test_loop|node_test_one|block_test_loop|intersect_block_watertight")
 string(REPLACE "\n" ";" lines "${symbols}")
 set(found 0)
 set(offending "")

@@ -15,11 +15,13 @@
 #include <utility>
 #include <vector>
 
+#include "harness/report/report_table.h"
+
 namespace sahbench {
 
-enum class ReportFormat { kMarkdown, kLatex };
+enum class ReportFormat { kMarkdown, kLatex, kHtml };
 
-/// "markdown" or "latex"; anything else is an Error naming it.
+/// "markdown", "latex" or "html"; anything else is an Error naming it.
 ReportFormat parse_report_format(std::string_view name);
 
 struct ReportOptions {
@@ -31,7 +33,11 @@ struct ReportOptions {
   std::vector<std::filesystem::path> inputs;
   std::string run_id;  ///< only rows of this run; empty: the latest run_id in the files
   ReportFormat format;
-  std::filesystem::path output;  ///< run_report_command writes here; empty: to its stream
+  std::filesystem::path output;          ///< run_report_command writes here; empty: to its stream
+  PageWidth width = PageWidth::kSingle;  ///< LaTeX: the text width its tables are split to fit
+  std::vector<std::string> columns;      ///< table_fit.h's select_columns keys; empty: every column
+  /// HTML: every PNG and SVG in this folder (scripts/plots.py's output) is embedded; empty: none.
+  std::filesystem::path figures;
 };
 
 /// Writes the report of `options` to `out`. No rows (or none of the run asked for) is an Error.

@@ -525,10 +525,11 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   // Groups another run of the same fingerprint had and this one lacks altogether have no table to note.
   std::vector<std::string> lost;
   for (const auto& [other_run, by_group] : others)
-    for (const auto& [group_text, cells] : by_group)
-      if (std::none_of(groups.begin(), groups.end(),
-                       [&](const GroupKey& g) { return g.text() == group_text; }))
+    for (const auto& [group_text, cells] : by_group) {
+      const std::string& text = group_text;  // clang 14 cannot capture a structured binding
+      if (std::none_of(groups.begin(), groups.end(), [&](const GroupKey& g) { return g.text() == text; }))
         lost.push_back(fmt::format("{} ({} cells in run {})", group_text, cells.size(), other_run));
+    }
   if (!lost.empty()) {
     std::string text = "Run " + run + " has no cells of";
     for (std::size_t i = 0; i < lost.size(); ++i) text += (i ? "; " : " ") + lost[i];

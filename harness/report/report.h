@@ -3,8 +3,9 @@
 // and layout, columns of build time, build + layout time, memory, SAH cost and rays/second per ray set,
 // with ratios to Embree medium (rtcIntersect1 / rtcOccluded1) from the same run: for the timings from
 // samples paired by round, with a 95% interval and a mark where it excludes 1 (harness/report/ratio_stats.h).
-// The best value of each column is marked, a caption names the machine, commit, thread count,
-// repetitions and the share of rays that hit, and a note names the cells that another run of the same
+// The best value of each column is marked, a short caption names the table, machine and commit, a legend
+// under it the repetitions, how to read the ratios, the parameters the rows share (rows name only those
+// that vary) and the share of rays that hit, and a note names the cells that another run of the same
 // fingerprint has and this one lacks. A CSV that is not sahbench's, or a run whose rows carry two
 // fingerprints, is an Error. Markdown (the default) or LaTeX (booktabs) for papers.
 

@@ -217,9 +217,11 @@ void render_latex(const ReportTable& table, std::ostream& out, PageWidth width) 
     const std::string dagger = row.marked ? "$^\\dagger$" : "";
     std::string detail;  // the stacked label's second line
     if (stacked) {
-      fmt::print(out, "    {}{}", latex_escape(builder), dagger);
-      detail = latex_escape(latex_label_detail(varying, layout_column ? row.layout : ""));
-      if (!detail.empty()) detail = "{\\scriptsize " + detail + "}";
+      // The builder and layout on the value line, the varying parameters under them: the two lines
+      // are about as long, which keeps the one label column narrow.
+      fmt::print(out, "    {}{}", latex_escape(latex_label_detail(builder, layout_column ? row.layout : "")),
+                 dagger);
+      if (!varying.empty()) detail = "{\\scriptsize " + latex_escape(varying) + "}";
     } else {
       std::string label = latex_escape(builder);
       if (!varying.empty()) label += " {\\scriptsize " + latex_breakable(varying) + "}";

@@ -84,14 +84,14 @@ bool layouts_vary(const ReportTable& table);
 /// "binned_sah [bins=8]" (ReportRow::builder_short) as {"binned_sah", "bins=8"}; no brackets: {label, ""}.
 std::pair<std::string, std::string> split_row_label(const std::string& builder_short);
 
-/// Whether render_latex stacks a row's label: the builder on the value line, its varying parameters
-/// and layout on the ratio line under it, in one column (two-column pages, where two label columns
+/// Whether render_latex stacks a row's label: builder and layout on the value line, its varying
+/// parameters on the ratio line under it, in one column (two-column pages, where two label columns
 /// would leave no room for numbers).
 inline bool latex_stacked_labels(PageWidth width) {
   return width == PageWidth::kDouble;
 }
 
-/// The script-size detail of a stacked label: "bins=8, bvh2" (either may be empty).
+/// "a, b", or whichever is not empty: a stacked label's "binned_sah, bvh2".
 std::string latex_label_detail(const std::string& varying, const std::string& layout);
 
 /// \tabcolsep of the LaTeX tables: half of LaTeX's 6 pt default, as in most papers' dense tables.

@@ -175,8 +175,9 @@ double label_columns_pt(const ReportTable& table, PageWidth width) {
     const auto [name, varying] = split_row_label(row.builder_short);
     const double dagger = row.marked ? dagger_pt : 0.0;
     if (latex_stacked_labels(width)) {
-      builder = std::max({builder, text_pt(name, size) + dagger,
-                          text_pt(latex_label_detail(varying, layout_column ? row.layout : ""), kScriptPt)});
+      builder = std::max({builder,
+                          text_pt(latex_label_detail(name, layout_column ? row.layout : ""), size) + dagger,
+                          text_pt(varying, kScriptPt)});
       continue;
     }
     double label = text_pt(name, size) + (varying.empty() ? 0.0 : text_pt(" " + varying, kScriptPt));

@@ -115,14 +115,17 @@ def builder_labels(data):
     labels = {}
     runs = sorted(set(zip(data["builder"], data["builder_params"])))
     for builder in {b for b, _ in runs}:
-        values = {}
+        values, counts = {}, {}
+        own = [p for b, p in runs if b == builder]
+        for p in own:
+            for k, v in split_params(p):
+                values.setdefault(k, set()).add(v)
+                counts[k] = counts.get(k, 0) + 1
         for b, p in runs:
             if b == builder:
-                for k, v in split_params(p):
-                    values.setdefault(k, set()).add(v)
-        for b, p in runs:
-            if b == builder:
-                varying = [f"{k}={v}" for k, v in split_params(p) if len(values.get(k, ())) > 1]
+                # A key some runs lack (Embree's robust=1) varies too, as in the report's labels.
+                varying = [f"{k}={v}" for k, v in split_params(p)
+                           if len(values.get(k, ())) > 1 or counts.get(k, 0) < len(own)]
                 labels[(b, p)] = builder + (f" [{';'.join(varying)}]" if varying else "")
     return labels
 

@@ -150,6 +150,12 @@ def main():
         return SKIP
     plots = load_plots(sys.argv[1])
     check_label_spreading(plots)
+    import pandas as pd
+    labels = plots.builder_labels(pd.DataFrame({"builder": ["embree"] * 3, "builder_params": [
+        "quality=medium", "quality=medium;robust=1", "quality=high"]}))
+    check(labels[("embree", "quality=medium;robust=1")] == "embree [quality=medium;robust=1]"
+          and labels[("embree", "quality=medium")] == "embree [quality=medium]",
+          f"a parameter some runs lack is a varying one: {labels}")
 
     # The helpers behind the pairings and the parameter parsing.
     check(plots.bins_of("adaptive_bins=1;bins=32;max_leaf=8") == 32, "bins_of")

@@ -73,12 +73,27 @@ int main(int argc, char** argv) {
 
   ReportOptions report;
   std::string report_format = "markdown";
-  auto* report_cmd =
-      app.add_subcommand("report", "Markdown or LaTeX tables from result CSVs, with ratios to Embree medium");
+  auto* report_cmd = app.add_subcommand(
+      "report", "Markdown, LaTeX or HTML tables from result CSVs, with ratios to Embree medium");
   report_cmd->add_option("csv", report.inputs, "result CSV files")->required();
   report_cmd->add_option("--run", report.run_id, "run_id to report (default: the latest)");
-  report_cmd->add_option("--format", report_format, "markdown | latex (booktabs)")->capture_default_str();
+  std::string report_width = "single";
+  report_cmd
+      ->add_option("--format", report_format, "markdown | latex (booktabs) | html (one self-contained page)")
+      ->capture_default_str();
   report_cmd->add_option("--output", report.output, "write the report to this file instead of stdout");
+  report_cmd
+      ->add_option("--width", report_width,
+                   "LaTeX: single (one-column article, 345 pt) | double (one column of a two-column paper, "
+                   "229 pt); a table wider than that is split into parts by columns")
+      ->capture_default_str();
+  report_cmd
+      ->add_option("--columns", report.columns,
+                   "columns to print, in order: build, build_layout, memory, sah, a ray set's name, or rays "
+                   "(every ray set); default all")
+      ->delimiter(',');
+  report_cmd->add_option("--figures", report.figures,
+                         "HTML: embed every PNG and SVG of this folder (scripts/plots.py --out)");
 
   TraceCommandOptions trace;
   std::string trace_query = "closest";
@@ -192,6 +207,7 @@ int main(int argc, char** argv) {
     }
     if (*report_cmd) {
       report.format = parse_report_format(report_format);
+      report.width = parse_page_width(report_width);
       run_report_command(report, std::cout);
     }
     if (*compare_cmd) {

@@ -6,18 +6,27 @@
 Writes PNG and PDF files named <stem>_<kind>[_<scene>].{png,pdf} (stem: the first CSV's name) into
 DIR, by default the first CSV's folder, for each kind whose columns are in the data:
 
+  pareto           per scene and thread count, one panel per ray set: build + layout time against
+                   rays/s, every builder run and layout a point with error bars (the 95% interval of
+                   the geometric mean over the rounds, Student's t on the logs of the *_samples; min to
+                   max without samples), the Pareto front (no other point both faster to build and
+                   faster to trace) as a line, every point labelled, the labels moved apart.
   build_vs_trace   per scene and thread count, one panel per ray set: build time against the time to
                    trace the set, one point per builder run and layout; Embree as stars.
   errors_vs_speed  stress suite rows (false_misses, false_hits, wrong_prim, leaks): total errors summed
                    over the cases (symlog axis) against the median rays/s, one point per variant.
   sah_vs_bins      builder runs with bins=N in builder_params: SAH cost against the bin count, one
-                   panel per scene, with the full-sweep builder's cost as a line where it was run.
+                   panel per tree arity and SAH cost model (c_trav, c_isect, block: costs under two
+                   models are not comparable), a line per scene and builder, with the full-sweep
+                   builder's cost as a dashed line where it was run.
   refit_vs_rebuild animation experiments (frame column with frames > 0, builders "refit(NAME)" beside
                    "NAME", or Embree quality=refit beside quality=medium): per frame, the refitted
                    tree's SAH cost and trace time relative to a fresh build (quality lost) and the refit
                    time relative to the build time (time saved).
 
-A kind whose columns are absent is skipped with a message; the script fails only on unreadable input.
+Every title names the scene, threads, CPU and commit. PDFs embed their fonts as TrueType (pdf.fonttype
+42), which publishers' checks accept and Type 3 fonts fail. A kind whose columns are absent is skipped
+with a message; the script fails only on unreadable input.
 By default only the latest run of each file is plotted (rows are appended as cells finish, so the last
 row's run_id), as `sahbench report` does.
 """
@@ -32,7 +41,11 @@ try:
     import matplotlib
 
     matplotlib.use("Agg")  # files only, no display
+    # TrueType fonts embedded in PDF (and PostScript) rather than Type 3, as publishers require.
+    matplotlib.rcParams["pdf.fonttype"] = 42
+    matplotlib.rcParams["ps.fonttype"] = 42
     import matplotlib.pyplot as plt
+    import matplotlib.text
     import matplotlib.ticker as ticker
     import pandas as pd
 except ImportError as e:  # the script is useless without them; say which one is missing
@@ -42,10 +55,11 @@ NUMERIC = [
     "threads", "scene_triangles", "frame", "build_ms_median", "build_ms_min", "build_ms_max", "mem_bytes",
     "sah_cost", "ray_count", "trace_mrays_median", "trace_mrays_min", "trace_mrays_max",
     "false_misses", "false_hits", "wrong_prim", "leaks", "t_err_ulps_max", "t_err_ulps_mean", "layout_ms",
-    "layout_refit_ms",
+    "layout_refit_ms", "build_layout_ms_median", "arity", "sah_c_trav", "sah_c_isect", "sah_block",
 ]
 ERROR_COLUMNS = ["false_misses", "false_hits", "wrong_prim", "leaks"]
-TEXT = ["run_id", "scene", "builder", "builder_params", "layout", "ray_set", "cpu", "git_commit"]
+TEXT = ["run_id", "scene", "builder", "builder_params", "layout", "ray_set", "cpu", "git_commit",
+        "build_layout_ms_samples", "trace_mrays_samples"]
 
 
 def log(message):
@@ -101,14 +115,17 @@ def builder_labels(data):
     labels = {}
     runs = sorted(set(zip(data["builder"], data["builder_params"])))
     for builder in {b for b, _ in runs}:
-        values = {}
+        values, counts = {}, {}
+        own = [p for b, p in runs if b == builder]
+        for p in own:
+            for k, v in split_params(p):
+                values.setdefault(k, set()).add(v)
+                counts[k] = counts.get(k, 0) + 1
         for b, p in runs:
             if b == builder:
-                for k, v in split_params(p):
-                    values.setdefault(k, set()).add(v)
-        for b, p in runs:
-            if b == builder:
-                varying = [f"{k}={v}" for k, v in split_params(p) if len(values.get(k, ())) > 1]
+                # A key some runs lack (Embree's robust=1) varies too, as in the report's labels.
+                varying = [f"{k}={v}" for k, v in split_params(p)
+                           if len(values.get(k, ())) > 1 or counts.get(k, 0) < len(own)]
                 labels[(b, p)] = builder + (f" [{';'.join(varying)}]" if varying else "")
     return labels
 
@@ -131,14 +148,225 @@ def save(fig, out_dir, stem, kind, suffix=""):
 
 
 def caption(rows):
-    """Machine and commit of the rows, for figure titles."""
+    """Threads, machine and commit of the rows, for figure titles."""
     parts = []
+    if "threads" in rows.columns:
+        threads = sorted({int(t) for t in rows["threads"].dropna()})
+        if threads:
+            parts.append(f"{', '.join(map(str, threads))} thread{'s' if threads != [1] else ''}")
     for column in ("cpu", "git_commit"):
         if column in rows.columns:
             values = sorted({v for v in rows[column] if v})
             if values:
                 parts.append(("commit " if column == "git_commit" else "") + ", ".join(values[:2]))
     return "; ".join(parts)
+
+
+# Two-sided 95% quantiles of Student's t for 1..30 degrees of freedom (any statistics table); beyond, the
+# normal quantile is within 2% of them.
+T_975 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145,
+         2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048,
+         2.045, 2.042]
+
+
+def samples_of(text):
+    """The positive numbers of a *_samples field ("12.5;12.7;12.4"); none for an empty one."""
+    values = []
+    for item in str(text).split(";"):
+        try:
+            v = float(item)
+        except ValueError:
+            continue
+        if v > 0 and math.isfinite(v):
+            values.append(v)
+    return values
+
+
+def geometric_interval(samples):
+    """(low, high) of the 95% interval of the geometric mean of `samples` (Student's t on their logs, as
+    harness/report/ratio_stats.h does for ratios), or None with fewer than two."""
+    if len(samples) < 2:
+        return None
+    logs = [math.log(v) for v in samples]
+    mean = sum(logs) / len(logs)
+    sd = math.sqrt(sum((x - mean) ** 2 for x in logs) / (len(logs) - 1))
+    df = len(logs) - 1
+    half = (T_975[df - 1] if df <= len(T_975) else 1.96) * sd / math.sqrt(len(logs))
+    return math.exp(mean - half), math.exp(mean + half)
+
+
+def readable_log_ticks(axis, low, high):
+    """Log axis labelled with plain numbers and enough of them: every integer multiple of a power of ten
+    for a range under a decade, 1-2-5 up to two decades, powers of ten beyond."""
+    decades = math.log10(high / low) if low > 0 and high > low else 0.0
+    subs = tuple(range(1, 10)) if decades < 1 else (1.0, 2.0, 5.0) if decades < 2.5 else (1.0,)
+    axis.set_major_locator(ticker.LogLocator(base=10, subs=subs, numticks=30))
+    axis.set_major_formatter(ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_locator(ticker.LogLocator(base=10, subs=tuple(range(1, 10)), numticks=30))
+    axis.set_minor_formatter(ticker.NullFormatter())
+
+
+def pareto_front(points):
+    """Indices of the points no other point dominates: (time, rate) with less or equal time and more or
+    equal rate, and better in one of them."""
+    front = []
+    for i, (t, r) in enumerate(points):
+        if not any((t2 <= t and r2 >= r) and (t2 < t or r2 > r) for j, (t2, r2) in enumerate(points) if j != i):
+            front.append(i)
+    return sorted(front, key=lambda i: points[i][0])
+
+
+def text_box(text, renderer):
+    """The box of an annotation's text alone (Annotation.get_window_extent includes its leader line)."""
+    return matplotlib.text.Text.get_window_extent(text, renderer)
+
+
+def spread_labels(ax, texts, iterations=200, pad=1.5, reach=60.0):
+    """Moves annotation labels (offsets in points from their anchors) apart until their text boxes stop
+    overlapping: each round pushes every overlapping pair apart, half the overlap each, along the axis
+    where they overlap least, and keeps each label within `reach` points of its point and inside the
+    axes. A simple form of the repulsion of force-directed label placers (Christensen, Marks and Shieber
+    1995, "An empirical study of algorithms for point-feature label placement", ACM TOG 14(3))."""
+    if not texts:
+        return
+    fig = ax.figure
+    renderer = fig.canvas.get_renderer()
+    scale = fig.dpi / 72.0  # pixels per point
+    frame = ax.get_window_extent(renderer)
+
+    def clamp(k):
+        x, y = texts[k].xyann
+        x, y = max(-reach, min(reach, x)), max(-reach, min(reach, y))
+        texts[k].xyann = (x, y)
+        box = text_box(texts[k], renderer)
+        # Back inside the axes where the label sticks out.
+        dx = max(0.0, frame.x0 - box.x0) - max(0.0, box.x1 - frame.x1)
+        dy = max(0.0, frame.y0 - box.y0) - max(0.0, box.y1 - frame.y1)
+        if dx or dy:
+            texts[k].xyann = (x + dx / scale, y + dy / scale)
+
+    for k in range(len(texts)):
+        clamp(k)
+    for _ in range(iterations):
+        boxes = [text_box(t, renderer).padded(pad * scale) for t in texts]
+        moved = False
+        for i in range(len(texts)):
+            for j in range(i + 1, len(texts)):
+                a, b = boxes[i], boxes[j]
+                dx = min(a.x1, b.x1) - max(a.x0, b.x0)
+                dy = min(a.y1, b.y1) - max(a.y0, b.y0)
+                if dx <= 0 or dy <= 0:
+                    continue
+                moved = True
+                up = (a.y0 + a.y1) >= (b.y0 + b.y1) if (a.y0 + a.y1) != (b.y0 + b.y1) else i < j
+                right = (a.x0 + a.x1) >= (b.x0 + b.x1)
+                if dy <= dx * 2:  # labels are wide and short: prefer stacking them
+                    step = (dy / 2 + 0.5) / scale * (1 if up else -1)
+                    shift = ((0, step), (0, -step))
+                else:
+                    step = (dx / 2 + 0.5) / scale * (1 if right else -1)
+                    shift = ((step, 0), (-step, 0))
+                for k, (sx, sy) in zip((i, j), shift):
+                    x, y = texts[k].xyann
+                    texts[k].xyann = (x + sx, y + sy)
+                    clamp(k)
+                boxes[i] = text_box(texts[i], renderer).padded(pad * scale)
+                boxes[j] = text_box(texts[j], renderer).padded(pad * scale)
+        if not moved:
+            break
+
+
+def labels_overlap(ax, texts):
+    """Whether any two labels' text boxes overlap (the test checks the figures with it)."""
+    renderer = ax.figure.canvas.get_renderer()
+    boxes = [text_box(t, renderer) for t in texts]
+    return any(boxes[i].overlaps(boxes[j]) for i in range(len(boxes)) for j in range(i + 1, len(boxes)))
+
+
+def plot_pareto(data, out_dir, stem):
+    need = ["scene", "builder", "layout", "ray_set", "trace_mrays_median"]
+    if not has(data, need) or not ("build_layout_ms_median" in data.columns or "build_ms_median" in data.columns):
+        missing = [c for c in need + ["build_layout_ms_median"] if c not in data.columns]
+        return log("pareto: skipped, missing columns " + ", ".join(missing))
+    rows = data.copy()
+    # Build + layout compile; Embree's build does both, and older CSVs have the build alone.
+    time = rows["build_layout_ms_median"] if "build_layout_ms_median" in rows.columns else rows["build_ms_median"]
+    if "build_ms_median" in rows.columns:
+        time = time.fillna(rows["build_ms_median"])
+    rows = rows.assign(_time=time)
+    rows = rows.dropna(subset=["_time", "trace_mrays_median"])
+    rows = rows[(rows["_time"] > 0) & (rows["trace_mrays_median"] > 0)]
+    if "frame" in rows.columns:  # animation frames have plots of their own
+        rows = rows[rows["frame"].fillna(0) == 0]
+    if rows.empty:
+        return log("pareto: skipped, no rows with build + layout time and rays/s")
+    labels = builder_labels(rows)
+    threads = rows["threads"] if "threads" in rows.columns else pd.Series([1] * len(rows), index=rows.index)
+    rows = rows.assign(_threads=threads.fillna(1).astype(int))
+    written = []
+    for (scene, nthreads), group in rows.groupby(["scene", "_threads"], sort=False):
+        ray_sets = list(dict.fromkeys(group["ray_set"]))
+        cols = min(len(ray_sets), 2)
+        nrows = math.ceil(len(ray_sets) / cols)
+        fig, axes = plt.subplots(nrows, cols, figsize=(6.5 * cols, 5.0 * nrows), squeeze=False)
+        for i, ray_set in enumerate(ray_sets):
+            ax = axes[i // cols][i % cols]
+            subset = group[group["ray_set"] == ray_set].reset_index(drop=True)
+            xs, ys, xerr, yerr, names = [], [], [[], []], [[], []], []
+            for _, r in subset.iterrows():
+                x, y = r["_time"], r["trace_mrays_median"]
+                xi = geometric_interval(samples_of(r.get("build_layout_ms_samples", "")))
+                yi = geometric_interval(samples_of(r.get("trace_mrays_samples", "")))
+                if yi is None and "trace_mrays_min" in subset.columns and pd.notna(r.get("trace_mrays_min")):
+                    yi = (r["trace_mrays_min"], r["trace_mrays_max"])
+                if xi is None and "build_ms_min" in subset.columns and pd.notna(r.get("build_ms_min")) \
+                        and "build_layout_ms_median" not in subset.columns:
+                    xi = (r["build_ms_min"], r["build_ms_max"])
+                xs.append(x)
+                ys.append(y)
+                # Error bars around the median; an interval of the mean that misses it is widened to it.
+                xerr[0].append(max(0.0, x - min(xi[0], x)) if xi else 0.0)
+                xerr[1].append(max(0.0, max(xi[1], x) - x) if xi else 0.0)
+                yerr[0].append(max(0.0, y - min(yi[0], y)) if yi else 0.0)
+                yerr[1].append(max(0.0, max(yi[1], y) - y) if yi else 0.0)
+                names.append(f"{labels[(r['builder'], r['builder_params'])]} / {r['layout']}")
+            front = set(pareto_front(list(zip(xs, ys))))
+            for k in range(len(xs)):
+                embree = is_embree(subset["builder"].iloc[k])
+                on_front = k in front
+                ax.errorbar(xs[k], ys[k], xerr=[[xerr[0][k]], [xerr[1][k]]], yerr=[[yerr[0][k]], [yerr[1][k]]],
+                            fmt="*" if embree else "o", markersize=10 if embree else 6,
+                            color="C3" if embree else ("C0" if on_front else "0.55"),
+                            markeredgecolor="black", markeredgewidth=0.5, elinewidth=0.8, capsize=2, zorder=3)
+            ordered = sorted(front, key=lambda k: xs[k])
+            ax.plot([xs[k] for k in ordered], [ys[k] for k in ordered], color="C0", linewidth=1.0, zorder=2,
+                    drawstyle="steps-post", label="Pareto front")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            pad = 1.25  # a quarter more on each side, room for the labels
+            ax.set_xlim(min(xs) / pad, max(xs) * pad)
+            ax.set_ylim(min(ys) / pad, max(ys) * pad)
+            readable_log_ticks(ax.xaxis, min(xs) / pad, max(xs) * pad)
+            readable_log_ticks(ax.yaxis, min(ys) / pad, max(ys) * pad)
+            ax.set_xlabel("build + layout time (ms, median)")
+            ax.set_ylabel("Mrays/s (median)")
+            ax.set_title(f"{ray_set} rays", fontsize=9)
+            ax.grid(True, which="major", alpha=0.35)
+            ax.grid(True, which="minor", alpha=0.12)
+            texts = [ax.annotate(name, (x, y), xytext=(6, 6), textcoords="offset points", fontsize=6.5,
+                                 arrowprops=dict(arrowstyle="-", color="0.5", linewidth=0.5), zorder=4)
+                     for name, x, y in zip(names, xs, ys)]
+            fig.canvas.draw()
+            spread_labels(ax, texts)
+            ax.legend(fontsize=7, loc="lower left")
+        for k in range(len(ray_sets), nrows * cols):
+            axes[k // cols][k % cols].axis("off")
+        fig.suptitle(f"{scene}, {nthreads} thread{'s' if nthreads != 1 else ''}: build + layout time against "
+                     f"rays/s (upper left is better; stars: Embree; bars: 95% intervals)\n"
+                     f"{caption(group)}", fontsize=10)
+        fig.tight_layout()
+        written += save(fig, out_dir, stem, "pareto", f"{scene}_t{nthreads}")
+    return written
 
 
 def plot_build_vs_trace(data, out_dir, stem):
@@ -220,6 +448,8 @@ def plot_errors_vs_speed(data, out_dir, stem):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False)
     ax.set_title(f"Errors vs speed over {int(variants['cases'].max())} stress cases "
+                 f"({', '.join(list(dict.fromkeys(rows['scene']))[:4])}"
+                 f"{', ...' if rows['scene'].nunique() > 4 else ''}) "
                  f"(lower right is better; stars: Embree)\nerrors = {' + '.join(present)}; {caption(rows)}",
                  fontsize=9)
     fig.tight_layout()
@@ -248,35 +478,59 @@ def plot_sah_vs_bins(data, out_dir, stem):
     # SAH cost depends on the tree only, not on layout, ray set or threads: one value per run.
     binned = binned.assign(_rest=binned["builder_params"].map(
         lambda p: ";".join(f"{k}={v}" for k, v in split_params(p) if k != "bins")))
-    scenes = list(dict.fromkeys(binned["scene"]))
-    cols = min(len(scenes), 3)
-    nrows = math.ceil(len(scenes) / cols)
-    fig, axes = plt.subplots(nrows, cols, figsize=(4.8 * cols, 3.8 * nrows), squeeze=False)
-    for i, scene in enumerate(scenes):
+    # One panel per tree arity and SAH cost model: 8-wide trees' costs (with block SAH) and binary trees'
+    # are on other scales, as are costs under other traversal and intersection constants.
+    def arity_of(r):
+        arity = dict(split_params(r["builder_params"])).get("arity")
+        if arity is None and "arity" in binned.columns and pd.notna(r.get("arity")):
+            arity = int(r["arity"])
+        return int(arity) if arity is not None else 2
+
+    def model_of(r):
+        parts = []
+        for column, name in (("sah_c_trav", "c_trav"), ("sah_c_isect", "c_isect"), ("sah_block", "block")):
+            if column in binned.columns and pd.notna(r.get(column)):
+                parts.append(f"{name}={r[column]:g}")
+        return ", ".join(parts)
+
+    binned = binned.assign(_arity=[arity_of(r) for _, r in binned.iterrows()],
+                           _model=[model_of(r) for _, r in binned.iterrows()])
+    panels = list(dict.fromkeys(zip(binned["_arity"], binned["_model"])))
+    panels.sort(key=lambda p: (p[0], p[1]))
+    cols = min(len(panels), 3)
+    nrows = math.ceil(len(panels) / cols)
+    fig, axes = plt.subplots(nrows, cols, figsize=(5.2 * cols, 4.0 * nrows), squeeze=False)
+    for i, (arity, model) in enumerate(panels):
         ax = axes[i // cols][i % cols]
-        subset = binned[binned["scene"] == scene]
-        rests = list(dict.fromkeys(zip(subset["builder"], subset["_rest"])))
-        varying = {k for r in rests for k, v in split_params(r[1])
-                   if len({dict(split_params(x[1])).get(k) for x in rests if x[0] == r[0]}) > 1}
-        for builder, rest in rests:
-            line = subset[(subset["builder"] == builder) & (subset["_rest"] == rest)]
+        subset = binned[(binned["_arity"] == arity) & (binned["_model"] == model)]
+        rests = list(dict.fromkeys(zip(subset["scene"], subset["builder"], subset["_rest"])))
+        varying = {k for r in rests for k, v in split_params(r[2])
+                   if len({dict(split_params(x[2])).get(k) for x in rests if x[1] == r[1]}) > 1}
+        many_scenes = subset["scene"].nunique() > 1
+        for scene, builder, rest in rests:
+            line = subset[(subset["scene"] == scene) & (subset["builder"] == builder) & (subset["_rest"] == rest)]
             line = line.groupby("_bins")["sah_cost"].first().sort_index()
             extra = ";".join(f"{k}={v}" for k, v in split_params(rest) if k in varying)
-            ax.plot(line.index, line.values, marker="o", label=builder + (f" [{extra}]" if extra else ""))
-        sweep = rows[(rows["scene"] == scene) & (rows["builder"] == "sweep_sah")]["sah_cost"]
-        if not sweep.empty:
-            ax.axhline(sweep.iloc[0], color="gray", linestyle="--", label="sweep_sah (every split)")
+            name = (f"{scene}: " if many_scenes else "") + builder + (f" [{extra}]" if extra else "")
+            color = ax.plot(line.index, line.values, marker="o", label=name)[0].get_color()
+            if arity == 2:  # the full sweep is a binary builder: its cost is the binned ones' limit
+                sweep = rows[(rows["scene"] == scene) & (rows["builder"] == "sweep_sah")]["sah_cost"]
+                if not sweep.empty:
+                    ax.axhline(sweep.iloc[0], color=color, linestyle="--", linewidth=0.8,
+                               label=(f"{scene}: " if many_scenes else "") + "sweep_sah (every split)")
         ax.set_xscale("log", base=2)
         ax.set_xticks(sorted(subset["_bins"].unique()))
         plain_log_ticks(ax.xaxis, locator=False)
         ax.set_xlabel("bins")
         ax.set_ylabel("SAH cost")
-        ax.set_title(str(scene), fontsize=9)
+        ax.set_title(f"arity {arity}" + (f"; {model}" if model else ""), fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
-    for k in range(len(scenes), nrows * cols):
+        ax.legend(fontsize=6.5)
+    for k in range(len(panels), nrows * cols):
         axes[k // cols][k % cols].axis("off")
-    fig.suptitle(f"SAH cost vs bin count (lower is better)\n{caption(binned)}", fontsize=10)
+    scenes = list(dict.fromkeys(binned["scene"]))
+    fig.suptitle(f"SAH cost against bin count (lower is better) on {', '.join(scenes)}\n{caption(binned)}",
+                 fontsize=10)
     fig.tight_layout()
     return save(fig, out_dir, stem, "sah_vs_bins")
 
@@ -390,7 +644,7 @@ def main(argv=None):
         sys.exit(f"plots.py: no rows in {', '.join(map(str, args.csv))}")
     stem = args.csv[0].stem
     written, failed = [], []
-    for plot in (plot_build_vs_trace, plot_errors_vs_speed, plot_sah_vs_bins, plot_refit_vs_rebuild):
+    for plot in (plot_pareto, plot_build_vs_trace, plot_errors_vs_speed, plot_sah_vs_bins, plot_refit_vs_rebuild):
         # One kind failing on unexpected data must not cost the others; the exit code still says so.
         try:
             written += plot(data, out_dir, stem) or []

@@ -14,11 +14,13 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "harness/report/html_report.h"
 #include "harness/report/predictors.h"
 #include "harness/report/ratio_stats.h"
 #include "harness/report/report_table.h"
 #include "harness/report/result_cells.h"
 #include "harness/report/stress_report.h"
+#include "harness/report/table_fit.h"
 #include "harness/run/csv.h"
 
 namespace sahbench {
@@ -207,12 +209,12 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
                             threads_text, frame_text);
   table.label =
       "tab:" + label_key(key.scene) + "-t" + key.threads + (key.frame == "0" ? "" : "-f" + key.frame);
-  table.columns = {{"build ms", "Build (ms)", 1, false},
-                   {"build+layout ms", "Build + layout (ms)", 1, false},
-                   {"memory MiB", "Memory (MiB)", 1, false},
-                   {"SAH", "SAH cost", 2, false}};
+  table.columns = {{"build ms", "Build\n(ms)", 1, false, "build"},
+                   {"build+layout ms", "Build +\nlayout (ms)", 1, false, "build_layout"},
+                   {"memory MiB", "Memory\n(MiB)", 1, false, "memory"},
+                   {"SAH", "SAH\ncost", 2, false, "sah"}};
   for (const auto& rs : ray_sets)
-    table.columns.push_back({rs + " Mrays/s", latex_escape(rs) + " (Mrays/s)", 2, true});
+    table.columns.push_back({rs + " Mrays/s", latex_escape(rs) + "\n(Mrays/s)", 2, true, rs});
 
   std::vector<std::string> shared;
   const auto short_label = short_labels(group, shared);
@@ -221,30 +223,40 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   std::string isa = field(first, "build_isa");
   if (isa.empty()) isa = field(first, "isa");
   const std::string kernels = kernel_isas(group);
-  const std::string anchors =
+  const bool latex = format == ReportFormat::kLatex;
+  // The caption names the table and the machine (three lines at most in a two-column paper); how to read
+  // the table and what its rows share go in the legend under it.
+  table.caption =
+      fmt::format("{}; {}{}, commit {}.", table.title, field(first, "cpu", "unknown CPU"),
+                  isa.empty() ? "" : " (built for " + isa + ")", field(first, "git_commit", "unknown"));
+  table.legend.push_back(fmt::format("Medians of {} builds and {} traces; kernels: {}.",
+                                     field(first, "build_reps", "?"), field(first, "trace_reps", "?"),
+                                     kernels.empty() ? "unknown" : kernels));
+  const std::string where_ratios = latex ? "Under each value" : "In parentheses";
+  const std::string interval_form =
+      latex ? "its 95% interval as offsets in super- and subscript" : "its 95% interval";
+  table.legend.push_back(
       any_marked
-          ? "In parentheses: ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same run, "
-            "like for like: rows marked \u2020 (our exact kernels: watertight triangle test, robust box "
-            "test) to Embree's robust mode (RTC_SCENE_FLAG_ROBUST, with its watertight triangle test), "
-            "the others (faster variants, and Embree's own rows) to its default mode"
-          : "In parentheses: ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same run";
-  const std::string packets =
-      any_packets ? ". Our packet layouts (packet=8) against Embree's packets instead (rtcIntersect8/16, "
-                    "rtcOccluded8/16, whichever width is faster in the cell), in the same mode"
-                  : "";
-  table.caption = fmt::format(
-      "{}; {}{}, commit {}; medians of {} builds and {} traces; kernels: {}. {}{}; for build + layout and "
-      "rays/s the geometric mean of the ratios of rounds paired with Embree's, with its 95% interval, and "
-      "an up (down) arrow where the interval lies wholly on the better (worse) side of 1. Best of each "
-      "column in bold: least build time, memory and SAH cost, most rays/s.",
-      table.title, field(first, "cpu", "unknown CPU"), isa.empty() ? "" : " (built for " + isa + ")",
-      field(first, "git_commit", "unknown"), field(first, "build_reps", "?"), field(first, "trace_reps", "?"),
-      kernels.empty() ? "unknown" : kernels, anchors, packets);
-  // The Markdown rows name every parameter; the LaTeX rows only the varying ones, so name the rest here.
-  if (format == ReportFormat::kLatex && !shared.empty()) {
-    table.caption += " Parameters common to a builder's rows:";
-    for (std::size_t i = 0; i < shared.size(); ++i) table.caption += (i ? "; " : " ") + shared[i];
-    table.caption += ".";
+          ? where_ratios +
+                ": ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same run, like for "
+                "like: rows marked \u2020 (our exact kernels: watertight triangle test, robust box test) to "
+                "Embree's robust mode (RTC_SCENE_FLAG_ROBUST, with its watertight triangle test), the others "
+                "(faster variants, and Embree's own rows) to its default mode;"
+          : where_ratios + ": ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same run;");
+  if (any_packets)
+    table.legend.push_back(
+        "our packet layouts (packet=8) against Embree's packets instead (rtcIntersect8/16, rtcOccluded8/16, "
+        "whichever width is faster in the cell), in the same mode;");
+  table.legend.push_back(
+      "for build + layout and rays/s the geometric mean of the ratios of rounds paired with Embree's, with " +
+      interval_form +
+      ", and an up (down) arrow where the interval lies wholly on the better (worse) side of 1. Best of each "
+      "column in bold: least build time, memory and SAH cost, most rays/s.");
+  // The rows name only the parameters that vary between a builder's rows; the rest are named here.
+  if (!shared.empty()) {
+    std::string text = "Parameters common to a builder's rows:";
+    for (std::size_t i = 0; i < shared.size(); ++i) text += (i ? "; " : " ") + shared[i];
+    table.legend.push_back(text + ".");
   }
 
   // SAH costs are comparable only under one cost model: the table's usual constants are those of most of
@@ -285,10 +297,9 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   auto model_note = [&](const CsvRow& r) { return describe(model_of(r), &usual_model); };
   if (model_rows.size() > 1) {
     const std::string usual = describe(usual_model, nullptr);
-    table.caption +=
-        " SAH costs are in each builder's own constants; those in brackets differ from the table's "
-        "usual " +
-        usual + ", and are not compared.";
+    table.legend.push_back(
+        "SAH costs are in each builder's own constants; those in brackets differ from the table's usual " +
+        usual + ", and are not compared.");
   }
 
   // The share of rays that hit weighs on rays/s (a miss ends early), so a ratio is read beside it. It is
@@ -306,7 +317,7 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
       hits += (hits.empty() ? "" : ", ") + rs + " " + field(*source, "hit_fraction");
   }
   if (!hits.empty())
-    table.caption += " Share of rays that hit (closest) or are occluded (any hit): " + hits + ".";
+    table.legend.push_back("Share of rays that hit (closest) or are occluded (any hit): " + hits + ".");
 
   // One table row per (builder, params, layout), with one trace column per ray set.
   std::vector<std::pair<std::string, std::string>> keys;
@@ -437,7 +448,8 @@ std::vector<std::string> missing_cell_notes(const GroupKey& key, const std::vect
 ReportFormat parse_report_format(std::string_view name) {
   if (name == "markdown" || name == "md") return ReportFormat::kMarkdown;
   if (name == "latex" || name == "tex") return ReportFormat::kLatex;
-  throw Error("unknown report format '" + std::string(name) + "' (known: markdown, latex)");
+  if (name == "html") return ReportFormat::kHtml;
+  throw Error("unknown report format '" + std::string(name) + "' (known: markdown, latex, html)");
 }
 
 void print_report(const ReportOptions& options, std::ostream& out) {
@@ -472,7 +484,7 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   {
     std::vector<CsvRow> copies;
     for (const Located& l : located) copies.push_back(l.row());
-    if (is_stress_result(copies)) return print_stress_report(copies, options.format, out);
+    if (is_stress_result(copies)) return print_stress_report(copies, options.format, out, options.width);
   }
   std::vector<const CsvRow*> rows;
   Timings timings;
@@ -485,7 +497,15 @@ void print_report(const ReportOptions& options, std::ostream& out) {
 
   const CsvRow& first = *rows.front();
   const bool latex = options.format == ReportFormat::kLatex;
-  if (latex)
+  const bool html = options.format == ReportFormat::kHtml;
+  if (html)
+    html_begin(fmt::format("sahbench report: run {}", run),
+               fmt::format("commit {}, {}, {}, {}; build reps {}, trace reps {}; config {}",
+                           field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
+                           field(first, "embree_version"), field(first, "build_reps"),
+                           field(first, "trace_reps"), field(first, "config")),
+               out);
+  else if (latex)
     fmt::print(
         out,
         "% sahbench report: run {}, commit {}, {}, {}, {}; config {}\n% Needs \\usepackage{{booktabs}} "
@@ -510,11 +530,17 @@ void print_report(const ReportOptions& options, std::ostream& out) {
     std::vector<const CsvRow*> group;
     for (const CsvRow* r : rows)
       if (group_of(*r) == key) group.push_back(r);
-    ReportTable table = make_table(key, group, timings, options.format);
+    ReportTable table = select_columns(make_table(key, group, timings, options.format), options.columns);
     table.notes = missing_cell_notes(key, group, others);
     for (const ReportRow& row : table.rows) any_marked |= row.marked;
-    if (latex)
-      render_latex(table, out);
+    if (html)
+      render_html(table, out);
+    else if (latex)
+      for (const ReportTable& part : split_to_width(table, options.width)) {
+        fmt::print(out, "% {}: estimated {:.0f} pt wide, text width {:.1f} pt\n", part.label,
+                   estimated_latex_width(part, options.width), page_width_pt(options.width));
+        render_latex(part, out, options.width);
+      }
     else
       render_markdown(table, out);
     render_predictors(key.text(), predictor_rows(group), options.format, out);
@@ -522,15 +548,23 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   // Groups another run of the same fingerprint had and this one lacks altogether have no table to note.
   std::vector<std::string> lost;
   for (const auto& [other_run, by_group] : others)
-    for (const auto& [group_text, cells] : by_group)
-      if (std::none_of(groups.begin(), groups.end(),
-                       [&](const GroupKey& g) { return g.text() == group_text; }))
+    for (const auto& [group_text, cells] : by_group) {
+      const std::string& text = group_text;  // clang 14 cannot capture a structured binding
+      if (std::none_of(groups.begin(), groups.end(), [&](const GroupKey& g) { return g.text() == text; }))
         lost.push_back(fmt::format("{} ({} cells in run {})", group_text, cells.size(), other_run));
+    }
   if (!lost.empty()) {
     std::string text = "Run " + run + " has no cells of";
     for (std::size_t i = 0; i < lost.size(); ++i) text += (i ? "; " : " ") + lost[i];
     text += ", which another run of the same fingerprint has.";
-    fmt::print(out, "{}Note: {}\n\n", latex ? "% " : "", text);
+    if (html)
+      html_paragraph("Note: " + text, out);
+    else
+      fmt::print(out, "{}Note: {}\n\n", latex ? "% " : "", text);
+  }
+  if (html) {
+    html_figures(options.figures, out);
+    return html_end(out);
   }
   if (!latex)
     fmt::print(out,

@@ -9,10 +9,13 @@
 #include <map>
 #include <optional>
 #include <ostream>
+#include <sstream>
 #include <string>
 #include <tuple>
 
+#include "harness/report/html_report.h"
 #include "harness/report/report_table.h"
+#include "harness/report/table_fit.h"
 
 namespace sahbench {
 namespace {
@@ -135,7 +138,8 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
     if (marked == table.rows.size() || infinite)
       for (ReportRow& row : table.rows) row.cells[c].best = false;
   }
-  table.caption = fmt::format(
+  table.caption = "Stress suite: errors against rays/s of each variant over every case.";
+  table.legend.push_back(fmt::format(
       "Mrays/s: geometric mean over the cases of each case's median rays/second (one traversal pass over its "
       "rays), with its ratio to {}'s. Errors are against the exact reference: a tie on a shared edge or "
       "vertex "
@@ -143,7 +147,7 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
       "are "
       "over hits on an accepted primitive; inf: an infinite t where the exact one is finite, which the mean "
       "(weighted by exact hits) leaves out. The best value of each column is in bold.",
-      anchor_name);
+      anchor_name));
   return table;
 }
 
@@ -222,16 +226,29 @@ bool is_stress_result(const std::vector<CsvRow>& rows) {
   return !rows.empty() && rows.front().count("false_misses") && rows.front().count("leaks");
 }
 
-void print_stress_report(const std::vector<CsvRow>& rows, ReportFormat format, std::ostream& out) {
+void print_stress_report(const std::vector<CsvRow>& rows, ReportFormat format, std::ostream& out,
+                         PageWidth width) {
   const CsvRow& first = rows.front();
   const ReportTable table = error_against_time(rows);
+  if (format == ReportFormat::kHtml) {
+    html_begin("sahbench stress report: run " + first.at("run_id"),
+               fmt::format("commit {}, {}, {}, {}; config {}", first.at("git_commit"), first.at("cpu"),
+                           first.at("compiler"), first.at("embree_version"), first.at("config")),
+               out);
+    render_html(table, out);
+    std::ostringstream cases;
+    print_wrong_cases(rows, cases);
+    print_cases(rows, cases);
+    fmt::print(out, "<pre>{}</pre>\n", html_escape(cases.str()));
+    return html_end(out);
+  }
   if (format == ReportFormat::kLatex) {
     fmt::print(out,
                "% sahbench stress report: run {}, commit {}, {}, {}, {}; config {}\n% Needs "
                "\\usepackage{{booktabs}}.\n\n",
                first.at("run_id"), first.at("git_commit"), first.at("cpu"), first.at("compiler"),
                first.at("embree_version"), first.at("config"));
-    render_latex(table, out);
+    for (const ReportTable& part : split_to_width(table, width)) render_latex(part, out, width);
     return;
   }
   fmt::print(

@@ -16,6 +16,8 @@ bool is_stress_result(const std::vector<CsvRow>& rows);
 
 /// The tables of one stress run's rows. LaTeX gets the error-against-time table only (the per-case
 /// tables are long lists meant for reading, not for a paper).
-void print_stress_report(const std::vector<CsvRow>& rows, ReportFormat format, std::ostream& out);
+/// LaTeX tables are split to fit `width` (table_fit.h); HTML is a page of its own (html_report.h).
+void print_stress_report(const std::vector<CsvRow>& rows, ReportFormat format, std::ostream& out,
+                         PageWidth width = PageWidth::kSingle);
 
 }  // namespace sahbench

@@ -113,6 +113,34 @@ def expect_files(out, names):
             check(path.is_file() and path.read_bytes()[:4] == magic, f"{path} missing or not a {ext}")
 
 
+def expect_embedded_fonts(path):
+    """Fonts embedded as TrueType (pdf.fonttype 42), no Type 3 font."""
+    data = path.read_bytes() if path.is_file() else b""
+    check(b"/FontFile2" in data and b"/Subtype /Type3" not in data, f"{path}: fonts not embedded as TrueType")
+
+
+def check_label_spreading(plots):
+    """Labels of points that sit on one another end up apart, and near their points."""
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(4, 3))
+    ax.set_xlim(0, 10)
+    ax.set_ylim(0, 10)
+    points = [(5, 5)] * 4 + [(5.1, 5.1), (2, 2)]
+    texts = [ax.annotate(f"label number {i}", p, xytext=(6, 6), textcoords="offset points", fontsize=7)
+             for i, p in enumerate(points)]
+    fig.canvas.draw()
+    check(plots.labels_overlap(ax, texts), "the test's labels should start on one another")
+    plots.spread_labels(ax, texts)
+    check(not plots.labels_overlap(ax, texts), "spread_labels left labels overlapping")
+    check(all(abs(t.xyann[0]) <= 60 and abs(t.xyann[1]) <= 60 for t in texts), "a label moved out of reach")
+    plt.close(fig)
+    check(plots.pareto_front([(1, 1), (2, 3), (3, 2), (0.5, 0.5), (2, 3)]) == [3, 0, 1, 4],
+          "pareto_front keeps the points no other beats in both time and rate")
+    low, high = plots.geometric_interval([10.0, 11.0, 12.0])
+    check(low < (10 * 11 * 12) ** (1 / 3) < high and low > 7 and high < 15, f"geometric_interval {low} {high}")
+    check(plots.geometric_interval([10.0]) is None, "one sample has no interval")
+
+
 def main():
     try:
         import matplotlib  # noqa: F401
@@ -121,6 +149,13 @@ def main():
         print(f"SKIPPED: {e.name} is not installed for {sys.executable}")
         return SKIP
     plots = load_plots(sys.argv[1])
+    check_label_spreading(plots)
+    import pandas as pd
+    labels = plots.builder_labels(pd.DataFrame({"builder": ["embree"] * 3, "builder_params": [
+        "quality=medium", "quality=medium;robust=1", "quality=high"]}))
+    check(labels[("embree", "quality=medium;robust=1")] == "embree [quality=medium;robust=1]"
+          and labels[("embree", "quality=medium")] == "embree [quality=medium]",
+          f"a parameter some runs lack is a varying one: {labels}")
 
     # The helpers behind the pairings and the parameter parsing.
     check(plots.bins_of("adaptive_bins=1;bins=32;max_leaf=8") == 32, "bins_of")
@@ -143,7 +178,8 @@ def main():
 
         code, err = run(plots, [tmp / "bench.csv"])
         check(code == 0, f"bench.csv: exit {code}: {err}")
-        expect_files(tmp, ["bench_build_vs_trace_proc_soup_t1", "bench_sah_vs_bins"])
+        expect_files(tmp, ["bench_pareto_proc_soup_t1", "bench_build_vs_trace_proc_soup_t1", "bench_sah_vs_bins"])
+        expect_embedded_fonts(tmp / "bench_pareto_proc_soup_t1.pdf")
         check("errors_vs_speed: skipped" in err and "refit_vs_rebuild: skipped" in err, f"skip messages: {err}")
         check(not list(tmp.glob("bench_errors*")) and not list(tmp.glob("bench_refit*")), "skipped kinds wrote files")
 
@@ -159,8 +195,18 @@ def main():
         # Columns of no kind at all: every kind skipped, still a success.
         write_csv(tmp / "bare.csv", [{"run_id": "r", "scene": "s"}])
         code, err = run(plots, [tmp / "bare.csv", "--out", tmp / "bare"])
-        check(code == 0 and err.count("skipped") == 4, f"bare.csv: exit {code}: {err}")
+        check(code == 0 and err.count("skipped") == 5, f"bare.csv: exit {code}: {err}")
         check(not list((tmp / "bare").glob("*.png")), "bare.csv wrote plots")
+
+        # The shipped CSVs: every kind their columns allow is drawn, the others skipped with a message.
+        shipped = Path(sys.argv[1]).resolve().parent.parent / "results" / "baselines" / "ci.csv"
+        code, err = run(plots, [shipped, "--out", tmp / "shipped"])
+        check(code == 0, f"{shipped}: exit {code}: {err}")
+        expect_files(tmp / "shipped", ["ci_pareto_proc_sphere_tris_20k_t1", "ci_build_vs_trace_proc_sphere_tris_20k_t1",
+                                       "ci_sah_vs_bins"])
+        expect_embedded_fonts(tmp / "shipped" / "ci_sah_vs_bins.pdf")
+        for kind in ("errors_vs_speed", "refit_vs_rebuild"):
+            check(f"{kind}: skipped" in err, f"{shipped}: no skip message for {kind}: {err}")
 
         code, err = run(plots, [tmp / "missing.csv"])
         check(code != 0 and "missing.csv" in err, f"a missing file must fail naming it: exit {code}: {err}")

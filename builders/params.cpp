@@ -38,6 +38,17 @@ constexpr int kMaxSourceDepth = 16;
 double parse_value(std::string_view builder, const ParamSpec& spec, const std::string& text) {
   const std::string where = std::string(builder) + ": parameter '" + spec.name + "' = '" + text + "'";
   if (spec.type == ParamType::kSource) return 0.0;  // resolved by resolve_source
+  if (spec.type == ParamType::kPath) {
+    // The CSV form writes the path unquoted between ';' and parentheses, and the command line separates
+    // parameters with ','; a path with any of these (or a control character) could not be read back.
+    if (text.empty()) throw Error(where + " is empty");
+    for (const char c : text)
+      if (c == ';' || c == ',' || c == '(' || c == ')' || static_cast<unsigned char>(c) < 0x20)
+        throw Error(where +
+                    " has a character a path parameter may not hold (';', ',', '(', ')' or a control "
+                    "character)");
+    return 0.0;
+  }
   if (spec.type == ParamType::kChoice) {
     for (std::size_t i = 0; i < spec.choices.size(); ++i)
       if (spec.choices[i] == text) return static_cast<double>(i);
@@ -111,6 +122,7 @@ ParamSet resolve_params_at(std::string_view builder, const std::vector<ParamSpec
       throw Error(std::string(builder) + ": parameter '" + key + "' is given twice");
     if (it->spec.type == ParamType::kSource) source_names[name] = text;
     it->number = parse_value(builder, it->spec, text);
+    if (it->spec.type == ParamType::kPath) it->text = text;
   }
   for (auto& value : values) {
     if (value.spec.type != ParamType::kSource) continue;
@@ -135,8 +147,9 @@ const ParamSet::Value& ParamSet::find(std::string_view name) const {
 
 double ParamSet::get(std::string_view name) const {
   const Value& value = find(name);
-  if (value.spec.type == ParamType::kSource)
-    throw Error(builder_ + ": parameter '" + std::string(name) + "' is a tree source, not a number");
+  if (value.spec.type == ParamType::kSource || value.spec.type == ParamType::kPath)
+    throw Error(builder_ + ": parameter '" + std::string(name) + "' is a " +
+                (value.spec.type == ParamType::kPath ? "path" : "tree source") + ", not a number");
   return value.number;
 }
 
@@ -144,6 +157,10 @@ std::string ParamSet::to_string() const {
   std::string out;
   for (const auto& value : values_) {
     out += (out.empty() ? "" : ";") + value.spec.name + "=";
+    if (value.spec.type == ParamType::kPath) {
+      out += value.text;
+      continue;
+    }
     if (value.spec.type != ParamType::kSource) {
       out += format_value(value.number, value.spec);
       continue;
@@ -174,6 +191,17 @@ const SourceSpec& ParamSet::get_source(std::string_view name) const {
   if (value.spec.type != ParamType::kSource)
     throw Error(builder_ + ": parameter '" + std::string(name) + "' is not a tree source");
   return value.source;
+}
+
+const std::string& ParamSet::get_path(std::string_view name) const {
+  const Value& value = find(name);
+  if (value.spec.type != ParamType::kPath)
+    throw Error(builder_ + ": parameter '" + std::string(name) + "' is not a path");
+  return value.text;
+}
+
+ParamSpec path_param(std::string name, std::string help) {
+  return {std::move(name), ParamType::kPath, 0.0, 0.0, 0.0, std::move(help)};
 }
 
 ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index,

@@ -21,7 +21,9 @@ namespace sahbench {
 
 /// kChoice: one of a list of names, held as its index (min 0, max choices - 1) and written by name.
 /// kSource: a binary tree source, a registered builder or pass with its own parameters (SourceSpec).
-enum class ParamType { kInt, kFloat, kChoice, kSource };
+/// kPath: a file path, held as text and never opened here (builders do no file I/O); a config makes a
+/// relative one relative to the config's folder, the command line leaves it relative to the current one.
+enum class ParamType { kInt, kFloat, kChoice, kSource, kPath };
 
 struct ParamSpec {
   std::string name;
@@ -42,6 +44,9 @@ struct ParamSpec {
 /// A kChoice parameter whose default is choices[default_index].
 ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index,
                        std::string help);
+
+/// A kPath parameter, empty unless given.
+ParamSpec path_param(std::string name, std::string help);
 
 /// A kSource parameter: the pass takes a binary tree from `default_source` unless another is named.
 ParamSpec source_param(std::string name, std::string default_source, std::string help,
@@ -65,11 +70,13 @@ struct SourceSpec {
 
 class ParamSet {
  public:
-  /// One declared parameter and its value: a number (kChoice: the index), or for kSource its source.
+  /// One declared parameter and its value: a number (kChoice: the index), for kSource its source, for
+  /// kPath its text.
   struct Value {
     ParamSpec spec;
     double number = 0.0;
     SourceSpec source = {};
+    std::string text = {};
   };
 
   ParamSet() = default;
@@ -86,6 +93,8 @@ class ParamSet {
   const std::string& get_choice(std::string_view name) const;
   /// The source of a kSource parameter.
   const SourceSpec& get_source(std::string_view name) const;
+  /// The text of a kPath parameter (empty when not given).
+  const std::string& get_path(std::string_view name) const;
 
   /// "key=value;key=value" in declaration order, integers without a fraction, a source as
   /// "NAME(its to_string())" unless shared: the CSV form.
@@ -99,11 +108,11 @@ class ParamSet {
 };
 
 /// Resolves `overrides` against `specs`: unknown names, values that do not parse as the declared type,
-/// values out of range and repeated names are errors naming the builder, the key and the value. A kSource
-/// parameter's value names a registered builder, and keys "P.KEY" are that source's own overrides,
-/// resolved against it (recursively) and checked by its BuilderInfo::check; an unknown source, a key
-/// nested under a parameter that is not a source, and a source that builds wider than binary trees are
-/// errors naming them.
+/// values out of range, paths with characters the CSV form cannot hold and repeated names are errors naming
+/// the builder, the key and the value. A kSource parameter's value names a registered builder, and keys
+/// "P.KEY" are that source's own overrides, resolved against it (recursively) and checked by its
+/// BuilderInfo::check; an unknown source, a key nested under a parameter that is not a source, and a source
+/// that builds wider than binary trees are errors naming them.
 ParamSet resolve_params(std::string_view builder, const std::vector<ParamSpec>& specs,
                         const ParamOverrides& overrides);
 

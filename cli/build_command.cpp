@@ -12,6 +12,7 @@
 #include "builders/registry.h"
 #include "core/bvh_stats.h"
 #include "core/error.h"
+#include "core/text_file.h"
 #include "core/validate.h"
 #include "harness/embree/embree_scene.h"
 #include "harness/run/cell_pipeline.h"
@@ -19,6 +20,7 @@
 #include "harness/run/round_order.h"
 #include "harness/run/timing.h"
 #include "scenes/load.h"
+#include "scenes/tree_file.h"
 
 namespace sahbench {
 namespace {
@@ -49,6 +51,13 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
   for (int t : options.threads)
     if (t < 1) throw Error("--threads: " + std::to_string(t) + " is not a thread count");
   const std::vector<BuilderRun> runs = resolved_runs(options);
+  if (!options.save.empty()) {
+    if (runs.size() != 1 || runs.front().is_embree())
+      throw Error(
+          "--save writes one tree: give exactly one builder that makes a tree of the common format "
+          "(not embree, whose rtcCommitScene keeps its tree to itself)");
+    require_file_path(options.save, "tree file");
+  }
 
   Scene scene;
   const double load_ms = time_ms([&] { scene = load_scene(options.scene); });
@@ -133,6 +142,7 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
                    threads, short_label(run), run.params_text(), t.median, spread, ratio, "-", "-", "-", "-",
                    "-", "-", "INVALID");
         log << short_label(run) << ": invalid tree:\n" << tree.report.summary();
+        if (!options.save.empty()) log << "the tree is not saved to " << options.save << "\n";
         continue;
       }
       const BvhStats& s = tree.stats;
@@ -140,6 +150,14 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
                  "{:>7} {:<20} {:<46} {:>10.2f} {:>21} {:>8} {:>8} {:>8} {:>6} {:>6.2f} {:>9.3f} {:>12} {}\n",
                  threads, short_label(run), run.params_text(), t.median, spread, ratio, s.nodes, s.leaves,
                  s.max_depth, s.mean_leaf_size, s.sah_cost, s.bytes, "ok");
+      // Any thread count's tree: builders give the same tree for every one (DESIGN.md).
+      if (!options.save.empty() && threads == options.threads.back()) {
+        write_tree_file(options.save, *jobs[i].tree, scene.triangles);
+        fmt::print(
+            out, "# saved the tree to {} (arity {}, {} nodes, {} references; scene hash {}, {} triangles)\n",
+            options.save, jobs[i].tree->arity, jobs[i].tree->nodes.size(), jobs[i].tree->prim_refs.size(),
+            hash_text(triangle_hash(scene.triangles)), scene.triangles.size());
+      }
     }
   }
   return exit_code;

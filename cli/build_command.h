@@ -19,10 +19,14 @@ struct BuildCommandOptions {
   std::vector<int> threads{1};
   int reps = 5;
   int warmup = 1;
+  /// Non-empty: the tree of the one builder run is written there as a tree file (scenes/tree_file.h) once
+  /// it has passed validation.
+  std::string save;
 };
 
-/// Runs the command; returns the process exit code (0, or 1 when a tree fails validation). Bad input
-/// throws sahbench::Error.
+/// Runs the command; returns the process exit code (0, or 1 when a tree fails validation, and is then not
+/// saved). Bad input throws sahbench::Error, before any build: --save with other than one builder that
+/// makes a tree of the common format (Embree's rtcCommitScene makes none), or to a directory.
 int run_build_command(const BuildCommandOptions& options, std::ostream& out, std::ostream& log);
 
 }  // namespace sahbench

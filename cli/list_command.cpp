@@ -24,6 +24,10 @@ void print_catalogue(std::ostream& out) {
                    p.name, p.default_source, p.help);
         continue;
       }
+      if (p.type == ParamType::kPath) {
+        fmt::print(out, "      {:<14} default {:<8} a file path  {}\n", p.name, "none", p.help);
+        continue;
+      }
       if (p.type == ParamType::kChoice) {
         fmt::print(out, "      {:<14} default {:<8} one of {}  {}\n", p.name,
                    p.choices.at(static_cast<std::size_t>(p.default_value)), fmt::join(p.choices, "|"),

@@ -21,12 +21,14 @@
 #include "harness/run/run_session.h"
 #include "harness/run/runner.h"
 #include "harness/run/stress_runner.h"
+#include "harness/run/tree_file_builder.h"
 
 int main(int argc, char** argv) {
   using namespace sahbench;
-  // Builders backed by Embree live in the harness (builders/ must not know Embree); register them
-  // before anything looks a builder up.
+  // Builders backed by Embree or by files live in the harness (builders/ must know neither); register
+  // them before anything looks a builder up.
   register_embree_builders();
+  register_tree_file_builder();
   CLI::App app{"sahbench: benchmark and research harness for SAH BVH builders"};
   app.require_subcommand(1);
 
@@ -47,6 +49,9 @@ int main(int argc, char** argv) {
   build_cmd->add_option("--threads", build.threads, "thread counts, e.g. 1,2")->delimiter(',');
   build_cmd->add_option("--reps", build.reps, "timed repetitions (median reported)")->capture_default_str();
   build_cmd->add_option("--warmup", build.warmup, "untimed builds first")->capture_default_str();
+  build_cmd->add_option("--save", build.save,
+                        "write the tree to this tree file (docs/tree_format.md); one builder of the common "
+                        "format only; read it back with --builder file:PATH");
 
   RunOptions run;
   std::string run_output;

@@ -15,7 +15,9 @@
 #include "scenes/gltf_loader.h"
 #include "scenes/obj_loader.h"
 #include "scenes/ply_loader.h"
+#include "scenes/procedural.h"
 #include "scenes/ray_file.h"
+#include "scenes/tree_file.h"
 
 namespace sahbench::fuzz {
 namespace {
@@ -27,6 +29,13 @@ bool starts_with_glb_magic(const std::filesystem::path& path) {
   return in.read(magic.data(), magic.size()) && std::memcmp(magic.data(), "glTF", magic.size()) == 0;
 }
 
+// The scene of the tree_file seeds (saved by `sahbench build --scene proc:soup:tris=64,seed=1 --save`),
+// so that inputs mutated from them pass the scene check and reach the validator.
+const Scene& tree_file_scene() {
+  static const Scene scene = generate_procedural(kTreeFileFuzzScene);
+  return scene;
+}
+
 constexpr std::array kReaders = {
     FuzzReader{"obj", ".obj", [](const std::filesystem::path& p) { load_obj(p); }},
     FuzzReader{"ply", ".ply", [](const std::filesystem::path& p) { load_ply(p); }},
@@ -35,6 +44,8 @@ constexpr std::array kReaders = {
     FuzzReader{"config", ".toml", [](const std::filesystem::path& p) { load_experiment_config(p); }},
     FuzzReader{"stress_config", ".toml", [](const std::filesystem::path& p) { load_stress_config(p); }},
     FuzzReader{"rays", ".txt", [](const std::filesystem::path& p) { read_rays(p); }},
+    FuzzReader{"tree_file", ".sbt",
+               [](const std::filesystem::path& p) { load_tree_file(p, tree_file_scene().triangles); }},
 };
 
 // The input files written so far, one per reader, removed when the process exits normally.

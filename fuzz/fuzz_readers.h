@@ -11,6 +11,9 @@
 
 namespace sahbench::fuzz {
 
+/// The scene the tree_file reader checks trees against, and its seeds were saved for.
+inline constexpr const char* kTreeFileFuzzScene = "proc:soup:tris=64,seed=1";
+
 struct FuzzReader {
   /// The fuzz target's name without "_fuzzer", and its folder under fuzz/corpus and fuzz/regressions.
   std::string_view name;
@@ -21,7 +24,8 @@ struct FuzzReader {
 };
 
 /// Every fuzzed reader: obj, ply, gltf (a .gltf, or a GLB when the bytes start with GLB's magic),
-/// config (experiment configs), stress_config and rays (ray files).
+/// config (experiment configs), stress_config, rays (ray files) and tree_file (tree files, checked
+/// against the scene kTreeFileFuzzScene).
 std::span<const FuzzReader> fuzz_readers();
 
 /// The reader named `name`; an unknown name is an Error.

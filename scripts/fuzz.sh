@@ -12,7 +12,7 @@ seconds=${1:-60}
 
 SAHBENCH_PRESET=fuzz bash scripts/setup.sh
 
-targets=(obj ply gltf config stress_config rays)
+targets=(obj ply gltf config stress_config rays tree_file)
 # One target per core at a time: each libFuzzer process is single-threaded.
 fuzz_one() {
   local target=$1 run=build/fuzz/runs/$1 start=$SECONDS status=0

@@ -224,6 +224,19 @@ SweepKey read_sweep(const Source& src, const std::string& key, const toml::node&
   return sweep;
 }
 
+// The values of a path parameter (`key` of `info`, ParamType::kPath) made relative to the config's folder,
+// so that a config and the files it names move together; the run, and builder_params, see the joined path.
+void resolve_paths(const Source& src, const BuilderInfo& info, const std::string& key, SweepKey& sweep) {
+  const auto spec =
+      std::find_if(info.params.begin(), info.params.end(), [&](const ParamSpec& p) { return p.name == key; });
+  if (spec == info.params.end() || spec->type != ParamType::kPath) return;
+  const std::filesystem::path folder = std::filesystem::path(src.file).parent_path();
+  for (auto& value : sweep.values) {
+    const std::filesystem::path path(value.first);
+    if (!value.first.empty() && path.is_relative()) value.first = (folder / path).lexically_normal().string();
+  }
+}
+
 // Whether parameter `key` of `info` is a tree source, whose value may be a table.
 bool is_source_param(const BuilderInfo& info, const std::string& key) {
   return std::any_of(info.params.begin(), info.params.end(),
@@ -255,6 +268,7 @@ void read_source_table(const Source& src, const toml::table& table, const Builde
       continue;
     }
     SweepKey sweep = read_sweep(src, nested, *node);
+    resolve_paths(src, *info, key, sweep);
     for (const auto& [text, at] : sweep.values) {
       try {
         resolve_params(info->name, info->params, {{key, text}});
@@ -304,6 +318,7 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
       continue;
     }
     SweepKey sweep = read_sweep(src, key, *node);
+    if (!embree) resolve_paths(src, *info, key, sweep);
     for (const auto& [text, at] : sweep.values) {
       try {
         if (embree && text == "refit" && !animation)
@@ -508,8 +523,13 @@ BuilderRun parse_builder_run(std::string_view text) {
   const auto colon = text.find(':');
   run.name = std::string(text.substr(0, colon));
   if (run.name.empty()) throw Error("builder '" + std::string(text) + "' has no name");
-  for (std::string_view rest = colon == std::string_view::npos ? "" : text.substr(colon + 1);
-       !rest.empty();) {
+  std::string_view rest = colon == std::string_view::npos ? "" : text.substr(colon + 1);
+  // "file:PATH" is short for "file:path=PATH".
+  if (run.name == "file" && !rest.empty() && rest.find('=') == std::string_view::npos) {
+    run.params.emplace_back("path", std::string(rest));
+    rest = {};
+  }
+  while (!rest.empty()) {
     const auto comma = rest.find(',');
     run.params.push_back(parse_override(rest.substr(0, comma)));
     rest = comma == std::string_view::npos ? "" : rest.substr(comma + 1);

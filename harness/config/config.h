@@ -48,6 +48,10 @@
 //                                     # builder_params records it resolved, each source's values in
 //                                     # parentheses: source=treelet(source=binned_sah(...);...);iterations=4
 //
+//   # [[builder]]                     # a tree read from a tree file (docs/tree_format.md), for a file
+//   # name = "file"                   # that exists (its header is read with the config); a relative
+//   # path = "trees/bunny.sbt"        # path is relative to this config's folder
+//
 //   [[builder]]
 //   name = "embree"
 //   quality = ["medium", "high"]      # embree takes quality: low | medium (default) | high, and refit
@@ -170,7 +174,8 @@ void require_resolved(const BuilderRun& run);
 /// builders or Embree's own BVH ("embree:quality=high", "embree:quality=medium,robust=1"; "embree_low",
 /// "embree_medium" and "embree_high" are short for the three qualities in Embree's default mode).
 /// Embree's run has its parameters as a config's (quality, medium by default, then robust=1 in robust
-/// mode; robust takes 1, 0, true or false); malformed text or an unknown Embree parameter or value is an
+/// mode; robust takes 1, 0, true or false); "file:PATH" is short for "file:path=PATH" (PATH as given,
+/// relative to the current directory); malformed text or an unknown Embree parameter or value is an
 /// Error naming it. Our builders' names and parameters are checked where they are resolved against the
 /// registry.
 BuilderRun parse_builder_run(std::string_view text);

@@ -149,6 +149,11 @@ std::vector<BuilderRun> all_builder_specs() {
   for (const auto& layout : layouts()) layout_arities.insert(layout.arity);
   std::vector<BuilderRun> out;
   for (const auto& b : builders()) {
+    // A builder that reads its tree from a file (`file`) has a tree for one scene only, never for the
+    // suite's generated ones.
+    if (std::any_of(b.params.begin(), b.params.end(),
+                    [](const ParamSpec& p) { return p.type == ParamType::kPath; }))
+      continue;
     out.push_back({b.name, {}});
     // A builder with an `arity` parameter also runs at every other arity some layout traverses, so
     // that every layout gets a tree.

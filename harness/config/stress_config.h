@@ -54,8 +54,9 @@ struct StressConfig {
   bool operator==(const StressConfig&) const = default;
 };
 
-/// Every registered builder with its defaults; builders with an `arity` parameter also at every other
-/// wide arity a registered layout traverses (e.g. wide_collapse:arity=4 beside its default 8).
+/// Every registered builder with its defaults, except those that read a file (a path parameter: `file`);
+/// builders with an `arity` parameter also at every other wide arity a registered layout traverses (e.g.
+/// wide_collapse:arity=4 beside its default 8).
 std::vector<BuilderRun> all_builder_specs();
 /// Every registered layout with every triangle test and every box test, the defaults first.
 std::vector<LayoutSpec> all_layout_variants();

@@ -1,0 +1,43 @@
+#include "harness/run/tree_file_builder.h"
+
+#include "builders/registry.h"
+#include "core/error.h"
+#include "core/sah.h"
+#include "scenes/tree_file.h"
+
+namespace sahbench {
+namespace {
+
+constexpr const char* kBuilderName = "file";
+
+const std::string& path_of(const ParamSet& p) {
+  const std::string& path = p.get_path("path");
+  if (path.empty())
+    throw Error(std::string(kBuilderName) +
+                ": parameter 'path' is required (file:path=TREE, or path = \"TREE\" "
+                "in a config)");
+  return path;
+}
+
+}  // namespace
+
+void register_tree_file_builder() {
+  for (const auto& b : builders())
+    if (b.name == kBuilderName) return;
+  const SahCost defaults;
+  register_builder(
+      {kBuilderName,
+       "a tree read from a tree file (docs/tree_format.md, `sahbench build --save`), checked against the "
+       "scene and validated; its build time is reading and checking the file",
+       {path_param("path",
+                   "the tree file: in a config relative to the config's folder, on the command line to the "
+                   "current one"),
+        {"c_trav", ParamType::kFloat, defaults.c_trav, 0, 1e6, "SAH cost of visiting an inner node"},
+        {"c_isect", ParamType::kFloat, defaults.c_isect, 1e-6, 1e6, "SAH cost of one ray/triangle test"}},
+       [](const BuildInput& input, const ParamSet& p) { return load_tree_file(path_of(p), input.triangles); },
+       // The header when the run is resolved: a missing or foreign file fails as the config is read.
+       [](const ParamSet& p) { read_tree_file_header(path_of(p)); },
+       [](const ParamSet& p) { return read_tree_file_header(path_of(p)).arity; }});
+}
+
+}  // namespace sahbench

@@ -1,0 +1,212 @@
+// The `file` builder (harness/run/tree_file_builder.h): a saved tree is a tree source like any builder, in
+// a config (path relative to the config's folder) and on the command line (relative to the current
+// folder); its cells trace with no mismatch against brute force, and a missing file, a foreign file or a
+// tree of another scene is an Error naming it.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "builders/registry.h"
+#include "cli/build_command.h"
+#include "core/error.h"
+#include "harness/config/config.h"
+#include "harness/run/csv.h"
+#include "harness/run/runner.h"
+#include "harness/run/tree_file_builder.h"
+#include "scenes/load.h"
+#include "scenes/tree_file.h"
+#include "tests/support/error_of.h"
+
+namespace sahbench {
+namespace {
+
+using test::error_of;
+
+constexpr const char* kScene = "proc:sphere:tris=3000";
+
+// A fresh folder per test, with a trees/ subfolder.
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_tree_file_builder" / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "trees");
+  return dir;
+}
+
+// The tree of `builder` (with `params`) on `scene`, saved at `path`.
+Bvh save_tree(const std::string& scene_spec, const std::string& builder, const ParamOverrides& params,
+              const std::filesystem::path& path) {
+  const Scene scene = load_scene(scene_spec);
+  const BuilderInfo& info = find_builder(builder);
+  const Bvh bvh =
+      info.build(BuildInput::from_triangles(scene.triangles), resolve_params(info.name, info.params, params));
+  write_tree_file(path, bvh, scene.triangles);
+  return bvh;
+}
+
+void contains(const std::string& message, const std::string& part) {
+  EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
+}
+
+class TreeFileBuilder : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { register_tree_file_builder(); }
+};
+
+TEST_F(TreeFileBuilder, ConfigRunTracesSavedTreesWithNoMismatches) {
+  const auto dir = fresh_dir("run");
+  save_tree(kScene, "binned_sah", {}, dir / "trees" / "binary.sbt");
+  save_tree(kScene, "wide_collapse", {{"arity", "8"}}, dir / "trees" / "wide.sbt");
+  const auto csv = dir / "out.csv";
+  const auto config = dir / "byot.toml";
+  // Paths relative to the config's folder; the run itself happens wherever the test runs.
+  std::ofstream(config) << "[experiment]\nname = \"byot\"\noutput = \"" << csv.string() << "\"\n"
+                        << "scenes = [\"" << kScene
+                        << "\"]\nlayouts = [\"bvh2\", \"bvh2_packed\", \"bvh8\"]\n"
+                        << "reference = \"brute_force\"\n"
+                        << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+                        << "[[builder]]\nname = \"file\"\npath = [\"trees/binary.sbt\", \"trees/wide.sbt\"]\n"
+                        << "[[builder]]\nname = \"embree\"\n"
+                        << "[[ray_set]]\nkind = \"primary\"\nwidth = 16\nheight = 16\n"
+                        << "[[ray_set]]\nkind = \"shadow\"\nwidth = 16\nheight = 16\n";
+  std::ostringstream log;
+  ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
+  const auto rows = read_csv(csv);
+  std::size_t binary = 0, wide = 0, embree = 0;
+  for (const auto& row : rows) {
+    SCOPED_TRACE(row.at("builder") + " " + row.at("builder_params") + " " + row.at("layout"));
+    EXPECT_EQ(row.at("mismatches"), "0");
+    EXPECT_EQ(row.at("reference"), "brute_force");
+    if (row.at("builder") != "file") {
+      ++embree;
+      continue;
+    }
+    EXPECT_FALSE(row.at("sah_cost").empty());
+    const std::string params = row.at("builder_params");
+    if (params.find("path=" + (dir / "trees" / "binary.sbt").string() + ";") == 0) {
+      ++binary;
+      EXPECT_EQ(row.at("arity"), "2");
+    } else {
+      EXPECT_EQ(params.find("path=" + (dir / "trees" / "wide.sbt").string() + ";"), 0u) << params;
+      EXPECT_EQ(row.at("layout"), "bvh8");
+      ++wide;
+    }
+  }
+  // The binary tree on both binary layouts and the 8-wide one on bvh8, each with 2 ray sets; Embree's
+  // 1-ray layout beside them.
+  EXPECT_EQ(binary, 4u);
+  EXPECT_EQ(wide, 2u);
+  EXPECT_GT(embree, 0u);
+}
+
+TEST_F(TreeFileBuilder, RelativePathsAreRelativeToTheConfigsFolder) {
+  const auto dir = fresh_dir("relative");
+  save_tree(kScene, "binned_sah", {}, dir / "trees" / "t.sbt");
+  std::filesystem::create_directories(dir / "configs");
+  const auto config = dir / "configs" / "c.toml";
+  std::ofstream(config) << "[experiment]\nname = \"c\"\nscenes = [\"" << kScene << "\"]\n"
+                        << "[[builder]]\nname = \"file\"\npath = \"../trees/t.sbt\"\n"
+                        << "[[builder]]\nname = \"reinsert\"\nsource = { name = \"file\", path = \""
+                        << (dir / "trees" / "t.sbt").string() << "\" }\n"
+                        << "[[ray_set]]\nkind = \"primary\"\n";
+  const ExperimentConfig c = load_experiment_config(config);
+  ASSERT_EQ(c.builders.size(), 2u);
+  EXPECT_EQ(c.builders[0].values.get_path("path"), (dir / "trees" / "t.sbt").string());
+  // An absolute path is kept; and a pass takes a saved binary tree as its source.
+  EXPECT_NE(c.builders[1].params_text().find("source=file(path=" + (dir / "trees" / "t.sbt").string()),
+            std::string::npos)
+      << c.builders[1].params_text();
+  // The same path relative to the current folder is not found from the config's.
+  std::ofstream(config) << "[experiment]\nname = \"c\"\nscenes = [\"" << kScene << "\"]\n"
+                        << "[[builder]]\nname = \"file\"\npath = \"trees/t.sbt\"\n"
+                        << "[[ray_set]]\nkind = \"primary\"\n";
+  const std::string message = error_of([&] { load_experiment_config(config); });
+  contains(message, "c.toml:");
+  contains(message, (dir / "configs" / "trees" / "t.sbt").string() + ": cannot open the tree file");
+}
+
+TEST_F(TreeFileBuilder, CommandLinePathsAreRelativeToTheCurrentFolder) {
+  const auto dir = fresh_dir("cli");
+  save_tree(kScene, "binned_sah", {}, dir / "trees" / "t.sbt");
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir);
+  BuilderRun shorthand = parse_builder_run("file:trees/t.sbt");
+  BuilderRun keyed = parse_builder_run("file:path=trees/t.sbt,c_trav=2");
+  EXPECT_NO_THROW(resolve(shorthand));
+  EXPECT_NO_THROW(resolve(keyed));
+  std::filesystem::current_path(cwd);
+  EXPECT_EQ(shorthand.values.get_path("path"), "trees/t.sbt");
+  EXPECT_EQ(keyed.values.to_string(), "path=trees/t.sbt;c_trav=2;c_isect=1");
+}
+
+TEST_F(TreeFileBuilder, BadPathsAreErrorsNamingThem) {
+  const auto dir = fresh_dir("bad");
+  BuilderRun missing = parse_builder_run("file:path=" + (dir / "no_such.sbt").string());
+  contains(error_of([&] { resolve(missing); }),
+           (dir / "no_such.sbt").string() + ": cannot open the tree file");
+  BuilderRun none = parse_builder_run("file");
+  contains(error_of([&] { resolve(none); }), "file: parameter 'path' is required");
+  BuilderRun separator = parse_builder_run("file:path=a;b.sbt");
+  contains(error_of([&] { resolve(separator); }), "file: parameter 'path' = 'a;b.sbt' has a character");
+  std::ofstream(dir / "foreign.sbt") << "solid cube\n";
+  BuilderRun foreign = parse_builder_run("file:" + (dir / "foreign.sbt").string());
+  contains(error_of([&] { resolve(foreign); }), "not a sahbench tree file");
+}
+
+TEST_F(TreeFileBuilder, TreeOfAnotherSceneFailsTheBuild) {
+  const auto dir = fresh_dir("other_scene");
+  const auto path = dir / "trees" / "soup.sbt";
+  save_tree("proc:soup:tris=1000", "binned_sah", {}, path);
+  BuildCommandOptions options;
+  options.scene = kScene;
+  options.builders = {parse_builder_run("file:" + path.string())};
+  options.reps = 1;
+  options.warmup = 0;
+  std::ostringstream out, log;
+  const std::string message = error_of([&] { run_build_command(options, out, log); });
+  contains(message, "tree file " + path.string() + " was built for a scene with hash ");
+  contains(message, "and 1000 triangles, this scene has hash");
+}
+
+TEST_F(TreeFileBuilder, BuildSaveWritesTheTreeThatFileReadsBack) {
+  const auto dir = fresh_dir("save");
+  const auto path = dir / "trees" / "saved.sbt";
+  BuildCommandOptions options;
+  options.scene = kScene;
+  options.builders = {parse_builder_run("sbvh")};
+  options.threads = {1, 2};
+  options.reps = 1;
+  options.warmup = 0;
+  options.save = path.string();
+  std::ostringstream out, log;
+  ASSERT_EQ(run_build_command(options, out, log), 0) << out.str() << log.str();
+  contains(out.str(), "# saved the tree to " + path.string());
+  const Scene scene = load_scene(kScene);
+  const BuilderInfo& sbvh = find_builder("sbvh");
+  EXPECT_EQ(load_tree_file(path, scene.triangles),
+            sbvh.build(BuildInput::from_triangles(scene.triangles), resolve_params("sbvh", sbvh.params, {})));
+  // Read back through the command: same statistics, valid.
+  BuildCommandOptions again = options;
+  again.save.clear();
+  again.threads = {1};
+  again.builders = {parse_builder_run("file:" + path.string()), parse_builder_run("sbvh")};
+  std::ostringstream out2;
+  ASSERT_EQ(run_build_command(again, out2, log), 0) << out2.str();
+  contains(out2.str(), " ok");
+  // One tree per file: two builders, or Embree's, are refused before any build.
+  BuildCommandOptions two = options;
+  two.builders = {parse_builder_run("sbvh"), parse_builder_run("binned_sah")};
+  contains(error_of([&] { run_build_command(two, out, log); }), "--save writes one tree");
+  BuildCommandOptions embree = options;
+  embree.builders = {parse_builder_run("embree_medium")};
+  contains(error_of([&] { run_build_command(embree, out, log); }), "--save writes one tree");
+  BuildCommandOptions folder = options;
+  folder.save = dir.string();
+  contains(error_of([&] { run_build_command(folder, out, log); }), "is a directory");
+}
+
+}  // namespace
+}  // namespace sahbench

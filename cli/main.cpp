@@ -11,6 +11,7 @@
 #include "cli/build_command.h"
 #include "cli/image_command.h"
 #include "cli/list_command.h"
+#include "cli/plan_command.h"
 #include "cli/suggest.h"
 #include "cli/trace_command.h"
 #include "core/error.h"
@@ -20,6 +21,8 @@
 #include "harness/report/report.h"
 #include "harness/run/run_session.h"
 #include "harness/run/runner.h"
+#include "harness/run/shard_merge.h"
+#include "harness/run/shard_plan.h"
 #include "harness/run/stress_runner.h"
 #include "harness/run/tree_file_builder.h"
 
@@ -63,7 +66,34 @@ int main(int argc, char** argv) {
       "--only", run.only,
       "run only cells whose key scene|builder|params|layout|threads|ray_set|frame contains this text "
       "(Embree's params: quality=Q, or quality=Q;robust=1 in its robust mode)");
-  run_cmd->add_option("--output", run_output, "CSV path instead of the config's");
+  run_cmd->add_option("--output", run_output,
+                      "CSV path instead of the config's (with --shard: the config's with -shard-K-of-N)");
+  std::string run_shard;
+  run_cmd->add_option("--shard", run_shard,
+                      "K/N: run only shard K (0..N-1) of the plan `sahbench plan CONFIG --shards N` prints; "
+                      "merge the shards' CSVs with `sahbench merge`");
+
+  PlanCommandOptions plan;
+  auto* plan_cmd = app.add_subcommand(
+      "plan",
+      "Cells of a config per scene, builder and layout, and their split into shards with estimated times");
+  plan_cmd->add_option("config", plan.config, "experiment config (TOML)")->required();
+  plan_cmd->add_option("--shards", plan.shards, "number of shards")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  plan_cmd->add_flag("--cells", plan.list_cells, "also list every cell with the shards that run it");
+  plan_cmd->add_flag("!--no-calibration", plan.calibrate,
+                     "skip the timed build that turns the estimate into seconds");
+
+  MergeOptions merge;
+  auto* merge_cmd = app.add_subcommand(
+      "merge",
+      "Merge the CSVs of a sweep's shards (run --shard K/N) into one run; exit 2 naming missing or "
+      "duplicated cells and shards");
+  merge_cmd->add_option("output", merge.output, "merged CSV (replaced)")->required();
+  merge_cmd->add_option("shards", merge.shards, "the shards' CSVs")->required();
+  merge_cmd->add_option("--config", merge.config,
+                        "the config the shards ran (default: the one their rows name)");
 
   StressOptions stress;
   stress.config = "configs/stress.toml";
@@ -196,8 +226,11 @@ int main(int argc, char** argv) {
     }
     if (*run_cmd) {
       if (!run_output.empty()) run.output = run_output;
+      if (!run_shard.empty()) run.shard = parse_shard_spec(run_shard);
       return run_experiment(run, std::cerr);
     }
+    if (*plan_cmd) run_plan_command(plan, std::cout, std::cerr);
+    if (*merge_cmd) merge_shards(merge, std::cerr);
     if (*stress_cmd) {
       if (!stress_output.empty()) stress.output = stress_output;
       const StressSummary summary = run_stress(stress, std::cerr);

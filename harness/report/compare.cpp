@@ -44,14 +44,20 @@ bool is_embree(const ResultFile& file, std::size_t i) {
   return file.field(i, "builder") == "embree";
 }
 
-// The key of row i's cell, or of its anchor's.
+// The key of row i's cell, or of its anchor's. A merged sweep (harness/run/shard_merge.h) holds Embree's
+// rows once per shard: they, and the anchor a row is paired with, are keyed by the row's shard too, so
+// that every ratio stays one of a single process on one node.
 std::string key_of(const ResultFile& file, std::size_t i, bool anchor) {
   const int threads = checked_integer(file, i, "threads"), frame = checked_integer(file, i, "frame");
+  const std::string& shard = file.field(i, "shard");
+  const std::string in_shard = shard.empty() ? "" : " @shard " + shard;
   if (anchor)
     return cell_key(file.field(i, "scene"), std::string(kAnchorBuilder), std::string(kAnchorParams),
-                    std::string(kAnchorLayout), threads, file.field(i, "ray_set"), frame);
+                    std::string(kAnchorLayout), threads, file.field(i, "ray_set"), frame) +
+           in_shard;
   return cell_key(file.field(i, "scene"), file.field(i, "builder"), file.field(i, "builder_params"),
-                  file.field(i, "layout"), threads, file.field(i, "ray_set"), frame);
+                  file.field(i, "layout"), threads, file.field(i, "ray_set"), frame) +
+         (is_embree(file, i) ? in_shard : "");
 }
 
 // The latest run of a file (rows are appended as cells finish, so the last row's run), checked: the

@@ -177,17 +177,22 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   // mode where the run has it, for the rows of ours whose kernels are exact (like for like: both
   // watertight, neither trading exactness for speed).
   // Our packet rows are compared with Embree's packets, the faster width of the cell (by median).
-  std::map<std::string, const CsvRow*> anchor, robust_anchor, packet_anchor, robust_packet_anchor;
+  // Keyed by shard, then ray set: a merged sweep (harness/run/shard_merge.h) has each shard's own
+  // anchors, and a row is compared only with those of its own shard (same process, same node); a whole
+  // run has one shard, "".
+  using Anchors = std::map<std::string, std::map<std::string, const CsvRow*>>;
+  Anchors anchor, robust_anchor, packet_anchor, robust_packet_anchor;
   auto keep_faster = [](const CsvRow*& kept, const CsvRow* r) {
     if (!kept || csv_number(*r, "trace_mrays_median").value_or(0) >
                      csv_number(*kept, "trace_mrays_median").value_or(0))
       kept = r;
   };
   for (const CsvRow* r : group) {
-    if (is_anchor(*r)) anchor[field(*r, "ray_set")] = r;
-    if (is_robust_anchor(*r)) robust_anchor[field(*r, "ray_set")] = r;
-    if (is_packet_anchor(*r, false)) keep_faster(packet_anchor[field(*r, "ray_set")], r);
-    if (is_packet_anchor(*r, true)) keep_faster(robust_packet_anchor[field(*r, "ray_set")], r);
+    const std::string shard = field(*r, "shard"), rs = field(*r, "ray_set");
+    if (is_anchor(*r)) anchor[shard][rs] = r;
+    if (is_robust_anchor(*r)) robust_anchor[shard][rs] = r;
+    if (is_packet_anchor(*r, false)) keep_faster(packet_anchor[shard][rs], r);
+    if (is_packet_anchor(*r, true)) keep_faster(robust_packet_anchor[shard][rs], r);
   }
   auto compared_robust = [&](const CsvRow& r) {
     return !robust_anchor.empty() && runs_exact_kernels(field(r, "builder"), field(r, "layout"));
@@ -306,7 +311,9 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   // the rays' answer, the same for every correct tree: the anchor's, else the first row's with one.
   std::string hits;
   for (const auto& rs : ray_sets) {
-    const CsvRow* source = anchor.count(rs) ? anchor.at(rs) : nullptr;
+    const CsvRow* source = nullptr;
+    for (const auto& [shard, by_set] : anchor)
+      if (!source && by_set.count(rs)) source = by_set.at(rs);
     if (!source || field(*source, "hit_fraction").empty())
       for (const CsvRow* r : group)
         if (field(*r, "ray_set") == rs && !field(*r, "hit_fraction").empty()) {
@@ -349,10 +356,13 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     const CsvRow& any = *by_set.begin()->second;
     ReportRow row{label, short_label.at(label), layout, {}};
     row.marked = compared_robust(any);
-    const auto& anchors_of_row = compared_to_packets(any)
-                                     ? (row.marked ? robust_packet_anchor : packet_anchor)
-                                 : row.marked ? robust_anchor
-                                              : anchor;
+    const Anchors& anchors_by_shard = compared_to_packets(any)
+                                          ? (row.marked ? robust_packet_anchor : packet_anchor)
+                                      : row.marked ? robust_anchor
+                                                   : anchor;
+    static const std::map<std::string, const CsvRow*> kNone;
+    const auto shard_anchors = anchors_by_shard.find(field(any, "shard"));
+    const auto& anchors_of_row = shard_anchors == anchors_by_shard.end() ? kNone : shard_anchors->second;
     const CsvRow* any_anchor = anchors_of_row.empty() ? nullptr : anchors_of_row.begin()->second;
     row.cells.push_back(cell(csv_number(any, "build_ms_median"), std::nullopt));
     // Build plus layout compile against Embree's build, whose rtcCommitScene does both: round r's sum

@@ -27,7 +27,9 @@ const std::vector<std::string>& extra_columns() {
                                                    "source_sah_cost",
                                                    "epo_cost",
                                                    "sah_epo_cost",
-                                                   "cost_per_ray"};
+                                                   "cost_per_ray",
+                                                   "shard",
+                                                   "shard_run_id"};
   return columns;
 }
 

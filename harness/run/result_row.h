@@ -21,7 +21,9 @@ namespace sahbench {
 
 /// The CSV columns of a run: DESIGN.md's (csv.h), then config, seed, scene_source, scene_removed, query,
 /// embree_version, notes, build_isa, bytes_per_tri, sah_block, fingerprint_parts,
-/// build_layout_ms_samples, source_sah_cost, epo_cost, sah_epo_cost and cost_per_ray.
+/// build_layout_ms_samples, source_sah_cost, epo_cost, sah_epo_cost, cost_per_ray, shard ("K/N" for a
+/// shard's run, shard_plan.h) and shard_run_id (in a merged CSV, the run id the row had in its shard's
+/// CSV; shard_merge.h).
 std::vector<std::string> result_columns();
 
 /// The key that identifies a cell, in the form `scene|builder|builder_params|layout|threads|ray_set|frame`,

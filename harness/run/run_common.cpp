@@ -79,6 +79,7 @@ CsvRow common_row(const RunIdentity& id, const Environment& env, const Experimen
   row["run_id"] = id.run_id;
   row["run_fingerprint"] = id.fingerprint.hash;
   row["fingerprint_parts"] = id.fingerprint.parts_text();
+  row["shard"] = id.shard;
   row["git_commit"] = env.git_commit;
   row["cpu"] = env.cpu;
   row["compiler"] = env.compiler;
@@ -119,8 +120,9 @@ OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const s
     log << fmt::format("{}: removed a partial last row (an interrupted write)\n", output.string());
   run.id.fingerprint = fingerprint_of(cfg, scenes, builder_runs, env);
   run.id.run_id = make_run_id(cfg.name);
+  if (options.shard) run.id.shard = options.shard->text();
   if (options.resume) {
-    ResumePoint point = find_resume_point(output, run.id.fingerprint, log);
+    ResumePoint point = find_resume_point(output, run.id.fingerprint, log, run.id.shard);
     if (!point.run_id.empty()) run.id.run_id = point.run_id;
     run.finished = std::move(point.finished);
   }

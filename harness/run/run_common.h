@@ -54,7 +54,7 @@ std::vector<CellLayout> layouts_for(const BuilderRun& b, const std::vector<Layou
 std::string camera_note(const CameraConfig& camera);
 
 /// The columns every row of a cell starts with: the run (run_id, run_fingerprint, fingerprint_parts,
-/// config, seed, build_reps, trace_reps), the machine (git_commit, cpu, compiler, embree_version), the
+/// shard, config, seed, build_reps, trace_reps), the machine (git_commit, cpu, compiler, embree_version), the
 /// scene and `frame`, the builder run (`builder`, its `params_text`) and the thread count. A scene viewed
 /// through the config's [[camera]] gets it in `notes` (camera_note), so a row says which view its rays
 /// came from.

@@ -169,7 +169,8 @@ OutputLock::~OutputLock() {
   if (fd_ >= 0) ::close(fd_);
 }
 
-ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerprint& fp, std::ostream& log) {
+ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerprint& fp, std::ostream& log,
+                              const std::string& shard) {
   ResumePoint point;
   if (!std::filesystem::exists(output)) {
     log << fmt::format("resume: {} does not exist yet; starting a new run\n", output.string());
@@ -184,8 +185,23 @@ ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerp
     const auto it = row.find(column);
     return it == row.end() ? std::string() : it->second;
   };
-  for (const auto& row : rows)
-    if (field(row, "run_fingerprint") == fp.hash) point.run_id = field(row, "run_id");
+  // A shard's rows are continued only by the same shard: another's cells are not in its plan.
+  std::string other_shard;
+  bool fingerprint_seen = false;
+  for (const auto& row : rows) {
+    if (field(row, "run_fingerprint") != fp.hash) continue;
+    fingerprint_seen = true;
+    if (field(row, "shard") == shard)
+      point.run_id = field(row, "run_id");
+    else
+      other_shard = field(row, "shard");
+  }
+  if (point.run_id.empty() && fingerprint_seen)
+    throw Error(
+        fmt::format("{}: --resume: this file holds rows of this config's fingerprint from {}, not "
+                    "from {}; give each shard its own --output",
+                    output.string(), other_shard.empty() ? "the whole run" : "shard " + other_shard,
+                    shard.empty() ? "the whole run" : "shard " + shard));
   if (point.run_id.empty()) {
     const CsvRow& last = rows.back();
     const auto theirs = Fingerprint::parse_parts(field(last, "fingerprint_parts"));
@@ -203,7 +219,7 @@ ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerp
                        : fmt::format("{}", fmt::join(differ, ", "))));
   }
   for (const auto& row : rows)
-    if (field(row, "run_id") == point.run_id)
+    if (field(row, "run_id") == point.run_id && field(row, "shard") == shard)
       point.finished.insert(cell_key(row.at("scene"), row.at("builder"), row.at("builder_params"),
                                      row.at("layout"), std::stoi(row.at("threads")), row.at("ray_set"),
                                      std::stoi(row.at("frame"))));
@@ -259,6 +275,7 @@ std::string resume_command(const RunOptions& options) {
   std::string command = "sahbench run " + shell_word(options.config.string()) + " --resume";
   if (options.output) command += " --output " + shell_word(options.output->string());
   if (!options.only.empty()) command += " --only " + shell_word(options.only);
+  if (options.shard) command += " --shard " + options.shard->text();
   return command;
 }
 

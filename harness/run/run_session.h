@@ -41,6 +41,7 @@ struct Fingerprint {
 struct RunIdentity {
   std::string run_id;
   Fingerprint fingerprint;
+  std::string shard;  ///< "K/N" for a run of one shard (ShardSpec::text), empty for a whole run
 };
 
 /// The fingerprint of running `cfg` over `scenes` (scenes_to_run) with its builder runs resolved to
@@ -69,11 +70,14 @@ class OutputLock {
 /// is `fp`, under that run's id. Only that run's rows count, so resuming after a killed rerun finishes the
 /// full cell set under one id. A file with rows of other runs only is an Error that names what differs
 /// from the latest of them (seed, repetitions, a scene, ...); a missing or empty file resumes nothing.
+/// A shard's run (`shard` "K/N") continues only rows of that shard: rows of the fingerprint under another
+/// shard are an Error naming both, since the file would then hold two shards.
 struct ResumePoint {
   std::string run_id;  ///< empty: nothing to resume, a new run
   std::set<std::string> finished;
 };
-ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerprint& fp, std::ostream& log);
+ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerprint& fp, std::ostream& log,
+                              const std::string& shard = "");
 
 /// Thrown between cells once SIGINT or SIGTERM has arrived: finished rows are on disk, the cells in
 /// progress are dropped. The CLI prints message() and exits 130.
@@ -97,8 +101,8 @@ class InterruptGuard {
   static void check(std::size_t done, std::size_t total, const std::string& continue_with);
 };
 
-/// "sahbench run CONFIG --resume", with the run's --output and --only, each quoted for a shell where it
-/// needs it: how to continue.
+/// "sahbench run CONFIG --resume", with the run's --output, --only and --shard, each quoted for a shell where
+/// it needs it: how to continue.
 std::string resume_command(const RunOptions& options);
 
 }  // namespace sahbench

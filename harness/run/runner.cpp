@@ -30,6 +30,8 @@
 #include "harness/run/round_order.h"
 #include "harness/run/run_common.h"
 #include "harness/run/run_session.h"
+#include "harness/run/shard_plan.h"
+#include "harness/run/static_plan.h"
 #include "harness/run/timing.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
@@ -46,7 +48,9 @@ class ExperimentRunner {
         options_(options),
         log_(log),
         env_(current_environment()),
-        output_(options.output ? *options.output : cfg.output),
+        output_(options.output  ? *options.output
+                : options.shard ? shard_output_path(cfg.output, *options.shard)
+                                : cfg.output),
         continue_with_(resume_command(options)) {}
 
   int run() {
@@ -60,7 +64,16 @@ class ExperimentRunner {
     const std::set<std::string>& finished = open.finished;
     CsvWriter& csv = *open.csv;
     supported_embree_layouts_ = supported_embree_layouts(log_);
-    // Plan: which cells of each scene are still to do.
+    // Plan: the static plan's cells, or one shard's of them; then which of each scene are still to do.
+    if (options_.shard) {
+      const ShardPlan plan = plan_shards(cfg_, scenes, supported_embree_layouts_, options_.shard->count);
+      shard_cells_ = plan.keys_of(options_.shard->index);
+      log_ << fmt::format("shard {}: {} of the plan's {} cells (anchors to Embree included)\n",
+                          options_.shard->text(), shard_cells_.size(), plan.cells.size());
+      cells_ = plan.cells;
+    } else {
+      cells_ = static_cells(cfg_, scenes, supported_embree_layouts_);
+    }
     std::size_t total = 0;
     for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
     if (total == 0 && !options_.only.empty() && finished.empty())
@@ -92,19 +105,15 @@ class ExperimentRunner {
     return sahbench::layouts_for(b, cfg_.layouts, supported_embree_layouts_);
   }
 
-  // Keys of the cells of `scene` that are neither finished (resume) nor filtered out (--only).
+  // Keys of the cells of `scene` that are neither finished (resume) nor filtered out (--only, --shard).
   std::set<std::string> pending_cells(const std::string& scene, const std::set<std::string>& finished) const {
     std::set<std::string> out;
-    for (const auto& b : builders_)
-      for (const auto& layout : layouts_for(b))
-        for (int threads : cfg_.threads)
-          for (const auto& rs : cfg_.ray_sets) {
-            const std::string key =
-                cell_key(scene, b.name, b.params_text(), layout.name, threads, rs.name, 0);
-            if (finished.count(key)) continue;
-            if (!options_.only.empty() && key.find(options_.only) == std::string::npos) continue;
-            out.insert(key);
-          }
+    for (const PlannedCell& cell : cells_) {
+      if (cell.scene != scene || finished.count(cell.key)) continue;
+      if (options_.shard && !shard_cells_.count(cell.key)) continue;
+      if (!options_.only.empty() && cell.key.find(options_.only) == std::string::npos) continue;
+      out.insert(cell.key);
+    }
     return out;
   }
 
@@ -322,6 +331,8 @@ class ExperimentRunner {
   Environment env_;
   const std::vector<BuilderRun>& builders_ = cfg_.builders;
   std::vector<EmbreeLayout> supported_embree_layouts_;
+  std::vector<PlannedCell> cells_;     // the static plan (static_plan.h)
+  std::set<std::string> shard_cells_;  // with --shard: the keys of that shard's cells
   std::filesystem::path output_;
   std::string continue_with_;  // the command that resumes this run, for the interrupt message
   RunIdentity id_;
@@ -335,6 +346,11 @@ class ExperimentRunner {
 
 int run_experiment(const RunOptions& options, std::ostream& log) {
   const ExperimentConfig cfg = load_experiment_config(options.config);
+  if (cfg.animation && options.shard)
+    throw Error(
+        fmt::format("{}: --shard applies to static experiments; an animation's frames build on "
+                    "each other and run as one process",
+                    cfg.path.string()));
   if (cfg.animation) return run_animation_experiment(cfg, options, log);
   for (const BuilderRun& run : cfg.builders) require_resolved(run);
   return ExperimentRunner(cfg, options, log).run();

@@ -1,0 +1,72 @@
+# A shard killed and resumed gives the same rows as the shard run straight through: `run --shard 1/2`
+# stopped by SIGINT once its first row is on disk, continued with --resume, then compared with an
+# uninterrupted run of the same shard (the same cells, and the same deterministic metrics).
+#   cmake -DSAHBENCH=path -DWORK=dir -P expect_shard_resume.cmake
+file(MAKE_DIRECTORY ${WORK})
+set(config ${WORK}/shard_resume.toml)
+set(csv ${WORK}/shard_resume-shard-1-of-2.csv)
+set(straight ${WORK}/straight.csv)
+file(REMOVE ${csv} ${straight})
+# The plan gives sweep_sah on the large sphere to shard 0, and binned_sah on it with the small soup to
+# shard 1: shard 1 writes the soup's rows at once, then works on the sphere for a while.
+file(WRITE ${config} "[experiment]
+name = \"shard_resume\"
+output = \"${WORK}/shard_resume.csv\"
+scenes = [\"proc:soup:tris=500\", \"proc:sphere:tris=2M\"]
+reference = \"none\"
+[repetitions]
+build = 1
+build_warmup = 0
+trace = 10
+trace_warmup = 0
+interleave = false
+[[builder]]
+name = \"binned_sah\"
+[[builder]]
+name = \"sweep_sah\"
+[[ray_set]]
+kind = \"primary\"
+width = 256
+height = 256
+")
+execute_process(
+  COMMAND bash -c "\"$0\" run \"$1\" --shard 1/2 2>\"$2.err\" & pid=$!
+                   for i in $(seq 1 1200); do
+                     [ \"$(wc -l < \"$2\" 2>/dev/null || echo 0)\" -ge 2 ] && break; sleep 0.1
+                   done
+                   kill -INT $pid; wait $pid; echo $?"
+          ${SAHBENCH} ${config} ${csv}
+  RESULT_VARIABLE shell_rc OUTPUT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE)
+file(READ ${csv}.err err)
+if(NOT rc EQUAL 130)
+  message(FATAL_ERROR "exit code ${rc}, expected 130\nstderr: ${err}")
+endif()
+string(FIND "${err}" "continue with: sahbench run ${config} --resume --shard 1/2" at)
+if(at EQUAL -1)
+  message(FATAL_ERROR "stderr lacks the continue command with --shard:\n${err}")
+endif()
+file(STRINGS ${csv} lines)
+list(LENGTH lines interrupted_lines)
+execute_process(COMMAND ${SAHBENCH} run ${config} --shard 1/2 --resume RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "resume: exit code ${rc}\n${err}")
+endif()
+execute_process(COMMAND ${SAHBENCH} run ${config} --shard 1/2 --output ${straight} RESULT_VARIABLE rc
+                ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "straight run: exit code ${rc}\n${err}")
+endif()
+file(STRINGS ${csv} resumed)
+file(STRINGS ${straight} whole)
+list(LENGTH resumed n_resumed)
+list(LENGTH whole n_whole)
+if(NOT n_resumed EQUAL n_whole OR n_resumed LESS 3 OR NOT interrupted_lines LESS n_resumed)
+  message(FATAL_ERROR "resumed shard has ${n_resumed} lines (${interrupted_lines} before the resume), the "
+                      "straight run ${n_whole}; expected equal, and more than before the resume")
+endif()
+# compare requires each file's cells in the other, one run each, and equal deterministic metrics.
+execute_process(COMMAND ${SAHBENCH} compare ${straight} ${csv} --deterministic-only RESULT_VARIABLE rc
+                OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0 OR NOT out MATCHES "0 missing, 0 regressions")
+  message(FATAL_ERROR "resumed shard differs from the straight run (exit ${rc}):\n${out}\n${err}")
+endif()

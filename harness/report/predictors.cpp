@@ -114,19 +114,40 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
     return;
   }
   if (latex) {
+    // In the style of the report's tables (table_fit.h): footnotesize, a short caption, the explanation
+    // in a legend under the table, and each layout a heading row above its ray sets, so that the table
+    // fits one column of a two-column page.
     fmt::print(
         out,
-        "\\begin{{table}}[htbp]\n\\centering\n\\caption{{How well the costs predict rays/s: {}. {}}}\n"
-        "\\begin{{tabular}}{{llrrrrr}}\n\\toprule\nLayout & Ray set & Builders & SAH & EPO & SAH+EPO & "
-        "Cost/ray \\\\\n\\midrule\n",
-        latex_escape(title), latex_escape(explanation));
+        "\\begin{{table}}[htbp]\n  \\centering\n  \\footnotesize\n  \\setlength{{\\tabcolsep}}{{3pt}}\n"
+        "  \\caption{{How well the costs predict rays/s: {}.}}\n  \\begin{{tabular}}{{lrrrr}}\n    "
+        "\\toprule\n"
+        "    Rays (builders) & SAH & EPO & \\begin{{tabular}}[b]{{@{{}}r@{{}}}}SAH+\\\\EPO\\end{{tabular}} & "
+        "\\begin{{tabular}}[b]{{@{{}}r@{{}}}}Cost\\\\per ray\\end{{tabular}} \\\\\n    \\midrule\n",
+        latex_escape(title));
+    // Each layout's ray sets together, layouts in order of first appearance.
+    std::vector<std::string> layouts;
     for (const PredictorRow* r : ranked)
-      fmt::print(out, "{} & {} & {} & {} & {} & {} & {} \\\\\n", latex_escape(r->layout),
-                 latex_escape(r->ray_set), r->builders, rho_text(r->rho[0]), rho_text(r->rho[1]),
-                 rho_text(r->rho[2]), rho_text(r->rho[3]));
-    fmt::print(out, "\\bottomrule\n\\end{{tabular}}\n");
-    if (!skipped.empty()) fmt::print(out, "\n\\par\\small {}\n", latex_escape(skipped));
-    fmt::print(out, "\\end{{table}}\n\n");
+      if (std::find(layouts.begin(), layouts.end(), r->layout) == layouts.end()) layouts.push_back(r->layout);
+    auto layout_index = [&](const PredictorRow* r) {
+      return std::find(layouts.begin(), layouts.end(), r->layout) - layouts.begin();
+    };
+    std::stable_sort(ranked.begin(), ranked.end(), [&](const PredictorRow* a, const PredictorRow* b) {
+      return layout_index(a) < layout_index(b);
+    });
+    std::string layout;
+    for (const PredictorRow* r : ranked) {
+      if (r->layout != layout) {
+        layout = r->layout;
+        fmt::print(out, "    \\multicolumn{{5}}{{l}}{{{}}} \\\\\n", latex_escape(layout));
+      }
+      fmt::print(out, "    \\quad {} ({}) & {} & {} & {} & {} \\\\\n", latex_escape(r->ray_set), r->builders,
+                 rho_text(r->rho[0]), rho_text(r->rho[1]), rho_text(r->rho[2]), rho_text(r->rho[3]));
+    }
+    fmt::print(out,
+               "    \\bottomrule\n  \\end{{tabular}}\n  \\par\\smallskip{{\\scriptsize "
+               "{}{}\\par}}\n\\end{{table}}\n\n",
+               latex_escape(explanation), skipped.empty() ? "" : " " + latex_escape(skipped));
     return;
   }
   fmt::print(out,

@@ -715,16 +715,18 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mt(const TriangleBlock* b, 
 
 #if defined(SAHBENCH_WIDE_AVX2) || defined(SAHBENCH_WIDE_AVX512)
 // A ray's origin, direction and interval in every lane (one ray against several triangles), or eight
-// rays' in theirs (a packet against one triangle, wide_packets.inl).
-template <class V>
+// rays' in theirs (a packet against one triangle, wide_packets.inl). Templated on the Ops (below) rather
+// than on their vector type, whose alignment attribute a template argument would drop.
+template <class Ops>
 struct RayLanes {
+  using V = typename Ops::V;
   V org[3];
   V dir[3];
   V tmin, tmax;
 };
 
-template <class V, class Ops>
-SAHBENCH_KERNEL_INLINE RayLanes<V> ray_lanes(const WideRay& r, float tmin, float tmax) {
+template <class Ops>
+SAHBENCH_KERNEL_INLINE RayLanes<Ops> ray_lanes(const WideRay& r, float tmin, float tmax) {
   return {{Ops::set1(r.org[0]), Ops::set1(r.org[1]), Ops::set1(r.org[2])},
           {Ops::set1(r.dir[0]), Ops::set1(r.dir[1]), Ops::set1(r.dir[2])},
           Ops::set1(tmin),
@@ -736,7 +738,7 @@ SAHBENCH_KERNEL_INLINE RayLanes<V> ray_lanes(const WideRay& r, float tmin, float
 // waits for a lane to pass, so a ray that hits nothing in the block divides nothing; t is checked again
 // once divided.
 template <class V, class Ops, class Load>
-SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const RayLanes<V>& r, float* t_out,
+SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const RayLanes<Ops>& r, float* t_out,
                                                     float* u_out, float* v_out) {
   const V dx = r.dir[0], dy = r.dir[1], dz = r.dir[2];
   const V cx = Ops::sub(load(0, 0), r.org[0]), cy = Ops::sub(load(0, 1), r.org[1]),
@@ -770,6 +772,7 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_mtn_lanes(V valid, Load load, const Ra
 }
 
 struct Ops128 {
+  using V = __m128;
   SAHBENCH_KERNEL_INLINE static __m128 set1(float x) { return _mm_set1_ps(x); }
   SAHBENCH_KERNEL_INLINE static __m128 add(__m128 a, __m128 b) { return _mm_add_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m128 sub(__m128 a, __m128 b) { return _mm_sub_ps(a, b); }
@@ -786,6 +789,7 @@ struct Ops128 {
 };
 
 struct Ops256 {
+  using V = __m256;
   SAHBENCH_KERNEL_INLINE static __m256 set1(float x) { return _mm256_set1_ps(x); }
   SAHBENCH_KERNEL_INLINE static __m256 add(__m256 a, __m256 b) { return _mm256_add_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m256 sub(__m256 a, __m256 b) { return _mm256_sub_ps(a, b); }
@@ -816,7 +820,7 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mtn(const NormalBlock& b, const 
     return _mm_load_ps(mtn_part(b, part)[axis]);
   };
   const uint32_t hits = intersect_mtn_lanes<__m128, Ops128>(
-      lanes_valid(b.tri), load, ray_lanes<__m128, Ops128>(r, tmin, tmax), t_out, u_out, v_out);
+      lanes_valid(b.tri), load, ray_lanes<Ops128>(r, tmin, tmax), t_out, u_out, v_out);
   const uint32_t in_double = mtn_double_lanes(b, r);
   if (in_double) [[unlikely]]
     return mtn_lanes_in_double(&b, in_double, hits, r, tmin, tmax, t_out, u_out, v_out);
@@ -830,9 +834,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, c
   auto load = [&](int part, int axis) __attribute__((always_inline)) {
     return load_pair(mtn_part(b[0], part)[axis], mtn_part(b[1], part)[axis]);
   };
-  const uint32_t hits =
-      intersect_mtn_lanes<__m256, Ops256>(pair_lanes_valid(b[0].tri, b[1].tri), load,
-                                          ray_lanes<__m256, Ops256>(r, tmin, tmax), t_out, u_out, v_out);
+  const uint32_t hits = intersect_mtn_lanes<__m256, Ops256>(
+      pair_lanes_valid(b[0].tri, b[1].tri), load, ray_lanes<Ops256>(r, tmin, tmax), t_out, u_out, v_out);
   const uint32_t in_double = mtn_double_lanes(b[0], r) | mtn_double_lanes(b[1], r) << kBlockWidth;
   if (in_double) [[unlikely]]
     return mtn_lanes_in_double(b, in_double, hits, r, tmin, tmax, t_out, u_out, v_out);

@@ -159,7 +159,7 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const NormalBlock* blocks, uint32_t 
         auto load = [&](int part, int axis) __attribute__((always_inline)) {
           return _mm256_broadcast_ss(&mtn_part(block, part)[axis][i]);
         };
-        const RayLanes<__m256> r{
+        const RayLanes<Ops256> r{
             {p.org[0], p.org[1], p.org[2]}, {p.dir[0], p.dir[1], p.dir[2]}, p.tmin, _mm256_load_ps(best_t)};
         hits = intersect_mtn_lanes<__m256, Ops256>(lane_mask(lanes), load, r, t, u, v);
       }

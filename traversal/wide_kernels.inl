@@ -1189,12 +1189,14 @@ void trace_batch(const WideBatch& batch) {
   }
   with_order.template operator()<kBox, IntOrder::kNone>(fma_rays);
 }
-// The table of this instruction set's kernels: [width 4, 8][triangle test][box test][closest, any].
-template <bool kCount>
-WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
+// A table of this instruction set's kernels, [width 4, 8][triangle test][box test][closest, any]:
+// `entry.template operator()<N, kTri, kBox, kAnyHit>()` is the kernel of one combination.
+template <class Entry>
+WideKernel select_variant(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit, Entry entry) {
   auto pick = [&]<uint32_t N, TriangleTestKind kTri>() -> WideKernel {
     auto with_box = [&]<BoxTestKind kBox>() -> WideKernel {
-      return any_hit ? &trace_batch<N, kTri, kBox, true, kCount> : &trace_batch<N, kTri, kBox, false, kCount>;
+      return any_hit ? entry.template operator()<N, kTri, kBox, true>()
+                     : entry.template operator()<N, kTri, kBox, false>();
     };
     switch (box) {
       case BoxTestKind::kRobust:
@@ -1222,6 +1224,16 @@ WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, 
   if (width == 4) return by_tri.template operator()<4>();
   if (width == 8) return by_tri.template operator()<8>();
   return nullptr;
+}
+
+// The single-ray kernels (counting ones: kCount).
+template <bool kCount>
+WideKernel select_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
+  return select_variant(
+      width, tri, box, any_hit,
+      []<uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>() -> WideKernel {
+        return &trace_batch<N, kTri, kBox, kAnyHit, kCount>;
+      });
 }
 
 // ---------------------------------------------------------------------------------------------------

@@ -336,36 +336,11 @@ void trace_packet_batch(const WideBatch& batch) {
   run.template operator()<AnyHitOrder::kNearest>();
 }
 
-// The packet kernels of this instruction set: [width 4, 8][triangle test][box test][closest, any].
+// The packet kernels of this instruction set (select_variant's table).
 inline WideKernel select_packet_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
-  auto pick = [&]<uint32_t N, TriangleTestKind kTri>() -> WideKernel {
-    auto with_box = [&]<BoxTestKind kBox>() -> WideKernel {
-      return any_hit ? &trace_packet_batch<N, kTri, kBox, true> : &trace_packet_batch<N, kTri, kBox, false>;
-    };
-    switch (box) {
-      case BoxTestKind::kRobust:
-        return with_box.template operator()<BoxTestKind::kRobust>();
-      case BoxTestKind::kFast:
-        return with_box.template operator()<BoxTestKind::kFast>();
-      case BoxTestKind::kFma:
-        return with_box.template operator()<BoxTestKind::kFma>();
-    }
-    return nullptr;
-  };
-  auto by_tri = [&]<uint32_t N>() -> WideKernel {
-    switch (tri) {
-      case TriangleTestKind::kWatertight:
-        return pick.template operator()<N, TriangleTestKind::kWatertight>();
-      case TriangleTestKind::kMollerTrumbore:
-        return pick.template operator()<N, TriangleTestKind::kMollerTrumbore>();
-      case TriangleTestKind::kMollerTrumboreNoEpsilon:
-        return pick.template operator()<N, TriangleTestKind::kMollerTrumboreNoEpsilon>();
-      case TriangleTestKind::kMollerTrumboreNormal:
-        return pick.template operator()<N, TriangleTestKind::kMollerTrumboreNormal>();
-    }
-    return nullptr;
-  };
-  if (width == 4) return by_tri.template operator()<4>();
-  if (width == 8) return by_tri.template operator()<8>();
-  return nullptr;
+  return select_variant(
+      width, tri, box, any_hit,
+      []<uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>() -> WideKernel {
+        return &trace_packet_batch<N, kTri, kBox, kAnyHit>;
+      });
 }

@@ -10,9 +10,9 @@ packages=(
   libopenimageio-dev libcgal-dev libgmp-dev libmpfr-dev
   libbenchmark-dev libgtest-dev libtomlplusplus-dev libcli11-dev libfmt-dev
   python3-matplotlib python3-pandas
-  # The report's tests: pdflatex with booktabs compiles the LaTeX tables (tests/scripts/test_latex_fit.py),
-  # headless Chromium loads the HTML page (tests/scripts/test_html_report.py).
-  texlive-latex-base texlive-latex-recommended chromium
+  # The report's tests: pdflatex with booktabs compiles the LaTeX tables, in IEEEtran too
+  # (tests/scripts/test_latex_fit.py), headless Chromium loads the HTML page (tests/scripts/test_html_report.py).
+  texlive-latex-base texlive-latex-recommended texlive-publishers texlive-fonts-recommended chromium
 )
 preset=${SAHBENCH_PRESET:-release}
 # The fuzz preset builds with clang and links libFuzzer (scripts/fuzz.sh).

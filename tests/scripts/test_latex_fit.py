@@ -1,18 +1,18 @@
 #!/usr/bin/python3
-"""`sahbench report --format latex` compiled with pdflatex in a one-column article and in one column of a
-two-column article (--width single / double): the test fails on any overfull box wider than 1 pt, and
-prints the width of every table measured by TeX.
+"""`sahbench report --format latex` compiled with pdflatex in a one-column article (--width single), in one
+column of a two-column article and of IEEE's two-column conference template, IEEEtran (--width double):
+the test fails on any overfull box wider than 1 pt, and prints the width of every table measured by TeX.
 
     test_latex_fit.py SAHBENCH CSV... [--measure] [--no-width-option]
 
 --measure prints the widths and the overfull boxes without failing (for before/after comparisons);
---no-width-option runs a sahbench without --width (an older build), once, in both documents.
-Exits 77 (ctest's skip) when pdflatex or booktabs is missing: scripts/setup.sh installs them
-(texlive-latex-base, texlive-latex-recommended).
+--no-width-option runs a sahbench without --width (an older build), once, in each document.
+Exits 77 (ctest's skip) when pdflatex, booktabs or IEEEtran is missing: scripts/setup.sh installs them
+(texlive-latex-base, texlive-latex-recommended, texlive-publishers with texlive-fonts-recommended).
 
-ACM's acmart and IEEEtran are in Debian's texlive-publishers, not in the base packages, so the two-column
-document is `article` with `twocolumn`, whose 229.5 pt column is narrower than acmart's 241 pt and
-IEEEtran's 252 pt: a table that fits it fits theirs.
+The two-column article's 229.5 pt column is narrower than acmart's 241 pt and IEEEtran's 252 pt, so a
+table that fits it fits theirs; IEEEtran is compiled as well, as the template a paper would use. (acmart
+needs the Libertine fonts of texlive-fonts-extra, a gigabyte more.)
 """
 
 import argparse
@@ -23,9 +23,11 @@ import sys
 import tempfile
 from pathlib import Path
 
+# Each document: its class line, the --width it takes, and the width TeX gives a table there.
 DOCUMENTS = {
-    "single": r"\documentclass[10pt]{article}",
-    "double": r"\documentclass[10pt,twocolumn]{article}",
+    "single": (r"\documentclass[10pt]{article}", "single", "textwidth 345.0pt"),
+    "double": (r"\documentclass[10pt,twocolumn]{article}", "double", "columnwidth 229.5pt"),
+    "ieee": (r"\documentclass[conference]{IEEEtran}", "double", "IEEEtran columnwidth about 252pt"),
 }
 # TeX reports a box wider than its line as "Overfull \hbox (12.3pt too wide)"; up to 1 pt is invisible.
 OVERFULL = re.compile(r"Overfull \\hbox \((\d+(?:\.\d+)?)pt too wide\)")
@@ -53,7 +55,7 @@ def instrument(tex):
 
 def compile_report(tex, width, work):
     doc = work / f"report_{width}.tex"
-    doc.write_text(DOCUMENTS[width] + "\n\\usepackage{booktabs}\n\\begin{document}\n" + instrument(tex)
+    doc.write_text(DOCUMENTS[width][0] + "\n\\usepackage{booktabs}\n\\begin{document}\n" + instrument(tex)
                    + "\n\\end{document}\n")
     run = subprocess.run(["pdflatex", "-interaction=nonstopmode", "-halt-on-error", doc.name], cwd=work,
                          capture_output=True, text=True)
@@ -100,6 +102,9 @@ def main():
     if subprocess.run(["kpsewhich", "booktabs.sty"], capture_output=True, text=True).stdout.strip() == "":
         print("test_latex_fit: booktabs.sty missing (texlive-latex-recommended); skipped")
         return 77
+    if subprocess.run(["kpsewhich", "IEEEtran.cls"], capture_output=True, text=True).stdout.strip() == "":
+        print("test_latex_fit: IEEEtran.cls missing (texlive-publishers); skipped")
+        return 77
     failures = []
     with tempfile.TemporaryDirectory(prefix="sahbench_latex_fit_") as tmp:
         work = Path(tmp)
@@ -108,24 +113,23 @@ def main():
             default_like(csvs[0], work / "default_like.csv")
             csvs.append(str(work / "default_like.csv"))
         for csv in csvs:
-            for width in DOCUMENTS:
+            for document, (_, width_option, line) in DOCUMENTS.items():
                 command = [args.sahbench, "report", csv, "--format", "latex"]
                 if not args.no_width_option:
-                    command += ["--width", width]
+                    command += ["--width", width_option]
                 report = subprocess.run(command, capture_output=True, text=True)
                 if report.returncode != 0:
                     sys.exit(f"test_latex_fit: {' '.join(command)} failed: {report.stderr}")
                 if report.stdout.count(r"\begin{table}") == 0:
                     sys.exit(f"test_latex_fit: {' '.join(command)} wrote no table")
-                widths, overfull = compile_report(report.stdout, width, work)
-                line = "textwidth 345.0pt" if width == "single" else "columnwidth 229.5pt"
-                print(f"{csv} --width {width} ({line}): {len(widths)} tables, widths "
+                widths, overfull = compile_report(report.stdout, document, work)
+                print(f"{csv} {document} --width {width_option} ({line}): {len(widths)} tables, widths "
                       + ", ".join(f"{w:.1f}" for _, w in widths) + " pt; max "
                       + (f"{max(w for _, w in widths):.1f} pt" if widths else "-")
                       + f"; overfull boxes: {len(overfull)}" + (f" (max {max(overfull):.1f} pt too wide)" if overfull else ""))
                 wide = [o for o in overfull if o > TOLERANCE_PT]
                 if wide:
-                    failures.append(f"{csv} --width {width}: {len(wide)} overfull boxes up to {max(wide):.1f} pt")
+                    failures.append(f"{csv} {document} --width {width_option}: {len(wide)} overfull boxes up to {max(wide):.1f} pt")
     for failure in failures:
         print("FAIL:", failure)
     return 0 if args.measure or not failures else 1

@@ -1,13 +1,12 @@
 // The layout registry and the binary layouts. Wide layouts (BVH4/BVH8) register here too.
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 
 #include "core/error.h"
 #include "core/refit.h"
 #include "traversal/bvh2_traversal.h"
 #include "traversal/layout.h"
+#include "traversal/packed_bvh2.h"
 #include "traversal/ray_chunks.h"
 #include "traversal/variant_dispatch.h"
 #include "traversal/wide_layout.h"
@@ -28,45 +27,18 @@ TraceCounts count_rays(std::size_t count, Trace trace) {
   });
 }
 
-/// A binary tree in the common format, traversed by the traversal/ kernels. `bvh2` traverses the tree
-/// as built, its triangles reached through the references. `bvh2_packed` copies the triangles into
-/// leaf order, so a leaf's triangles are contiguous and no reference is chased per primitive (as
-/// tinybvh and Embree store leaves); its references become the identity and hits are mapped back to
-/// scene indices through `ids_`. The triangle and box tests are template parameters (variant_dispatch.h).
+/// A binary tree in the common format as built, traversed by the traversal/ kernels, its triangles reached
+/// through the references. The triangle and box tests are template parameters (variant_dispatch.h).
 template <class Tri, class Box>
 class Bvh2Layout final : public CompiledLayout {
  public:
-  /// The tree as built; `bvh` and `triangles` must outlive the layout. Any hit visits children in `order`.
+  /// `bvh` and `triangles` must outlive the layout. Any hit visits children in `order`.
   Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, AnyHitOrder order)
-      : bvh_(&bvh), triangles_(triangles), triangle_count_(triangles.size()), order_(order) {}
-
-  /// Packed: owns a copy of the nodes in depth-first order and the triangles in leaf order.
-  static std::unique_ptr<Bvh2Layout> packed(const Bvh& bvh, std::span<const Triangle> triangles,
-                                            AnyHitOrder order) {
-    auto layout = std::unique_ptr<Bvh2Layout>(new Bvh2Layout());
-    layout->order_ = order;
-    layout->owned_ = depth_first(bvh);
-    const std::size_t refs = layout->owned_.prim_refs.size();
-    layout->packed_.resize(refs);
-    layout->ids_ = std::move(layout->owned_.prim_refs);
-    layout->owned_.prim_refs.resize(refs);
-    tbb::parallel_for(std::size_t{0}, refs, [&](std::size_t i) {
-      layout->owned_.prim_refs[i] = static_cast<uint32_t>(i);
-      layout->packed_[i] = triangles[layout->ids_[i]];
-    });
-    layout->bvh_ = &layout->owned_;
-    layout->triangles_ = layout->packed_;
-    layout->triangle_count_ = triangles.size();
-    return layout;
-  }
+      : bvh_(&bvh), triangles_(triangles), order_(order) {}
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        Hit hit = closest_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
-        if (hit.found() && !ids_.empty()) hit.prim = ids_[hit.prim];
-        hits[i] = hit;
-      }
+      for (std::size_t i = b; i < e; ++i) hits[i] = closest_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
     });
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
@@ -84,72 +56,26 @@ class Bvh2Layout final : public CompiledLayout {
       any_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c, order_);
     });
   }
-  // Refit (core/refit.h): as built, a copy of the borrowed tree is made the first time, and the new
-  // triangles are borrowed like the old ones; packed, the packed copies are rewritten first.
+  // Refit (core/refit.h): a copy of the borrowed tree is made the first time, and the new triangles are
+  // borrowed like the old ones.
   void refit(std::span<const Triangle> triangles) override {
-    if (triangles.size() != triangle_count_)
+    if (triangles.size() != triangles_.size())
       throw Error("refit with " + std::to_string(triangles.size()) + " triangles, compiled over " +
-                  std::to_string(triangle_count_));
-    if (ids_.empty()) {
-      if (bvh_ != &owned_) {
-        owned_ = *bvh_;
-        bvh_ = &owned_;
-      }
-      triangles_ = triangles;
-    } else {
-      tbb::parallel_for(std::size_t{0}, ids_.size(), [&](std::size_t i) { packed_[i] = triangles[ids_[i]]; });
+                  std::to_string(triangles_.size()));
+    if (bvh_ != &owned_) {
+      owned_ = *bvh_;
+      bvh_ = &owned_;
     }
+    triangles_ = triangles;
     sahbench::refit(owned_, triangles_);
   }
 
-  // As built: nodes and references. Packed: nodes, the packed triangles and the ids that map them back
-  // (the identity references are an artefact of reusing the common-format kernel and are not counted).
-  std::size_t bytes() const override {
-    if (ids_.empty()) return bvh_->bytes();
-    return bvh_->nodes.size() * sizeof(Node) + packed_.size() * sizeof(Triangle) +
-           ids_.size() * sizeof(uint32_t);
-  }
+  std::size_t bytes() const override { return bvh_->bytes(); }
 
  private:
-  Bvh2Layout() = default;
-
-  // The same tree with its nodes in depth-first order, each node's children kept together and placed just
-  // before the first child's own children, and its references in the order the leaves are met: a ray
-  // descending to the nearest leaf then reads nodes that are close in memory, whatever order the builder
-  // wrote them in (the top-down builders hand out slots as their tasks need them), so layouts of
-  // the same tree from different builders also trace alike.
-  static Bvh depth_first(const Bvh& bvh) {
-    Bvh out;
-    out.arity = bvh.arity;
-    out.nodes.reserve(bvh.nodes.size());
-    out.prim_refs.reserve(bvh.prim_refs.size());
-    if (bvh.nodes.empty()) return out;
-    out.nodes.push_back(bvh.nodes[0]);
-    std::vector<std::pair<uint32_t, uint32_t>> stack = {{0, 0}};  // (index in bvh, index in out)
-    while (!stack.empty()) {
-      const auto [from, to] = stack.back();
-      stack.pop_back();
-      const Node& node = bvh.nodes[from];
-      if (node.is_leaf()) {
-        out.nodes[to].first = static_cast<uint32_t>(out.prim_refs.size());
-        out.prim_refs.insert(out.prim_refs.end(), bvh.prim_refs.begin() + node.first,
-                             bvh.prim_refs.begin() + node.first + node.prim_count);
-        continue;
-      }
-      const auto first = static_cast<uint32_t>(out.nodes.size());
-      out.nodes[to].first = first;
-      for (uint32_t c = 0; c < node.child_count; ++c) out.nodes.push_back(bvh.nodes[node.first + c]);
-      for (uint32_t c = node.child_count; c-- > 0;) stack.push_back({node.first + c, first + c});
-    }
-    return out;
-  }
-
   const Bvh* bvh_ = nullptr;
   std::span<const Triangle> triangles_;
-  std::size_t triangle_count_ = 0;  // of the scene, for refit's check
-  Bvh owned_;                       // packed; as built, once refitted
-  std::vector<Triangle> packed_;    // packed only
-  std::vector<uint32_t> ids_;       // packed only: scene index of each packed triangle
+  Bvh owned_;  // once refitted
   AnyHitOrder order_ = AnyHitOrder::kAuto;
 };
 
@@ -167,19 +93,12 @@ std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Tri
   });
 }
 
-std::unique_ptr<CompiledLayout> compile_bvh2_packed(const Bvh& bvh, std::span<const Triangle> tris,
-                                                    const LayoutSpec& spec) {
-  require_binary(bvh, "bvh2_packed");
-  return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
-    return Bvh2Layout<Tri, Box>::packed(bvh, tris, spec.variant.any_hit);
-  });
-}
-
 const std::vector<LayoutInfo>& registry() {
   static const std::vector<LayoutInfo> all = {
       {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false,
        compile_bvh2},
-      {"bvh2_packed", "common-format nodes, triangles copied into leaf order", 2, false, compile_bvh2_packed},
+      {"bvh2_packed", "64-byte nodes holding both children's boxes, triangles copied into leaf order", 2,
+       false, compile_packed_bvh2},
       {"bvh4", "4-wide SoA nodes (128 B), triangles packed 4 per block, SIMD kernels (sse/avx2/avx512)", 4,
        true,
        [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {

@@ -1,0 +1,254 @@
+#pragma once
+// bvh2_packed: a binary tree compiled for tracing. Every inner node is one 64-byte line that holds its two
+// children's boxes plane by plane, and what each child is (an inner node's index, or a leaf's triangles):
+// the node layout of Aila and Laine 2009 ("Understanding the Efficiency of Ray Traversal on GPUs"), which
+// tinybvh's BVH_SoA brings to CPUs. A step down the tree then reads one line and tests both children in one
+// SIMD pass, where the common format reads the parent for its children's index and then the children for
+// their boxes: two dependent loads per step, which is what the binary kernel on the common format waits on.
+//
+// The box tests are the ones of ray_box.h, lane by lane: the same IEEE operations on the same planes and
+// the same NaN rule, so the kernel visits the nodes the common-format kernel visits, in the same order,
+// and counts the same work (the layout tests hold it to that).
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "core/aabb.h"
+#include "core/bvh.h"
+#include "core/ray.h"
+#include "core/triangle.h"
+#include "traversal/bvh2_traversal.h"
+#include "traversal/layout.h"
+#include "traversal/ray_box.h"
+#include "traversal/triangle_tests.h"
+
+#if defined(__SSE4_1__)
+#include <immintrin.h>
+#endif
+
+namespace sahbench {
+
+/// An inner node of bvh2_packed: its children's boxes and what they are.
+struct alignas(64) PairNode {
+  /// planes[axis] = (left min, right min, left max, right max) on that axis.
+  float planes[3][4];
+  /// Per child: an inner child's PairNode index, or a leaf's first triangle in leaf order.
+  uint32_t child[2];
+  /// Per child: 0 for an inner node, else the leaf's triangle count (never 0: core/bvh.h).
+  uint32_t count[2];
+
+  Aabb box(int c) const {
+    return {{planes[0][c], planes[1][c], planes[2][c]},
+            {planes[0][c + 2], planes[1][c + 2], planes[2][c + 2]}};
+  }
+  void set_box(int c, const Aabb& b) {
+    for (int axis = 0; axis < 3; ++axis) {
+      planes[axis][c] = b.min[static_cast<std::size_t>(axis)];
+      planes[axis][c + 2] = b.max[static_cast<std::size_t>(axis)];
+    }
+  }
+};
+static_assert(sizeof(PairNode) == 64, "a PairNode is one cache line");
+
+/// A binary tree in PairNodes, its triangles copied into leaf order.
+struct PackedBvh2 {
+  std::vector<PairNode> nodes;      ///< depth first: a node's inner children come after it
+  std::vector<Triangle> triangles;  ///< in leaf order
+  std::vector<uint32_t> ids;        ///< scene index of each packed triangle
+  Aabb root_box;
+  uint32_t root = 0;        ///< the root: a PairNode index, or (a tree that is one leaf) its first triangle
+  uint32_t root_count = 0;  ///< 0 when the root is an inner node, else its triangle count
+  bool empty = true;        ///< no nodes at all: every ray misses
+
+  /// Compiles a valid binary tree over `triangles`: nodes depth first, the nearer-stored child first, so
+  /// that a ray going down to the first leaf reads lines close in memory whatever order the builder
+  /// wrote them in; triangles in the order the leaves are met.
+  static PackedBvh2 compile(const Bvh& bvh, std::span<const Triangle> triangles);
+
+  /// New positions of the same triangles (scene order): every box recomputed bottom up.
+  void refit(std::span<const Triangle> scene_triangles);
+
+  std::size_t bytes() const {
+    return nodes.size() * sizeof(PairNode) + triangles.size() * sizeof(Triangle) +
+           ids.size() * sizeof(uint32_t);
+  }
+};
+
+namespace detail {
+
+/// Both children of a PairNode against one ray, with the operations of the box test `Box` (RobustRayBox,
+/// FastRayBox or FmaRayBox) lane by lane. Near planes are picked by the direction's sign bit, as
+/// SlabSetup does, by swapping the min and max halves of an axis's planes where the direction is negative.
+/// The far distances are negated so that one max per axis clamps both ends of the interval: max(-t1,
+/// -tmax) is -min(t1, tmax) exactly, and `_mm_max_ps(t, clamp)` returns `clamp` for a NaN t, which is
+/// the slab tests' NaN rule (an origin on a face plane of a zero-direction axis is inside that slab).
+template <class Box>
+class PairSlabs {
+ public:
+  explicit PairSlabs(const Ray& ray) : setup_(ray), box_(ray) {
+#if defined(__SSE4_1__)
+    for (int axis = 0; axis < 3; ++axis) {
+      const auto a = static_cast<std::size_t>(axis);
+      org_[axis] = _mm_set1_ps(setup_.org[a]);
+      inv_[axis] = _mm_set1_ps(setup_.inv_dir[a]);
+      org_inv_[axis] = _mm_set1_ps(setup_.org[a] * setup_.inv_dir[a]);
+      negative_[axis] = _mm_castsi128_ps(_mm_set1_epi32(setup_.negative[a] ? -1 : 0));
+    }
+#endif
+  }
+
+  /// Bit 0: the left child is met within [tmin, tmax], bit 1: the right one; their entry distances in
+  /// t_left and t_right.
+  [[gnu::always_inline]] unsigned intersect(const PairNode& node, float tmin, float tmax, float& t_left,
+                                            float& t_right) const {
+#if defined(__SSE4_1__)
+    const __m128 clamp = _mm_setr_ps(tmin, tmin, -tmax, -tmax);
+    __m128 m = axis_distances(node, 0);
+    m = _mm_max_ps(m, clamp);
+    m = _mm_max_ps(m, _mm_max_ps(axis_distances(node, 1), clamp));
+    m = _mm_max_ps(m, _mm_max_ps(axis_distances(node, 2), clamp));
+    // Lanes 0 and 1: entry distances; lanes 2 and 3: minus the exit distances.
+    const __m128 exit = _mm_xor_ps(_mm_shuffle_ps(m, m, _MM_SHUFFLE(3, 2, 3, 2)), _mm_set1_ps(-0.0f));
+    t_left = _mm_cvtss_f32(m);
+    t_right = _mm_cvtss_f32(_mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 1, 1, 1)));
+    return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(m, exit))) & 3u;
+#else
+    return unsigned(box_.intersect(node.box(0), tmin, tmax, t_left)) |
+           unsigned(box_.intersect(node.box(1), tmin, tmax, t_right)) << 1;
+#endif
+  }
+
+ private:
+#if defined(__SSE4_1__)
+  // (left near, right near, -left far, -right far) on `axis`, before clamping to [tmin, tmax].
+  [[gnu::always_inline]] __m128 axis_distances(const PairNode& node, int axis) const {
+    const __m128 stored = _mm_load_ps(node.planes[axis]);
+    const __m128 swapped = _mm_shuffle_ps(stored, stored, _MM_SHUFFLE(1, 0, 3, 2));
+    const __m128 planes = _mm_blendv_ps(stored, swapped, negative_[axis]);  // near, near, far, far
+    const __m128 far_sign = _mm_setr_ps(0.0f, 0.0f, -0.0f, -0.0f);
+    if constexpr (std::is_same_v<Box, FmaRayBox>) {
+#if defined(__FMA__)
+      return _mm_xor_ps(_mm_fmsub_ps(planes, inv_[axis], org_inv_[axis]), far_sign);
+#else
+      alignas(16) float p[4], t[4];
+      _mm_store_ps(p, planes);
+      for (int i = 0; i < 4; ++i) t[i] = std::fma(p[i], inv_[axis][0], -org_inv_[axis][0]);
+      return _mm_xor_ps(_mm_load_ps(t), far_sign);
+#endif
+    } else {
+      const __m128 t = _mm_mul_ps(_mm_sub_ps(planes, org_[axis]), inv_[axis]);
+      if constexpr (std::is_same_v<Box, RobustRayBox>) {
+        // Ize's scaling of the far distances (RobustRayBox), and their sign, in one product.
+        constexpr float s = RobustRayBox::kFarScale;
+        return _mm_mul_ps(t, _mm_setr_ps(1.0f, 1.0f, -s, -s));
+      } else {
+        return _mm_xor_ps(t, far_sign);
+      }
+    }
+  }
+#endif
+
+  SlabSetup setup_;
+  Box box_;  // the scalar test, where SSE4.1 is not there
+#if defined(__SSE4_1__)
+  __m128 org_[3], inv_[3], org_inv_[3], negative_[3];
+#endif
+};
+
+// The while-while loop of traverse_binary (bvh2_traversal.h) on PairNodes: the same visits in the same
+// order, with a child's box read from its parent's line and a leaf's triangles reached without a node.
+template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
+Hit traverse_packed(const PackedBvh2& tree, const Ray& ray, [[maybe_unused]] TraversalCounters* counters,
+                    AnyHitOrder any_order) {
+  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
+    if (!FmaRayBox::takes(ray)) [[unlikely]]
+      return traverse_packed<TriangleTest, RobustRayBox, kAnyHit, kCount>(tree, ray, counters, any_order);
+  }
+  if constexpr (kCount) ++counters->rays;
+  if (tree.empty || !traceable(ray)) return {};
+  if constexpr (kCount) ++counters->box_tests;
+  const float tmin = ray.tmin;
+  const float tmax = far_limit(ray);
+  float t_root;
+  if (!BoxTest(ray).intersect(tree.root_box, tmin, tmax, t_root)) return {};
+
+  const PairSlabs<BoxTest> slabs(ray);
+  const TriangleTest triangle_test(ray);
+  const PairNode* nodes = tree.nodes.data();
+  const Triangle* triangles = tree.triangles.data();
+  struct Entry {
+    uint32_t index, count;
+    float t_entry;
+  };
+  Entry stack[kStackCapacity];
+  uint32_t size = 0;
+  uint32_t current = tree.root;
+  uint32_t count = tree.root_count;
+  Hit best;
+  float best_t = tmax;
+  while (true) {
+    if (count == 0) {
+      if constexpr (kCount) {
+        ++counters->inner_visits;
+        counters->box_tests += 2;
+      }
+      const PairNode& node = nodes[current];
+      float t0, t1;
+      const unsigned hits = slabs.intersect(node, tmin, best_t, t0, t1);
+      if (hits == 3) {
+        bool second_first = !(t0 < t1);
+        if constexpr (kAnyHit) {
+          if (any_order == AnyHitOrder::kStored) second_first = false;
+          if (any_order == AnyHitOrder::kNearestStored) second_first = t1 < t0;
+        }
+        if (size == kStackCapacity) [[unlikely]]
+          throw_stack_overflow(current, 2);
+        const int near = second_first ? 1 : 0;
+        stack[size++] = {node.child[1 - near], node.count[1 - near], second_first ? t0 : t1};
+        current = node.child[near];
+        count = node.count[near];
+        continue;
+      }
+      if (hits != 0) {
+        const unsigned c = hits >> 1;
+        current = node.child[c];
+        count = node.count[c];
+        continue;
+      }
+    } else {
+      if constexpr (kCount) {
+        ++counters->leaf_visits;
+        counters->prim_tests += count;
+      }
+      const uint32_t end = current + count;
+      for (uint32_t prim = current; prim < end; ++prim) {
+        float t, u, v;
+        const bool hit = kAnyHit ? intersect_any(triangle_test, triangles[prim], tmin, best_t, t, u, v)
+                                 : triangle_test.intersect(triangles[prim], tmin, best_t, t, u, v);
+        if (!hit) continue;
+        if constexpr (kAnyHit) {
+          return {prim, t, u, v};
+        } else if (t < best_t || prim < best.prim) {
+          best = {prim, t, u, v};
+          best_t = t;
+        }
+      }
+    }
+    do {
+      if (size == 0) return best;
+      --size;
+    } while (!kAnyHit && stack[size].t_entry > best_t);
+    current = stack[size].index;
+    count = stack[size].count;
+  }
+}
+
+}  // namespace detail
+
+/// The bvh2_packed layout of a binary `bvh` over `triangles`, with `spec`'s triangle and box tests.
+std::unique_ptr<CompiledLayout> compile_packed_bvh2(const Bvh& bvh, std::span<const Triangle> triangles,
+                                                    const LayoutSpec& spec);
+
+}  // namespace sahbench

@@ -14,8 +14,17 @@ set -euo pipefail
 sahbench=$1
 source_dir=$2
 work=$3
-shards=${SAHBENCH_SLURM_SHARDS:-4}  # the issue asks for a 4-task array; other counts for measurements
-config=configs/ci.toml
+# Defaults are the ctest's; the overrides are for measuring a larger sweep the same way:
+#   SAHBENCH_SLURM_SHARDS (4), SAHBENCH_SLURM_CONFIG (configs/ci.toml), SAHBENCH_SLURM_WAIT_S (600, per
+#   job), SAHBENCH_SLURM_SUBMIT_ARGS (extra submit.sh options, e.g. "--cpus-per-task 2"),
+#   SAHBENCH_SLURM_SINGLE (an earlier single-process CSV of the config, compared instead of a new run) and
+#   SAHBENCH_SLURM_RESUBMIT (1: also check that a cut shard resubmitted alone continues).
+shards=${SAHBENCH_SLURM_SHARDS:-4}
+config=${SAHBENCH_SLURM_CONFIG:-configs/ci.toml}
+wait_s=${SAHBENCH_SLURM_WAIT_S:-600}
+read -r -a submit_args <<<"${SAHBENCH_SLURM_SUBMIT_ARGS:-}"
+single_csv=${SAHBENCH_SLURM_SINGLE:-}
+resubmit=${SAHBENCH_SLURM_RESUBMIT:-1}
 
 fail() {
   echo "local_slurm: FAIL: $*" >&2
@@ -129,14 +138,15 @@ echo "local_slurm: Slurm up: node $host, $cpus CPUs, ${mem_mb} MB, ports $ctld_p
 # The sweep through submit.sh, from the source folder (the config's paths are relative to it).
 cd "$source_dir"
 start=$(date +%s.%N)
-submitted=$(bash scripts/slurm/submit.sh "$config" --shards "$shards" --out "$work/run" --sahbench "$sahbench") ||
+submitted=$(bash scripts/slurm/submit.sh "$config" --shards "$shards" --out "$work/run" --sahbench "$sahbench" \
+  "${submit_args[@]}") ||
   fail "submit.sh failed"
 echo "$submitted"
 merge_job=$(sed -n 's/^merge job \([0-9]*\):.*/\1/p' <<<"$submitted")
 [[ -n $merge_job ]] || fail "submit.sh printed no merge job id"
-wait_for_job() {  # $1: job id; fails unless it completes within 10 minutes
+wait_for_job() {  # $1: job id; fails unless it completes within wait_s seconds
   local job_state=
-  for _ in $(seq 1200); do
+  for _ in $(seq $((wait_s * 2))); do
     job_state=$(scontrol show job "$1" 2>/dev/null | sed -n 's/.*JobState=\([A-Z_]*\).*/\1/p')
     case $job_state in
       COMPLETED) return 0 ;;
@@ -144,15 +154,30 @@ wait_for_job() {  # $1: job id; fails unless it completes within 10 minutes
       *) fail "job $1 ended $job_state" ;;
     esac
   done
-  fail "job $1 not done after 10 minutes ($job_state)"
+  fail "job $1 not done after $wait_s s ($job_state)"
 }
 wait_for_job "$merge_job"
 end=$(date +%s.%N)
 echo "local_slurm: submission to merged report: $(/usr/bin/python3 -c "print(f'{$end - $start:.1f}')") s" >&2
+# Each task's measured time, to set beside the plan's estimates (plan.md).
+array_job=$(sed -n 's/^array job \([0-9]*\):.*/\1/p' <<<"$submitted")
+scontrol -o show job "$array_job" 2>/dev/null | while read -r line; do
+  task=$(sed -n 's/.*ArrayTaskId=\([0-9]*\).*/\1/p' <<<"$line")
+  t0=$(date -d "$(sed -n 's/.*StartTime=\([^ ]*\).*/\1/p' <<<"$line")" +%s)
+  t1=$(date -d "$(sed -n 's/.*EndTime=\([^ ]*\).*/\1/p' <<<"$line")" +%s)
+  echo "local_slurm: shard $task ran $((t1 - t0)) s" >&2
+done
 [[ -s $work/run/report.md ]] || fail "no report at $work/run/report.md"
 
 # One process, the same config: every deterministic metric equal, and the same cells both ways.
-"$sahbench" run "$config" --output "$work/single.csv" 2>"$work/logs/single.log" || fail "single run failed"
+if [[ -n $single_csv ]]; then
+  cp "$single_csv" "$work/single.csv"
+else
+  start=$(date +%s.%N)
+  "$sahbench" run "$config" --output "$work/single.csv" 2>"$work/logs/single.log" || fail "single run failed"
+  end=$(date +%s.%N)
+  echo "local_slurm: one process: $(/usr/bin/python3 -c "print(f'{$end - $start:.1f}')") s" >&2
+fi
 compare_with_single() {
   local pair out
   for pair in "$work/single.csv $work/run/merged.csv" "$work/run/merged.csv $work/single.csv"; do
@@ -165,6 +190,7 @@ $out"
 }
 compare_with_single
 echo "local_slurm: merged CSV of $shards shards equals the single run in every deterministic metric" >&2
+[[ $resubmit == 1 ]] || exit 0
 
 # A failed task resubmitted alone continues its shard: shard 1's CSV cut back to its first two rows (as
 # a task killed mid-shard leaves it), task 1 resubmitted, and the new merge again equals the single run.

@@ -10,9 +10,11 @@
 // the same NaN rule, so the kernel visits the nodes the common-format kernel visits, in the same order,
 // and counts the same work (the layout tests hold it to that).
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include "core/aabb.h"
@@ -62,9 +64,10 @@ struct PackedBvh2 {
   uint32_t root_count = 0;  ///< 0 when the root is an inner node, else its triangle count
   bool empty = true;        ///< no nodes at all: every ray misses
 
-  /// Compiles a valid binary tree over `triangles`: nodes depth first, the nearer-stored child first, so
-  /// that a ray going down to the first leaf reads lines close in memory whatever order the builder
-  /// wrote them in; triangles in the order the leaves are met.
+  /// Compiles a valid binary tree over `triangles`: nodes depth first, left subtrees before right ones
+  /// and a node's two inner children side by side, so that a ray going down the tree reads lines close
+  /// in memory whatever order the builder wrote them in; a leaf's triangles are copied where its parent
+  /// is laid out, so they follow the same order.
   static PackedBvh2 compile(const Bvh& bvh, std::span<const Triangle> triangles);
 
   /// New positions of the same triangles (scene order): every box recomputed bottom up.
@@ -87,17 +90,20 @@ namespace detail {
 template <class Box>
 class PairSlabs {
  public:
-  explicit PairSlabs(const Ray& ray) : setup_(ray), box_(ray) {
 #if defined(__SSE4_1__)
+  explicit PairSlabs(const Ray& ray) {
+    const SlabSetup setup(ray);
     for (int axis = 0; axis < 3; ++axis) {
       const auto a = static_cast<std::size_t>(axis);
-      org_[axis] = _mm_set1_ps(setup_.org[a]);
-      inv_[axis] = _mm_set1_ps(setup_.inv_dir[a]);
-      org_inv_[axis] = _mm_set1_ps(setup_.org[a] * setup_.inv_dir[a]);
-      negative_[axis] = _mm_castsi128_ps(_mm_set1_epi32(setup_.negative[a] ? -1 : 0));
+      org_[axis] = _mm_set1_ps(setup.org[a]);
+      inv_[axis] = _mm_set1_ps(setup.inv_dir[a]);
+      org_inv_[axis] = _mm_set1_ps(setup.org[a] * setup.inv_dir[a]);
+      negative_[axis] = _mm_castsi128_ps(_mm_set1_epi32(setup.negative[a] ? -1 : 0));
     }
-#endif
   }
+#else
+  explicit PairSlabs(const Ray& ray) : box_(ray) {}
+#endif
 
   /// Bit 0: the left child is met within [tmin, tmax], bit 1: the right one; their entry distances in
   /// t_left and t_right.
@@ -150,10 +156,10 @@ class PairSlabs {
   }
 #endif
 
-  SlabSetup setup_;
-  Box box_;  // the scalar test, where SSE4.1 is not there
 #if defined(__SSE4_1__)
   __m128 org_[3], inv_[3], org_inv_[3], negative_[3];
+#else
+  Box box_;  // the scalar test, where SSE4.1 is not there
 #endif
 };
 

@@ -22,6 +22,8 @@ struct TraceCounts {
   uint64_t rays = 0;
   uint64_t nodes_visited = 0;  ///< nodes whose box test passed and whose children or primitives were examined
   uint64_t prims_tested = 0;   ///< ray/primitive tests
+  uint64_t leaves_visited =
+      0;  ///< of nodes_visited, the leaves (the rest are inner nodes, box-testing children)
 };
 
 class CompiledLayout {

@@ -23,7 +23,7 @@ TraceCounts count_rays(std::size_t count, Trace trace) {
   return sum_over_ray_chunks(count, kRayChunk, [&](std::size_t begin, std::size_t end) {
     TraversalCounters counters;
     for (std::size_t i = begin; i != end; ++i) trace(i, counters);
-    return TraceCounts{end - begin, counters.nodes_visited(), counters.prim_tests};
+    return TraceCounts{end - begin, counters.nodes_visited(), counters.prim_tests, counters.leaf_visits};
   });
 }
 

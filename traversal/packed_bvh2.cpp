@@ -125,7 +125,7 @@ class PackedBvh2Layout final : public CompiledLayout {
       TraversalCounters counters;
       for (std::size_t i = begin; i != end; ++i)
         detail::traverse_packed<Tri, Box, kAnyHit, true>(tree_, rays[i], &counters, order_);
-      return TraceCounts{end - begin, counters.nodes_visited(), counters.prim_tests};
+      return TraceCounts{end - begin, counters.nodes_visited(), counters.prim_tests, counters.leaf_visits};
     });
   }
 

@@ -34,6 +34,7 @@ TraceCounts sum_over_ray_chunks(std::size_t count, std::size_t chunk, Counts cou
     a.rays += b.rays;
     a.nodes_visited += b.nodes_visited;
     a.prims_tested += b.prims_tested;
+    a.leaves_visited += b.leaves_visited;
     return a;
   };
   return tbb::parallel_reduce(

@@ -104,6 +104,7 @@ class WideLayout final : public CompiledLayout {
         sum.rays += c.rays;
         sum.nodes_visited += c.inner_visits + c.leaf_visits;
         sum.prims_tested += c.prim_tests;
+        sum.leaves_visited += c.leaf_visits;
       }
       return sum;
     });

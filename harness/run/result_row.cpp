@@ -29,7 +29,8 @@ const std::vector<std::string>& extra_columns() {
                                                    "sah_epo_cost",
                                                    "cost_per_ray",
                                                    "shard",
-                                                   "shard_run_id"};
+                                                   "shard_run_id",
+                                                   "leaves_per_ray"};
   return columns;
 }
 
@@ -108,6 +109,7 @@ void put_per_ray_counts(CsvRow& row, const TraceCounts& counts, const std::optio
   const double prims = static_cast<double>(counts.prims_tested) / rays;
   row["nodes_per_ray"] = fmt::format("{:.3f}", nodes);
   row["prims_per_ray"] = fmt::format("{:.3f}", prims);
+  row["leaves_per_ray"] = fmt::format("{:.3f}", static_cast<double>(counts.leaves_visited) / rays);
   if (cost)
     row["cost_per_ray"] = fmt::format(
         "{:.3f}", static_cast<double>(cost->c_trav) * nodes + static_cast<double>(cost->c_isect) * prims);

@@ -57,7 +57,8 @@ void put_ray_set(CsvRow& row, const RaySet& rs);
 /// epo_cost (core/epo.h) and sah_epo_cost, the paper's blend of `sah` and `epo` (6 decimals each).
 void put_epo(CsvRow& row, double epo, double sah);
 
-/// nodes_per_ray and prims_per_ray (3 decimals) from a counting pass; with the tree's `cost` model also
+/// nodes_per_ray, leaves_per_ray (the leaves among those nodes) and prims_per_ray (3 decimals) from a
+/// counting pass; with the tree's `cost` model also
 /// cost_per_ray = c_trav * nodes_per_ray + c_isect * prims_per_ray, the SAH's cost measured on the rays.
 /// nodes_per_ray counts inner nodes and leaves whose contents were examined (TraceCounts), so unlike the
 /// SAH, which charges a leaf only for its primitives, the measured cost charges each leaf visit c_trav

@@ -39,7 +39,7 @@ const std::vector<std::string>& extra_columns() {
       "config",        "case_kind",     "case_seed",          "case_size",
       "closed",        "scene_removed", "invalid_made",       "exact_hits",
       "must_hit_rays", "reference_ms",  "build_time_limit_s", "embree_version",
-      "notes",         "sah_block"};
+      "notes",         "sah_block",     "leaves_per_ray"};
   return columns;
 }
 

@@ -200,6 +200,8 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
           if (!(layout.arity > 2 && bvh.root().is_leaf()) && !tie_broken_differently) {
             EXPECT_EQ(closest_counts.nodes_visited, scalar_closest.nodes_visited());
             EXPECT_EQ(any_counts.nodes_visited, scalar_any.nodes_visited());
+            EXPECT_EQ(closest_counts.leaves_visited, scalar_closest.leaf_visits);
+            EXPECT_EQ(any_counts.leaves_visited, scalar_any.leaf_visits);
           }
 
           // The default variant is exact: the brute-force answer (ties aside).

@@ -1,6 +1,7 @@
 # `sahbench run` stopped by SIGINT: exit 130, the message with the command that continues the run, and
 # only whole rows in the CSV (here the first scene's one cell; the second scene's cell was in progress).
 #   cmake -DSAHBENCH=path -DWORK=dir -P expect_interrupt.cmake
+include(${CMAKE_CURRENT_LIST_DIR}/interrupt_after_first_row.cmake)
 file(MAKE_DIRECTORY ${WORK})
 set(config ${WORK}/interrupt.toml)
 set(csv ${WORK}/interrupt.csv)
@@ -22,18 +23,9 @@ kind = \"primary\"
 width = 512
 height = 512
 ")
-# SIGINT once the first scene's row is on disk (the second scene, a 4M-triangle sphere traced 30 times,
-# is then still running), so the test does not depend on the machine's speed; the shell prints the
-# run's exit status.
-execute_process(
-  COMMAND bash -c "\"$0\" run \"$1\" 2>\"$2.err\" & pid=$!
-                   for i in $(seq 1 1200); do
-                     [ \"$(wc -l < \"$2\" 2>/dev/null || echo 0)\" -ge 2 ] && break; sleep 0.1
-                   done
-                   kill -INT $pid; wait $pid; echo $?"
-          ${SAHBENCH} ${config} ${csv}
-  RESULT_VARIABLE shell_rc OUTPUT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE)
-file(READ ${csv}.err err)
+# SIGINT once the first scene's row is on disk: the second scene, a 4M-triangle sphere traced 30 times,
+# is then still running.
+interrupt_after_first_row(${csv} rc err run ${config})
 if(NOT rc EQUAL 130)
   message(FATAL_ERROR "exit code ${rc}, expected 130\nstderr: ${err}")
 endif()

@@ -2,6 +2,7 @@
 # stopped by SIGINT once its first row is on disk, continued with --resume, then compared with an
 # uninterrupted run of the same shard (the same cells, and the same deterministic metrics).
 #   cmake -DSAHBENCH=path -DWORK=dir -P expect_shard_resume.cmake
+include(${CMAKE_CURRENT_LIST_DIR}/interrupt_after_first_row.cmake)
 file(MAKE_DIRECTORY ${WORK})
 set(config ${WORK}/shard_resume.toml)
 set(csv ${WORK}/shard_resume-shard-1-of-2.csv)
@@ -29,15 +30,7 @@ kind = \"primary\"
 width = 256
 height = 256
 ")
-execute_process(
-  COMMAND bash -c "\"$0\" run \"$1\" --shard 1/2 2>\"$2.err\" & pid=$!
-                   for i in $(seq 1 1200); do
-                     [ \"$(wc -l < \"$2\" 2>/dev/null || echo 0)\" -ge 2 ] && break; sleep 0.1
-                   done
-                   kill -INT $pid; wait $pid; echo $?"
-          ${SAHBENCH} ${config} ${csv}
-  RESULT_VARIABLE shell_rc OUTPUT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE)
-file(READ ${csv}.err err)
+interrupt_after_first_row(${csv} rc err run ${config} --shard 1/2)
 if(NOT rc EQUAL 130)
   message(FATAL_ERROR "exit code ${rc}, expected 130\nstderr: ${err}")
 endif()

@@ -8,6 +8,7 @@
 
 #include "bench/bench_data.h"
 #include "builders/collapse.h"
+#include "traversal/packed_bvh2.h"
 #include "traversal/ray_box.h"
 #include "traversal/triangle_tests.h"
 #include "traversal/wide_bvh.h"
@@ -172,6 +173,29 @@ void BM_Bvh2NodeVisit(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * rs.size() * inner.size()));
 }
 BENCHMARK(BM_Bvh2NodeVisit)->Name("node_visit/bvh2/scalar/robust");
+
+// One bvh2_packed node visit: both child boxes of a PairNode, as traverse_packed tests them.
+template <class BoxTest>
+void BM_PairNodeVisit(benchmark::State& state) {
+  const PackedBvh2 tree = PackedBvh2::compile(binary_tree(kPrims * 16), soup(kPrims * 16));
+  const std::vector<PairNode> nodes(
+      tree.nodes.begin(), tree.nodes.begin() + std::min<std::ptrdiff_t>(256, std::ssize(tree.nodes)));
+  const auto& rs = rays(kRays);
+  for (auto _ : state) {
+    uint32_t hits = 0;
+    for (const Ray& ray : rs) {
+      const detail::PairSlabs<BoxTest> test(ray);
+      float t_a, t_b;
+      for (const PairNode& n : nodes)
+        hits += static_cast<uint32_t>(std::popcount(test.intersect(n, ray.tmin, ray.tmax, t_a, t_b)));
+    }
+    benchmark::DoNotOptimize(hits);
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * rs.size() * nodes.size()));
+}
+BENCHMARK(BM_PairNodeVisit<RobustRayBox>)->Name("node_visit/bvh2_packed/scalar/robust");
+BENCHMARK(BM_PairNodeVisit<FastRayBox>)->Name("node_visit/bvh2_packed/scalar/fast");
+BENCHMARK(BM_PairNodeVisit<FmaRayBox>)->Name("node_visit/bvh2_packed/scalar/fma");
 
 }  // namespace
 }  // namespace sahbench::bench

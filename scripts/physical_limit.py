@@ -1,0 +1,118 @@
+#!/usr/bin/python3
+"""How close each kernel comes to the cost its own counts imply: the physical limit of a cell.
+
+    scripts/physical_limit.py RESULTS.csv BENCH.json [--threads N]
+
+BENCH.json is the micro-benchmarks of the same build on the same machine, as Google Benchmark writes them:
+
+    build/release/bench/sahbench_bench --benchmark_filter='node_visit|ray_triangle' \\
+        --benchmark_format=json > bench.json
+
+For every row of ours with counts (not Embree's, which has no counting kernel, and not packet rows, whose
+rays share node tests), the bound is the time per ray of its work if every node test and every triangle
+test ran at the throughput the micro-benchmarks measure with their data in cache:
+
+    bound = (nodes_per_ray - leaves_per_ray) * t_node + prims_per_ray * t_triangle
+
+with t_node one node visit of the row's layout, box test and ISA (all of a node's children at once), and
+t_triangle one triangle of its triangle test (one lane of a 4-triangle block for bvh4/bvh8). The measured
+time per ray is threads / rays per second, per core. bound / measured is the share of the limit reached:
+1 would be a kernel that waits on nothing but its arithmetic; what is missing is memory latency, branch
+mispredictions and the loop around the tests.
+
+Exits 2 with a message when a file lacks what is needed.
+"""
+
+import argparse
+import csv
+import json
+import sys
+
+
+def fail(message):
+    print(f"physical_limit: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
+def parse_layout(text):
+    """(name, {option: value}) of a layout spec such as bvh8:tri=mtn,box=fma."""
+    name, _, rest = text.partition(":")
+    options = dict(item.split("=", 1) for item in rest.split(",") if "=" in item)
+    return name, options
+
+
+def benchmark_names(row):
+    """The node and triangle benchmarks of a row, or None for a row without a bound."""
+    name, options = parse_layout(row["layout"])
+    if options.get("packet", "1") != "1":
+        return None
+    box = options.get("box", "robust")
+    tri = options.get("tri", "watertight")
+    if name == "bvh2":
+        # The common-format node visit is benchmarked with the robust box test only.
+        return "node_visit/bvh2/scalar/robust", f"ray_triangle/scalar/{tri}"
+    if name == "bvh2_packed":
+        return f"node_visit/bvh2_packed/scalar/{box}", f"ray_triangle/scalar/{tri}"
+    if name in ("bvh4", "bvh8"):
+        isa = row["isa"]
+        return f"node_visit/{name}/{isa}/{box}", f"ray_triangle/block4/{isa}/{tri}"
+    return None
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("results")
+    parser.add_argument("bench")
+    parser.add_argument("--threads", type=int, help="only rows of this thread count")
+    args = parser.parse_args()
+
+    try:
+        with open(args.bench) as f:
+            bench = json.load(f)
+    except (OSError, json.JSONDecodeError) as e:
+        fail(f"{args.bench}: {e}")
+    ns_per_item = {}
+    for b in bench.get("benchmarks", []):
+        if b.get("items_per_second"):
+            ns_per_item[b["name"]] = 1e9 / b["items_per_second"]
+    if not ns_per_item:
+        fail(f"{args.bench}: no benchmark with items_per_second (run sahbench_bench with --benchmark_format=json)")
+
+    try:
+        with open(args.results, newline="") as f:
+            rows = list(csv.DictReader(f))
+    except OSError as e:
+        fail(f"{args.results}: {e}")
+    needed = ["layout", "isa", "threads", "nodes_per_ray", "leaves_per_ray", "prims_per_ray", "trace_mrays_median"]
+    if rows and any(c not in rows[0] for c in needed):
+        missing = [c for c in needed if c not in rows[0]]
+        fail(f"{args.results}: no column {', '.join(missing)} (a CSV of this version of sahbench run is needed)")
+
+    print("| scene | builder | layout | threads | ray set | inner + leaves | prims | bound ns | measured ns | "
+          "bound / measured |")
+    print("| --- | --- | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: |")
+    missing_bench = set()
+    for row in rows:
+        if args.threads and int(row["threads"]) != args.threads:
+            continue
+        if not row["nodes_per_ray"] or not row["leaves_per_ray"] or not row["trace_mrays_median"]:
+            continue
+        names = benchmark_names(row)
+        if names is None:
+            continue
+        if any(n not in ns_per_item for n in names):
+            missing_bench.update(n for n in names if n not in ns_per_item)
+            continue
+        nodes, leaves = float(row["nodes_per_ray"]), float(row["leaves_per_ray"])
+        prims = float(row["prims_per_ray"])
+        bound = (nodes - leaves) * ns_per_item[names[0]] + prims * ns_per_item[names[1]]
+        measured = 1000.0 * int(row["threads"]) / float(row["trace_mrays_median"])
+        print(f"| {row['scene']} | {row['builder']} | {row['layout']} | {row['threads']} | {row['ray_set']} | "
+              f"{nodes - leaves:.1f} + {leaves:.1f} | {prims:.1f} | {bound:.0f} | {measured:.0f} | "
+              f"{bound / measured:.2f} |")
+    if missing_bench:
+        print(f"\nNo figure in {args.bench} for: {', '.join(sorted(missing_bench))} (their rows are left out).")
+
+
+if __name__ == "__main__":
+    main()

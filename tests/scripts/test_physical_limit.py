@@ -1,0 +1,83 @@
+#!/usr/bin/python3
+"""scripts/physical_limit.py on a hand-made CSV and benchmark JSON: the bound of each row from its counts
+and the benchmarks of its layout, box test, triangle test and ISA; Embree and packet rows left out; a row
+whose benchmark is missing named; exit 2 for a CSV without leaves_per_ray.
+
+    test_physical_limit.py PATH/TO/physical_limit.py
+"""
+
+import csv
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+failures = []
+
+
+def check(condition, message):
+    if not condition:
+        failures.append(message)
+        print(f"FAIL: {message}", file=sys.stderr)
+
+
+COLUMNS = ["scene", "builder", "layout", "isa", "threads", "ray_set", "nodes_per_ray", "leaves_per_ray",
+           "prims_per_ray", "trace_mrays_median"]
+ROWS = [
+    # 10 inner nodes at 2 ns and 8 triangle lanes at 1 ns: 28 ns against 1 / 20 Mrays/s = 50 ns.
+    ["s", "wide_collapse", "bvh8", "avx2", "1", "primary", "14", "4", "8", "20"],
+    # Two threads: 2 / 20 Mrays/s = 100 ns per ray per core.
+    ["s", "wide_collapse", "bvh8", "avx2", "2", "primary", "14", "4", "8", "20"],
+    # bvh2_packed with the fast box test and Möller-Trumbore: 30 * 4 + 5 * 3 = 135 ns against 250 ns.
+    ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "4"],
+    ["s", "embree", "embree_1", "avx2", "1", "primary", "", "", "", "30"],
+    ["s", "wide_collapse", "bvh8:packet=8", "avx2", "1", "primary", "14", "4", "8", "25"],
+    ["s", "wide_collapse", "bvh8:tri=mtn", "avx512", "1", "primary", "14", "4", "8", "25"],
+]
+BENCH = {"benchmarks": [
+    {"name": "node_visit/bvh8/avx2/robust", "items_per_second": 5e8},
+    {"name": "ray_triangle/block4/avx2/watertight", "items_per_second": 1e9},
+    {"name": "node_visit/bvh2_packed/scalar/fast", "items_per_second": 2.5e8},
+    {"name": "ray_triangle/scalar/mt", "items_per_second": 1e9 / 3},
+]}
+
+
+def main():
+    script = sys.argv[1]
+    with tempfile.TemporaryDirectory() as tmp:
+        results, bench = Path(tmp) / "r.csv", Path(tmp) / "b.json"
+        with results.open("w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(COLUMNS)
+            w.writerows(ROWS)
+        bench.write_text(json.dumps(BENCH))
+        out = subprocess.run([sys.executable, script, str(results), str(bench)], capture_output=True, text=True)
+        check(out.returncode == 0, f"exit {out.returncode}: {out.stderr}")
+        text = out.stdout
+        check("| s | wide_collapse | bvh8 | 1 | primary | 10.0 + 4.0 | 8.0 | 28 | 50 | 0.56 |" in text, text)
+        check("| s | wide_collapse | bvh8 | 2 | primary | 10.0 + 4.0 | 8.0 | 28 | 100 | 0.28 |" in text, text)
+        check("| s | binned_sah | bvh2_packed:tri=mt,box=fast | 1 | shadow | 30.0 + 10.0 | 5.0 | 135 | 250 | 0.54 |"
+              in text, text)
+        check("embree_1" not in text and "packet=8" not in text, text)
+        check("No figure in" in text and "node_visit/bvh8/avx512/robust" in text
+              and "ray_triangle/block4/avx512/mtn" in text, text)
+        only = subprocess.run([sys.executable, script, str(results), str(bench), "--threads", "2"],
+                              capture_output=True, text=True)
+        check("| 1 | primary" not in only.stdout and "| 2 | primary" in only.stdout, only.stdout)
+
+        old = Path(tmp) / "old.csv"
+        old.write_text("scene,layout,isa,threads,ray_set,nodes_per_ray,prims_per_ray,trace_mrays_median\n"
+                       "s,bvh8,avx2,1,primary,14,8,20\n")
+        bad = subprocess.run([sys.executable, script, str(old), str(bench)], capture_output=True, text=True)
+        check(bad.returncode == 2 and "leaves_per_ray" in bad.stderr, f"{bad.returncode}: {bad.stderr}")
+        missing = subprocess.run([sys.executable, script, str(results), str(Path(tmp) / "none.json")],
+                                 capture_output=True, text=True)
+        check(missing.returncode == 2 and "none.json" in missing.stderr, f"{missing.returncode}: {missing.stderr}")
+    if failures:
+        sys.exit(1)
+    print("physical_limit.py: all checks passed")
+
+
+if __name__ == "__main__":
+    main()

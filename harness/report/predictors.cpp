@@ -40,6 +40,11 @@ std::string rho_text(const std::optional<double>& rho) {
   return rho ? fmt::format("{:.2f}", *rho) : "-";
 }
 
+// "0.74 (0.98)": the fitted weight and its correlation, or "-".
+std::string fit_text(const std::optional<EpoWeightFit>& fit) {
+  return fit ? fmt::format("{:.2f} ({:.2f})", fit->weight, fit->r) : "-";
+}
+
 }  // namespace
 
 std::optional<double> spearman(std::span<const double> x, std::span<const double> y) {
@@ -54,6 +59,37 @@ std::optional<double> spearman(std::span<const double> x, std::span<const double
   }
   if (!(sxx > 0.0) || !(syy > 0.0)) return std::nullopt;
   return sxy / std::sqrt(sxx * syy);
+}
+
+std::optional<double> pearson(std::span<const double> x, std::span<const double> y) {
+  if (x.size() != y.size() || x.size() < 2) return std::nullopt;
+  const double n = static_cast<double>(x.size());
+  const double mx = std::accumulate(x.begin(), x.end(), 0.0) / n;
+  const double my = std::accumulate(y.begin(), y.end(), 0.0) / n;
+  double sxy = 0.0, sxx = 0.0, syy = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+    syy += (y[i] - my) * (y[i] - my);
+  }
+  if (!(sxx > 0.0) || !(syy > 0.0)) return std::nullopt;
+  return sxy / std::sqrt(sxx * syy);
+}
+
+std::optional<EpoWeightFit> fit_epo_weight(std::span<const double> sah, std::span<const double> epo,
+                                           std::span<const double> time_per_ray) {
+  if (sah.size() != epo.size() || sah.size() != time_per_ray.size() || sah.size() < kMinRankedBuilders)
+    return std::nullopt;
+  std::optional<EpoWeightFit> best;
+  const int steps = static_cast<int>(std::lround(1.0 / kEpoWeightStep));
+  std::vector<double> blend(sah.size());
+  for (int step = 0; step <= steps; ++step) {
+    const double w = step * kEpoWeightStep;
+    for (std::size_t i = 0; i < sah.size(); ++i) blend[i] = (1.0 - w) * sah[i] + w * epo[i];
+    const auto r = pearson(blend, time_per_ray);
+    if (r && (!best || *r > best->r)) best = EpoWeightFit{w, *r};
+  }
+  return best;
 }
 
 std::vector<PredictorRow> predictor_rows(const std::vector<const CsvRow*>& group) {
@@ -82,6 +118,14 @@ std::vector<PredictorRow> predictor_rows(const std::vector<const CsvRow*>& group
         }
       if (speed.size() >= kMinRankedBuilders) out[i].rho[p] = spearman(speed, negated_cost);
     }
+    std::vector<double> sah, epo, time_per_ray;
+    for (const CsvRow* r : members[i])
+      if (const auto e = csv_number(*r, "epo_cost")) {
+        sah.push_back(*csv_number(*r, "sah_cost"));
+        epo.push_back(*e);
+        time_per_ray.push_back(1.0 / *csv_number(*r, "trace_mrays_median"));
+      }
+    out[i].epo_weight = fit_epo_weight(sah, epo, time_per_ray);
   }
   return out;
 }
@@ -100,8 +144,10 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
   const std::string explanation = fmt::format(
       "Spearman rank correlation across builders between rays/s and each cost, negated: 1 where the cost "
       "orders the builders exactly as their speed, -1 in reverse. SAH+EPO is (1 - w) SAH + w EPO with w = "
-      "{} (Aila, Karras and Laine 2013); cost/ray is c_trav nodes_per_ray + c_isect prims_per_ray from "
-      "the counting kernel; '-' where fewer than {} rows have the cost or it orders nothing.",
+      "{} (tinybvh's); fitted w is the weight that best predicts the time per ray here, with its Pearson "
+      "correlation r, fitted per scene and kind of ray as Aila, Karras and Laine 2013 do; cost/ray is "
+      "c_trav nodes_per_ray + c_isect prims_per_ray from the counting kernel; '-' where fewer than {} "
+      "rows have the cost or it orders nothing.",
       kEpoWeight, kMinRankedBuilders);
   const std::string skipped =
       too_few.empty() ? ""
@@ -120,10 +166,11 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
     fmt::print(
         out,
         "\\begin{{table}}[htbp]\n  \\centering\n  \\footnotesize\n  \\setlength{{\\tabcolsep}}{{3pt}}\n"
-        "  \\caption{{How well the costs predict rays/s: {}.}}\n  \\begin{{tabular}}{{lrrrr}}\n    "
+        "  \\caption{{How well the costs predict rays/s: {}.}}\n  \\begin{{tabular}}{{lrrrrr}}\n    "
         "\\toprule\n"
         "    Rays (builders) & SAH & EPO & \\begin{{tabular}}[b]{{@{{}}r@{{}}}}SAH+\\\\EPO\\end{{tabular}} & "
-        "\\begin{{tabular}}[b]{{@{{}}r@{{}}}}Cost\\\\per ray\\end{{tabular}} \\\\\n    \\midrule\n",
+        "\\begin{{tabular}}[b]{{@{{}}r@{{}}}}Cost\\\\per ray\\end{{tabular}} & "
+        "\\begin{{tabular}}[b]{{@{{}}r@{{}}}}Fitted\\\\$w$ ($r$)\\end{{tabular}} \\\\\n    \\midrule\n",
         latex_escape(title));
     // Each layout's ray sets together, layouts in order of first appearance.
     std::vector<std::string> layouts;
@@ -139,10 +186,11 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
     for (const PredictorRow* r : ranked) {
       if (r->layout != layout) {
         layout = r->layout;
-        fmt::print(out, "    \\multicolumn{{5}}{{l}}{{{}}} \\\\\n", latex_escape(layout));
+        fmt::print(out, "    \\multicolumn{{6}}{{l}}{{{}}} \\\\\n", latex_escape(layout));
       }
-      fmt::print(out, "    \\quad {} ({}) & {} & {} & {} & {} \\\\\n", latex_escape(r->ray_set), r->builders,
-                 rho_text(r->rho[0]), rho_text(r->rho[1]), rho_text(r->rho[2]), rho_text(r->rho[3]));
+      fmt::print(out, "    \\quad {} ({}) & {} & {} & {} & {} & {} \\\\\n", latex_escape(r->ray_set),
+                 r->builders, rho_text(r->rho[0]), rho_text(r->rho[1]), rho_text(r->rho[2]),
+                 rho_text(r->rho[3]), fit_text(r->epo_weight));
     }
     fmt::print(out,
                "    \\bottomrule\n  \\end{{tabular}}\n  \\par\\smallskip{{\\scriptsize "
@@ -152,12 +200,13 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
   }
   fmt::print(out,
              "### How well the costs predict rays/s: {}\n\n"
-             "| layout | ray set | builders | SAH | EPO | SAH+EPO | cost/ray |\n"
-             "| --- | --- | ---: | ---: | ---: | ---: | ---: |\n",
+             "| layout | ray set | builders | SAH | EPO | SAH+EPO | cost/ray | fitted w (r) |\n"
+             "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n",
              title);
   for (const PredictorRow* r : ranked)
-    fmt::print(out, "| {} | {} | {} | {} | {} | {} | {} |\n", r->layout, r->ray_set, r->builders,
-               rho_text(r->rho[0]), rho_text(r->rho[1]), rho_text(r->rho[2]), rho_text(r->rho[3]));
+    fmt::print(out, "| {} | {} | {} | {} | {} | {} | {} | {} |\n", r->layout, r->ray_set, r->builders,
+               rho_text(r->rho[0]), rho_text(r->rho[1]), rho_text(r->rho[2]), rho_text(r->rho[3]),
+               fit_text(r->epo_weight));
   fmt::print(out, "\n{}\n\n", explanation);
   if (!skipped.empty()) fmt::print(out, "{}\n\n", skipped);
 }

@@ -23,6 +23,24 @@ namespace sahbench {
 /// sizes, or where all x or all y are equal (no order to compare).
 std::optional<double> spearman(std::span<const double> x, std::span<const double> y);
 
+/// Pearson's correlation of the pairs (x[i], y[i]); nullopt as spearman().
+std::optional<double> pearson(std::span<const double> x, std::span<const double> y);
+
+/// The weight of EPO in the blend (1 - w) SAH + w EPO that best predicts the measured time per ray
+/// (1 / rays/s) across builders, as Aila, Karras and Laine 2013 fit it for each scene and kind of ray
+/// (section 5): w from 0 to 1 in steps of kEpoWeightStep, the one of the largest Pearson correlation r
+/// (the smallest such w on ties).
+struct EpoWeightFit {
+  double weight = 0.0;
+  double r = 0.0;
+};
+inline constexpr double kEpoWeightStep = 0.01;
+
+/// The fit over the builders (sah[i], epo[i], time_per_ray[i]); nullopt for fewer than kMinRankedBuilders,
+/// for spans of different sizes, or where no weight gives a correlation.
+std::optional<EpoWeightFit> fit_epo_weight(std::span<const double> sah, std::span<const double> epo,
+                                           std::span<const double> time_per_ray);
+
 /// Fewest builders a correlation is computed over: with two, any cost either agrees or disagrees.
 inline constexpr std::size_t kMinRankedBuilders = 3;
 
@@ -37,6 +55,7 @@ struct PredictorRow {
   std::string layout, ray_set;
   std::size_t builders = 0;
   std::array<std::optional<double>, kPredictorColumns.size()> rho{};
+  std::optional<EpoWeightFit> epo_weight;  ///< over the rows with an SAH and an EPO cost
 };
 
 /// The rows of `group` (one report table's) by layout and ray set, in order of first appearance.

@@ -697,6 +697,34 @@ TEST(ReportPredictors, SpearmanOfPerfectReversedAndTiedOrders) {
   EXPECT_FALSE(spearman(x, std::vector<double>{1, 2}));
 }
 
+TEST(ReportPredictors, PearsonIsLinearCorrelation) {
+  const std::vector<double> x = {1, 2, 3, 4, 5};
+  EXPECT_NEAR(*pearson(x, std::vector<double>{3, 5, 7, 9, 11}), 1.0, 1e-12);
+  EXPECT_NEAR(*pearson(x, std::vector<double>{-1, -2, -3, -4, -5}), -1.0, 1e-12);
+  // Monotone but not linear: below 1, where Spearman's is 1.
+  EXPECT_LT(*pearson(x, std::vector<double>{1, 8, 27, 64, 1000}), 0.9);
+  EXPECT_FALSE(pearson(x, std::vector<double>{2, 2, 2, 2, 2}));
+  EXPECT_FALSE(pearson(x, std::vector<double>{1, 2}));
+}
+
+// Times made of 0.3 SAH + 0.7 EPO exactly, over costs that are not proportional: the fit finds w = 0.70
+// with r = 1; where SAH alone explains the times, w = 0; fewer than three builders, no fit.
+TEST(ReportPredictors, FittedEpoWeightRecoversTheBlendOfTheTimes) {
+  const std::vector<double> sah = {70, 80, 75, 90, 60}, epo = {20, 5, 12, 9, 30};
+  std::vector<double> time(sah.size());
+  for (std::size_t i = 0; i < sah.size(); ++i) time[i] = 0.3 * sah[i] + 0.7 * epo[i];
+  const auto fit = fit_epo_weight(sah, epo, time);
+  ASSERT_TRUE(fit);
+  EXPECT_NEAR(fit->weight, 0.70, 1e-9);
+  EXPECT_NEAR(fit->r, 1.0, 1e-12);
+  const auto sah_only = fit_epo_weight(sah, epo, sah);
+  ASSERT_TRUE(sah_only);
+  EXPECT_EQ(sah_only->weight, 0.0);
+  EXPECT_NEAR(sah_only->r, 1.0, 1e-12);
+  EXPECT_FALSE(
+      fit_epo_weight(std::vector<double>{1, 2}, std::vector<double>{2, 1}, std::vector<double>{1, 1}));
+}
+
 // Four builders whose SAH orders them exactly as their speed on bvh2, whose cost per ray orders them in
 // reverse, and whose EPO only two have; two builders on bvh4, too few to rank; Embree takes no part.
 TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
@@ -722,9 +750,10 @@ TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
   const std::string md = out.str();
   EXPECT_NE(md.find("### How well the costs predict rays/s: proc:soup at 2 threads"), std::string::npos)
       << md;
-  EXPECT_NE(md.find("| layout | ray set | builders | SAH | EPO | SAH+EPO | cost/ray |"), std::string::npos)
+  EXPECT_NE(md.find("| layout | ray set | builders | SAH | EPO | SAH+EPO | cost/ray | fitted w (r) |"),
+            std::string::npos)
       << md;
-  EXPECT_NE(md.find("| bvh2 | primary | 4 | 1.00 | - | - | -1.00 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| bvh2 | primary | 4 | 1.00 | - | - | -1.00 | - |"), std::string::npos) << md;
   EXPECT_NE(md.find("Not ranked, fewer than 3 builders (layout, ray set, builders): bvh4 primary (2)."),
             std::string::npos)
       << md;
@@ -732,9 +761,9 @@ TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
   std::ostringstream tex;
   print_report({{path}, "", ReportFormat::kLatex}, tex);
   // Each layout a heading row, its ray sets under it with their builder counts.
-  EXPECT_NE(
-      tex.str().find("\\multicolumn{5}{l}{bvh2} \\\\\n    \\quad primary (4) & 1.00 & - & - & -1.00 \\\\"),
-      std::string::npos)
+  EXPECT_NE(tex.str().find(
+                "\\multicolumn{6}{l}{bvh2} \\\\\n    \\quad primary (4) & 1.00 & - & - & -1.00 & - \\\\"),
+            std::string::npos)
       << tex.str();
 }
 

@@ -26,6 +26,7 @@ Exits 2 with a message when a file lacks what is needed.
 import argparse
 import csv
 import json
+import re
 import sys
 
 
@@ -39,6 +40,12 @@ def parse_layout(text):
     name, _, rest = text.partition(":")
     options = dict(item.split("=", 1) for item in rest.split(",") if "=" in item)
     return name, options
+
+
+def builder_label(row):
+    """The builder, with the builder a pass starts from: wide_collapse[source=reinsert]."""
+    source = re.match(r"(?:.*?;)?source=([a-z_0-9]+)", row.get("builder_params", ""))
+    return f"{row['builder']}[source={source.group(1)}]" if source else row["builder"]
 
 
 def benchmark_names(row):
@@ -107,7 +114,7 @@ def main():
         prims = float(row["prims_per_ray"])
         bound = (nodes - leaves) * ns_per_item[names[0]] + prims * ns_per_item[names[1]]
         measured = 1000.0 * int(row["threads"]) / float(row["trace_mrays_median"])
-        print(f"| {row['scene']} | {row['builder']} | {row['layout']} | {row['threads']} | {row['ray_set']} | "
+        print(f"| {row['scene']} | {builder_label(row)} | {row['layout']} | {row['threads']} | {row['ray_set']} | "
               f"{nodes - leaves:.1f} + {leaves:.1f} | {prims:.1f} | {bound:.0f} | {measured:.0f} | "
               f"{bound / measured:.2f} |")
     if missing_bench:

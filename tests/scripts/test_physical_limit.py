@@ -23,17 +23,19 @@ def check(condition, message):
 
 
 COLUMNS = ["scene", "builder", "layout", "isa", "threads", "ray_set", "nodes_per_ray", "leaves_per_ray",
-           "prims_per_ray", "trace_mrays_median"]
+           "prims_per_ray", "trace_mrays_median", "builder_params"]
+# A pass's row names the builder it starts from, the outermost source only.
+PASS = "arity=8;source=reinsert(source=binned_sah(bins=32));c_trav=1"
 ROWS = [
     # 10 inner nodes at 2 ns and 8 triangle lanes at 1 ns: 28 ns against 1 / 20 Mrays/s = 50 ns.
-    ["s", "wide_collapse", "bvh8", "avx2", "1", "primary", "14", "4", "8", "20"],
+    ["s", "wide_collapse", "bvh8", "avx2", "1", "primary", "14", "4", "8", "20", ""],
     # Two threads: 2 / 20 Mrays/s = 100 ns per ray per core.
-    ["s", "wide_collapse", "bvh8", "avx2", "2", "primary", "14", "4", "8", "20"],
+    ["s", "wide_collapse", "bvh8", "avx2", "2", "primary", "14", "4", "8", "20", PASS],
     # bvh2_packed with the fast box test and Möller-Trumbore: 30 * 4 + 5 * 3 = 135 ns against 250 ns.
-    ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "4"],
-    ["s", "embree", "embree_1", "avx2", "1", "primary", "", "", "", "30"],
-    ["s", "wide_collapse", "bvh8:packet=8", "avx2", "1", "primary", "14", "4", "8", "25"],
-    ["s", "wide_collapse", "bvh8:tri=mtn", "avx512", "1", "primary", "14", "4", "8", "25"],
+    ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "4", ""],
+    ["s", "embree", "embree_1", "avx2", "1", "primary", "", "", "", "30", ""],
+    ["s", "wide_collapse", "bvh8:packet=8", "avx2", "1", "primary", "14", "4", "8", "25", ""],
+    ["s", "wide_collapse", "bvh8:tri=mtn", "avx512", "1", "primary", "14", "4", "8", "25", ""],
 ]
 BENCH = {"benchmarks": [
     {"name": "node_visit/bvh8/avx2/robust", "items_per_second": 5e8},
@@ -56,7 +58,7 @@ def main():
         check(out.returncode == 0, f"exit {out.returncode}: {out.stderr}")
         text = out.stdout
         check("| s | wide_collapse | bvh8 | 1 | primary | 10.0 + 4.0 | 8.0 | 28 | 50 | 0.56 |" in text, text)
-        check("| s | wide_collapse | bvh8 | 2 | primary | 10.0 + 4.0 | 8.0 | 28 | 100 | 0.28 |" in text, text)
+        check("| s | wide_collapse[source=reinsert] | bvh8 | 2 | primary | 10.0 + 4.0 | 8.0 | 28 | 100 | 0.28 |" in text, text)
         check("| s | binned_sah | bvh2_packed:tri=mt,box=fast | 1 | shadow | 30.0 + 10.0 | 5.0 | 135 | 250 | 0.54 |"
               in text, text)
         check("embree_1" not in text and "packet=8" not in text, text)

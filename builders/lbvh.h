@@ -18,14 +18,15 @@
 namespace sahbench {
 
 /// How the radix tree is found: Karras 2012's search per inner node, or Apetrei 2014's bottom-up pass
-/// (the same tree, and the same output, node for node).
+/// (the same tree, and the same output, node for node). Apetrei's is the default: it drops the searches
+/// and the parent links, and finds the boxes and collapse costs in the same pass.
 enum class LbvhHierarchy { kKarras, kApetrei };
 
 struct LbvhParams {
   /// Morton code length: 30 (10 bits per axis, Karras's choice) or 63 (21 bits per axis; finer cells for
   /// scenes with detail in a large box, at twice the sorting).
   uint32_t bits = 30;
-  LbvhHierarchy hierarchy = LbvhHierarchy::kKarras;
+  LbvhHierarchy hierarchy = LbvhHierarchy::kApetrei;
   /// min_leaf, max_leaf and the SAH constants of the leaf collapse; arity must be 2.
   TopDownConfig top_down;
 };

@@ -236,9 +236,9 @@ BuilderInfo lbvh_info() {
   auto params = top_down_params();
   params.insert(params.begin(),
                 {morton_bits_param(),
-                 choice_param("hierarchy", {"karras", "apetrei"}, 0,
-                              "karras: one search per inner node (Karras 2012); apetrei: one bottom-up pass "
-                              "(Apetrei 2014), the same tree")});
+                 choice_param("hierarchy", {"karras", "apetrei"}, 1,
+                              "apetrei: one bottom-up pass (Apetrei 2014); karras: one search per inner node "
+                              "(Karras 2012); the same tree")});
   auto config = [](const ParamSet& p) {
     const auto hierarchy =
         p.get_choice("hierarchy") == "apetrei" ? LbvhHierarchy::kApetrei : LbvhHierarchy::kKarras;

@@ -69,8 +69,8 @@ namespace detail {
 // <= kMaxDepth - 1 when leaves lie at depth <= kMaxDepth. So the stack never holds more than
 // (kMaxArity - 1) * (kMaxDepth - 1) + kMaxArity = (kMaxArity - 1) * kMaxDepth + 1 entries.
 inline constexpr uint32_t kStackBound = (kMaxArity - 1) * kMaxDepth + 1;
-// Rounded up to a power of two as margin; 512 entries of 8 bytes are 4 KiB on the call stack. A tree
-// deeper than kMaxDepth is still caught by the per-node capacity check (which throws), never overrun.
+// Rounded up to a power of two as margin; 512 entries of 8 to 12 bytes are 4 to 6 KiB on the call stack. A
+// tree deeper than kMaxDepth is still caught by the per-node capacity check (which throws), never overrun.
 inline constexpr uint32_t kStackCapacity = 512;
 static_assert(kStackCapacity >= kStackBound, "traversal stack too small for kMaxDepth and kMaxArity");
 

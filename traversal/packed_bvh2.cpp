@@ -93,17 +93,15 @@ class PackedBvh2Layout final : public CompiledLayout {
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) {
-        Hit hit = detail::traverse_packed<Tri, Box, false, false>(tree_, rays[i], nullptr, order_);
+      trace_in_pairs<false>(rays, b, e, [&](std::size_t i, Hit hit) {
         if (hit.found()) hit.prim = tree_.ids[hit.prim];
         hits[i] = hit;
-      }
+      });
     });
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i)
-        occluded[i] = detail::traverse_packed<Tri, Box, true, false>(tree_, rays[i], nullptr, order_).found();
+      trace_in_pairs<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
     });
   }
   TraceCounts count_closest(std::span<const Ray> rays) const override { return count<false>(rays); }
@@ -127,6 +125,20 @@ class PackedBvh2Layout final : public CompiledLayout {
         detail::traverse_packed<Tri, Box, kAnyHit, true>(tree_, rays[i], &counters, order_);
       return TraceCounts{end - begin, counters.nodes_visited(), counters.prim_tests, counters.leaf_visits};
     });
+  }
+
+  // Rays [begin, end) two at a time (detail::trace_pair), the last one alone; `put(i, hit)` takes each
+  // answer.
+  template <bool kAnyHit, class Put>
+  void trace_in_pairs(std::span<const Ray> rays, std::size_t begin, std::size_t end, Put&& put) const {
+    std::size_t i = begin;
+    for (; i + 1 < end; i += 2) {
+      Hit a, b;
+      detail::trace_pair<Tri, Box, kAnyHit>(tree_, rays[i], rays[i + 1], order_, a, b);
+      put(i, a);
+      put(i + 1, b);
+    }
+    if (i < end) put(i, detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, rays[i], nullptr, order_));
   }
 
   PackedBvh2 tree_;

@@ -163,93 +163,156 @@ class PairSlabs {
 #endif
 };
 
-// The while-while loop of traverse_binary (bvh2_traversal.h) on PairNodes: the same visits in the same
-// order, with a child's box read from its parent's line and a leaf's triangles reached without a node.
+// The while-while loop of traverse_binary (bvh2_traversal.h) on PairNodes, one step at a time: the same
+// visits in the same order, with a child's box read from its parent's line and a leaf's triangles reached
+// without a node. A step is one inner node, or one leaf and the pops after it, so that two walks can be
+// stepped in turn (trace_pair below).
 template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
-Hit traverse_packed(const PackedBvh2& tree, const Ray& ray, [[maybe_unused]] TraversalCounters* counters,
+class PackedWalk {
+ public:
+  PackedWalk(const PackedBvh2& tree, const Ray& ray, [[maybe_unused]] TraversalCounters* counters,
+             AnyHitOrder any_order)
+      : slabs_(ray),
+        triangle_test_(ray),
+        nodes_(tree.nodes.data()),
+        triangles_(tree.triangles.data()),
+        ids_(tree.ids.data()),
+        counters_(counters),
+        any_order_(any_order),
+        tmin_(ray.tmin),
+        best_t_(far_limit(ray)),
+        current_(tree.root),
+        count_(tree.root_count) {
+    if constexpr (kCount) ++counters_->rays;
+    if (tree.empty || !traceable(ray)) return;
+    if constexpr (kCount) ++counters_->box_tests;
+    float t_root;
+    active_ = BoxTest(ray).intersect(tree.root_box, tmin_, best_t_, t_root);
+  }
+
+  /// Whether the walk has steps left; once false, hit() is its answer.
+  bool active() const { return active_; }
+  const Hit& hit() const { return best_; }
+
+  /// One step; returns active().
+  [[gnu::always_inline]] bool step() {
+    if (count_ == 0) {
+      if constexpr (kCount) {
+        ++counters_->inner_visits;
+        counters_->box_tests += 2;
+      }
+      const PairNode& node = nodes_[current_];
+      float t0, t1;
+      const unsigned hits = slabs_.intersect(node, tmin_, best_t_, t0, t1);
+      if (hits == 3) {
+        bool second_first = !(t0 < t1);
+        if constexpr (kAnyHit) {
+          if (any_order_ == AnyHitOrder::kStored) second_first = false;
+          if (any_order_ == AnyHitOrder::kNearestStored) second_first = t1 < t0;
+        }
+        if (size_ == kStackCapacity) [[unlikely]]
+          throw_stack_overflow(current_, 2);
+        const int near = second_first ? 1 : 0;
+        stack_[size_++] = {node.child[1 - near], node.count[1 - near], second_first ? t0 : t1};
+        current_ = node.child[near];
+        count_ = node.count[near];
+        return true;
+      }
+      if (hits != 0) {
+        const unsigned c = hits >> 1;
+        current_ = node.child[c];
+        count_ = node.count[c];
+        return true;
+      }
+    } else {
+      if constexpr (kCount) {
+        ++counters_->leaf_visits;
+        counters_->prim_tests += count_;
+      }
+      const uint32_t end = current_ + count_;
+      for (uint32_t prim = current_; prim < end; ++prim) {
+        float t, u, v;
+        const bool hit = kAnyHit ? intersect_any(triangle_test_, triangles_[prim], tmin_, best_t_, t, u, v)
+                                 : triangle_test_.intersect(triangles_[prim], tmin_, best_t_, t, u, v);
+        if (!hit) continue;
+        if constexpr (kAnyHit) {
+          best_ = {prim, t, u, v};
+          return active_ = false;
+        } else if (t < best_t_ || !best_.found() || ids_[prim] < ids_[best_.prim]) {
+          // On a tie the lowest scene index wins, as in the common-format kernel.
+          best_ = {prim, t, u, v};
+          best_t_ = t;
+        }
+      }
+    }
+    do {
+      if (size_ == 0) return active_ = false;
+      --size_;
+    } while (!kAnyHit && stack_[size_].t_entry > best_t_);
+    current_ = stack_[size_].index;
+    count_ = stack_[size_].count;
+    return true;
+  }
+
+ private:
+  struct Entry {
+    uint32_t index, count;
+    float t_entry;
+  };
+
+  PairSlabs<BoxTest> slabs_;
+  TriangleTest triangle_test_;
+  const PairNode* nodes_;
+  const Triangle* triangles_;
+  const uint32_t* ids_;
+  [[maybe_unused]] TraversalCounters* counters_;
+  AnyHitOrder any_order_;
+  float tmin_, best_t_;
+  uint32_t current_, count_;
+  uint32_t size_ = 0;
+  bool active_ = false;
+  Hit best_;
+  Entry stack_[kStackCapacity];
+};
+
+// One ray; box=fma's rays outside its domain take the robust box test (FmaRayBox::takes).
+template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
+Hit traverse_packed(const PackedBvh2& tree, const Ray& ray, TraversalCounters* counters,
                     AnyHitOrder any_order) {
   if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
     if (!FmaRayBox::takes(ray)) [[unlikely]]
       return traverse_packed<TriangleTest, RobustRayBox, kAnyHit, kCount>(tree, ray, counters, any_order);
   }
-  if constexpr (kCount) ++counters->rays;
-  if (tree.empty || !traceable(ray)) return {};
-  if constexpr (kCount) ++counters->box_tests;
-  const float tmin = ray.tmin;
-  const float tmax = far_limit(ray);
-  float t_root;
-  if (!BoxTest(ray).intersect(tree.root_box, tmin, tmax, t_root)) return {};
+  PackedWalk<TriangleTest, BoxTest, kAnyHit, kCount> walk(tree, ray, counters, any_order);
+  while (walk.active()) walk.step();
+  return walk.hit();
+}
 
-  const PairSlabs<BoxTest> slabs(ray);
-  const TriangleTest triangle_test(ray);
-  const PairNode* nodes = tree.nodes.data();
-  const Triangle* triangles = tree.triangles.data();
-  struct Entry {
-    uint32_t index, count;
-    float t_entry;
-  };
-  Entry stack[kStackCapacity];
-  uint32_t size = 0;
-  uint32_t current = tree.root;
-  uint32_t count = tree.root_count;
-  Hit best;
-  float best_t = tmax;
-  while (true) {
-    if (count == 0) {
-      if constexpr (kCount) {
-        ++counters->inner_visits;
-        counters->box_tests += 2;
-      }
-      const PairNode& node = nodes[current];
-      float t0, t1;
-      const unsigned hits = slabs.intersect(node, tmin, best_t, t0, t1);
-      if (hits == 3) {
-        bool second_first = !(t0 < t1);
-        if constexpr (kAnyHit) {
-          if (any_order == AnyHitOrder::kStored) second_first = false;
-          if (any_order == AnyHitOrder::kNearestStored) second_first = t1 < t0;
-        }
-        if (size == kStackCapacity) [[unlikely]]
-          throw_stack_overflow(current, 2);
-        const int near = second_first ? 1 : 0;
-        stack[size++] = {node.child[1 - near], node.count[1 - near], second_first ? t0 : t1};
-        current = node.child[near];
-        count = node.count[near];
-        continue;
-      }
-      if (hits != 0) {
-        const unsigned c = hits >> 1;
-        current = node.child[c];
-        count = node.count[c];
-        continue;
-      }
-    } else {
-      if constexpr (kCount) {
-        ++counters->leaf_visits;
-        counters->prim_tests += count;
-      }
-      const uint32_t end = current + count;
-      for (uint32_t prim = current; prim < end; ++prim) {
-        float t, u, v;
-        const bool hit = kAnyHit ? intersect_any(triangle_test, triangles[prim], tmin, best_t, t, u, v)
-                                 : triangle_test.intersect(triangles[prim], tmin, best_t, t, u, v);
-        if (!hit) continue;
-        if constexpr (kAnyHit) {
-          return {prim, t, u, v};
-        } else if (t < best_t || !best.found() || tree.ids[prim] < tree.ids[best.prim]) {
-          // On a tie the lowest scene index wins, as in the common-format kernel.
-          best = {prim, t, u, v};
-          best_t = t;
-        }
-      }
+// Two rays, their walks stepped in turn: a walk is one chain of dependent loads, tests and branches, and
+// two independent chains let the core overlap one ray's latency with the other's work (the software
+// counterpart of a GPU's warps hiding memory latency; Aila and Laine 2009). Each ray's answer is the
+// one traverse_packed gives it.
+template <class TriangleTest, class BoxTest, bool kAnyHit>
+void trace_pair(const PackedBvh2& tree, const Ray& ray_a, const Ray& ray_b, AnyHitOrder any_order, Hit& hit_a,
+                Hit& hit_b) {
+  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
+    if (!FmaRayBox::takes(ray_a) || !FmaRayBox::takes(ray_b)) [[unlikely]] {
+      hit_a = traverse_packed<TriangleTest, BoxTest, kAnyHit, false>(tree, ray_a, nullptr, any_order);
+      hit_b = traverse_packed<TriangleTest, BoxTest, kAnyHit, false>(tree, ray_b, nullptr, any_order);
+      return;
     }
-    do {
-      if (size == 0) return best;
-      --size;
-    } while (!kAnyHit && stack[size].t_entry > best_t);
-    current = stack[size].index;
-    count = stack[size].count;
   }
+  PackedWalk<TriangleTest, BoxTest, kAnyHit, false> a(tree, ray_a, nullptr, any_order);
+  PackedWalk<TriangleTest, BoxTest, kAnyHit, false> b(tree, ray_b, nullptr, any_order);
+  bool more_a = a.active(), more_b = b.active();
+  while (more_a && more_b) {
+    more_a = a.step();
+    more_b = b.step();
+  }
+  while (more_a) more_a = a.step();
+  while (more_b) more_b = b.step();
+  hit_a = a.hit();
+  hit_b = b.hit();
 }
 
 }  // namespace detail

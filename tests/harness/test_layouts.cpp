@@ -116,6 +116,8 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
     // Random rays, and rays in groups of eight that the packet kernels trace as packets.
     auto rays = test::random_rays(scene.triangles, 800, 5);
     for (const Ray& r : test::coherent_rays(scene.triangles, 400, 6)) rays.push_back(r);
+    // An odd count: bvh2_packed traces rays in pairs and the last one alone.
+    rays.push_back(test::random_rays(scene.triangles, 1, 7).front());
     std::vector<Hit> reference(rays.size());
     std::vector<uint8_t> reference_any(rays.size());
     for (std::size_t i = 0; i < rays.size(); ++i) {

@@ -1089,41 +1089,86 @@ SAHBENCH_KERNEL_INLINE bool intersect_leaf(const BlockOf<kTri>* blocks, uint32_t
 
 // One ray through the subtree at `entry` (a node or a leaf it enters at entry.t_entry), starting from the
 // closest hit so far in `best` and `best_t`, which it updates. Returns true when any hit has found one.
+// One ray's walk below a node, one step at a time: a leaf, or an inner node, and then the pops to the
+// next entry. Stepping two walks in turn (trace_ray_pair) gives the core two independent chains of loads,
+// box tests and branches to overlap.
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
           IntOrder kInt>
-SAHBENCH_KERNEL_INLINE bool trace_subtree(const WideUnit* arena, const WideRay& r, WideStackEntry entry,
-                                          Hit& best, float& best_t, WideCounts* counts) {
+class WideWalk {
+ public:
   static_assert(kWideStackCapacity >= (N - 1) * kMaxDepth + 1, "wide traversal stack too small");
-  WideStackEntry stack[kWideStackCapacity];
-  uint32_t size = 0;
-  const RaySlabs slabs = ray_slabs(r);
-  while (true) {
-    if (entry.count != 0) {
-      if constexpr (kCount) ++counts->leaf_visits;
-      if (intersect_leaf<kTri, kAnyHit, kCount>(&at<BlockOf<kTri>>(arena, entry.child), entry.count, r, best,
-                                                best_t, counts))
-        return true;
+
+  SAHBENCH_KERNEL_INLINE WideWalk(const WideUnit* arena, const WideRay& r, WideStackEntry entry,
+                                  const Hit& best, float best_t, WideCounts* counts)
+      : arena_(arena),
+        r_(r),
+        slabs_(ray_slabs(r)),
+        entry_(entry),
+        best_(best),
+        best_t_(best_t),
+        counts_(counts) {}
+
+  /// One step; false once the walk is over: the stack ran out, or (any hit) a hit was found.
+  SAHBENCH_KERNEL_INLINE bool step() {
+    if (entry_.count != 0) {
+      if constexpr (kCount) ++counts_->leaf_visits;
+      if (intersect_leaf<kTri, kAnyHit, kCount>(&at<BlockOf<kTri>>(arena_, entry_.child), entry_.count, r_,
+                                                best_, best_t_, counts_)) {
+        found_any_ = true;
+        return false;
+      }
     } else {
-      const WideNode<N>& node = at<WideNode<N>>(arena, entry.child);
+      const WideNode<N>& node = at<WideNode<N>>(arena_, entry_.child);
       // The child and count line is read only after the box test has picked a child: ask for it now, so
       // that it arrives with the planes rather than one memory latency after them.
       __builtin_prefetch(node.child);
-      if constexpr (kCount) ++counts->inner_visits;
+      if constexpr (kCount) ++counts_->inner_visits;
       alignas(32) float t_entry[N];
-      uint32_t mask = intersect_children<N, kBox, kInt>(node, r, slabs, r.tmin, best_t, t_entry);
+      const uint32_t mask = intersect_children<N, kBox, kInt>(node, r_, slabs_, r_.tmin, best_t_, t_entry);
       if (mask != 0) {
         // Continue with the nearest child entered; the others go on the stack, farthest deepest.
-        entry = descend<N, kOrder>(node, mask, t_entry, arena, stack, size);
-        continue;
+        entry_ = descend<N, kOrder>(node, mask, t_entry, arena_, stack_, size_);
+        return true;
       }
     }
     // The next entry, skipping those entered beyond the closest hit so far (nothing inside can be closer;
     // equal is kept for the tie rule).
     do {
-      if (size == 0) return false;
-      entry = stack[--size];
-    } while (!kAnyHit && entry.t_entry > best_t);
+      if (size_ == 0) return false;
+      entry_ = stack_[--size_];
+    } while (!kAnyHit && entry_.t_entry > best_t_);
+    return true;
   }
+
+  const Hit& best() const { return best_; }
+  float best_t() const { return best_t_; }
+  /// Any hit: whether the walk ended on a hit.
+  bool found_any() const { return found_any_; }
+
+ private:
+  const WideUnit* arena_;
+  const WideRay& r_;
+  RaySlabs slabs_;
+  WideStackEntry entry_;
+  Hit best_;
+  float best_t_;
+  [[maybe_unused]] WideCounts* counts_;
+  uint32_t size_ = 0;
+  bool found_any_ = false;
+  WideStackEntry stack_[kWideStackCapacity];
+};
+
+// The walk below `entry` to its end; true when an any-hit query found a hit.
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
+          IntOrder kInt>
+SAHBENCH_KERNEL_INLINE bool trace_subtree(const WideUnit* arena, const WideRay& r, WideStackEntry entry,
+                                          Hit& best, float& best_t, WideCounts* counts) {
+  WideWalk<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt> walk(arena, r, entry, best, best_t, counts);
+  while (walk.step()) {
+  }
+  best = walk.best();
+  best_t = walk.best_t();
+  return walk.found_any();
 }
 
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
@@ -1135,6 +1180,34 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
   float best_t = r.tmax;
   trace_subtree<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(arena, r, {0, 0, t_root}, best, best_t, counts);
   return best;
+}
+
+// Two rays, their walks stepped in turn until one ends, then the other alone: each ray's answer is the
+// one trace_ray gives it.
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
+          IntOrder kInt>
+inline void trace_ray_pair(const float* root_planes, const WideUnit* arena, const WideRay& r0,
+                           const WideRay& r1, WideCounts* counts, Hit& hit0, Hit& hit1) {
+  using Walk = WideWalk<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>;
+  float t0, t1;
+  const bool in0 = intersect_root<kBox>(root_planes, r0, t0), in1 = intersect_root<kBox>(root_planes, r1, t1);
+  if (!in0 || !in1) {
+    hit0 =
+        in0 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r0, counts) : Hit{};
+    hit1 =
+        in1 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r1, counts) : Hit{};
+    return;
+  }
+  Walk a(arena, r0, {0, 0, t0}, Hit{}, r0.tmax, counts), b(arena, r1, {0, 0, t1}, Hit{}, r1.tmax, counts);
+  bool more_a = true, more_b = true;
+  while (more_a && more_b) {
+    more_a = a.step();
+    more_b = b.step();
+  }
+  while (more_a) more_a = a.step();
+  while (more_b) more_b = b.step();
+  hit0 = a.best();
+  hit1 = b.best();
 }
 
 // The integer order (kInt) is chosen for a whole batch, the lowest of its rays' (WideBatch::int_order):
@@ -1151,17 +1224,35 @@ template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, boo
 void trace_batch(const WideBatch& batch) {
   // rays: every ray of the batch (kAllRays), or only those whose WideRay::robust_box is 0 or 1.
   auto run = [&]<BoxTestKind kRayBox, AnyHitOrder kOrder, IntOrder kInt>(int rays) {
+    auto put = [&](std::size_t i, const Hit& hit) {
+      if constexpr (kAnyHit)
+        batch.occluded[i] = hit.prim != kInvalidPrim;
+      else
+        batch.hits[i] = hit;
+    };
+    // Two rays at a time where every ray takes this kernel (trace_ray_pair).
+    if (kBox != BoxTestKind::kFma || rays == kAllRays) {
+      if constexpr (kCount) batch.counts->rays += batch.count;
+      std::size_t i = 0;
+      for (; i + 1 < batch.count; i += 2) {
+        Hit h0, h1;
+        trace_ray_pair<N, kTri, kRayBox, kAnyHit, kCount, kOrder, kInt>(
+            batch.root_planes, batch.arena, batch.rays[i], batch.rays[i + 1], batch.counts, h0, h1);
+        put(i, h0);
+        put(i + 1, h1);
+      }
+      if (i < batch.count)
+        put(i, trace_ray<N, kTri, kRayBox, kAnyHit, kCount, kOrder, kInt>(batch.root_planes, batch.arena,
+                                                                          batch.rays[i], batch.counts));
+      return;
+    }
     for (std::size_t i = 0; i < batch.count; ++i) {
       if constexpr (kBox == BoxTestKind::kFma) {
         if (rays != kAllRays && static_cast<int>(batch.rays[i].robust_box) != rays) continue;
       }
       if constexpr (kCount) ++batch.counts->rays;
-      const Hit hit = trace_ray<N, kTri, kRayBox, kAnyHit, kCount, kOrder, kInt>(
-          batch.root_planes, batch.arena, batch.rays[i], batch.counts);
-      if constexpr (kAnyHit)
-        batch.occluded[i] = hit.prim != kInvalidPrim;
-      else
-        batch.hits[i] = hit;
+      put(i, trace_ray<N, kTri, kRayBox, kAnyHit, kCount, kOrder, kInt>(batch.root_planes, batch.arena,
+                                                                        batch.rays[i], batch.counts));
     }
   };
   auto with_order = [&]<BoxTestKind kRayBox, IntOrder kInt>(int rays) {

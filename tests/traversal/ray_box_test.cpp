@@ -210,8 +210,12 @@ TYPED_TEST(TravRayBoxBoth, PairNodeTestAgreesWithTheBoxTestOnEachChild) {
       const bool right_hit = box.intersect(right, ray.tmin, ray.tmax, want_right);
       ASSERT_EQ((mask & 1u) != 0, left);
       ASSERT_EQ((mask & 2u) != 0, right_hit);
-      if (left) ASSERT_EQ(t_left, want_left);
-      if (right_hit) ASSERT_EQ(t_right, want_right);
+      if (left) {
+        ASSERT_EQ(t_left, want_left);
+      }
+      if (right_hit) {
+        ASSERT_EQ(t_right, want_right);
+      }
     }
   }
 }

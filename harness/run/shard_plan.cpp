@@ -13,6 +13,7 @@
 #include "scenes/proc_spec.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_path.h"
+#include "traversal/layout.h"
 
 namespace sahbench {
 namespace {
@@ -48,6 +49,13 @@ double relative_build_cost(const BuilderRun& run) {
       {"ploc", 1.5},       {"wide_collapse", 1.5}};
   const auto it = known.find(run.name);
   return it == known.end() ? 2.0 : it->second;  // passes over a source tree (reinsertion, treelets)
+}
+
+// The children per node of the tree a layout traces: our layouts' registered arity; Embree's layouts trace
+// its 8-wide BVH where the CPU has AVX2 (4-wide without; the model takes 8).
+int layout_arity(const std::string& layout) {
+  const std::string name = layout.substr(0, layout.find(':'));
+  return name.starts_with("embree") ? 8 : static_cast<int>(find_layout(name).arity);
 }
 
 bool uses_brute_force(const ExperimentConfig& cfg, double triangles) {
@@ -120,16 +128,18 @@ double build_cost(const ExperimentConfig& cfg, const BuilderRun& run, double tri
   return builds + compiles;
 }
 
-double trace_cost(const ExperimentConfig& cfg, double triangles, double rays) {
-  const double per_ray = kTraceNsPerStep * kStepsPerLevel * std::log2(std::max(triangles, 2.0));
-  return (cfg.reps.trace_warmup + cfg.reps.trace + 1) * rays * per_ray;
+double trace_cost(const ExperimentConfig& cfg, double triangles, double rays, int threads, int arity) {
+  // A wide node is tested in one SIMD pass, about as long as a binary node's step: the cost is per level.
+  const double levels = std::log2(std::max(triangles, 2.0)) / std::log2(std::max(arity, 2));
+  const double per_ray = kTraceNsPerStep * kStepsPerLevel * levels;
+  return (cfg.reps.trace_warmup + cfg.reps.trace + 1) * rays * per_ray / std::max(threads, 1);
 }
 
 double scene_cost(const ExperimentConfig& cfg, double triangles) {
   double rays = 0;
   for (const auto& rs : cfg.ray_sets) rays += ray_count(rs);
   const double reference = uses_brute_force(cfg, triangles) ? rays * triangles * kBruteForceNsPerTest
-                                                            : trace_cost(cfg, triangles, rays) / 4;
+                                                            : trace_cost(cfg, triangles, rays, 1, 2) / 4;
   return triangles * kLoadNsPerTriangle + reference;
 }
 
@@ -177,7 +187,8 @@ ShardPlan plan_shards(const ExperimentConfig& cfg, const std::vector<std::string
     auto [g, new_group] = group_of.try_emplace({c.scene, c.threads}, groups.size());
     if (new_group) groups.push_back({c.scene, c.threads, {}, scene_cost(cfg, triangles[c.scene]), {}});
     Group& group = groups[g->second];
-    const double trace = trace_cost(cfg, triangles[c.scene], rays[c.ray_set]);
+    const double trace =
+        trace_cost(cfg, triangles[c.scene], rays[c.ray_set], c.threads, layout_arity(c.layout));
     if (is_anchor_cell(cfg, c)) {
       if (group.anchors.empty())
         group.setup += build_cost(cfg, cfg.builders[c.builder], triangles[c.scene], c.threads, 1);

@@ -43,8 +43,10 @@ SceneSize scene_size(const std::string& scene);
 /// One builder run's builds (warm-ups and timed rounds) and its layout compiles on `triangles`.
 double build_cost(const ExperimentConfig& cfg, const BuilderRun& run, double triangles, int threads,
                   std::size_t layouts);
-/// One cell's traces: warm-ups, timed rounds and the counting pass over `rays` rays.
-double trace_cost(const ExperimentConfig& cfg, double triangles, double rays);
+/// One cell's traces: warm-ups, timed rounds and the counting pass over `rays` rays, on `threads`
+/// threads (rays are independent, so a trace divides among them, unlike a build's serial top levels),
+/// through a tree of `arity` children per node (a ray visits about log2(n) / log2(arity) levels).
+double trace_cost(const ExperimentConfig& cfg, double triangles, double rays, int threads, int arity);
 /// A scene's fixed cost in every shard that measures it: loading, ray generation and the reference hits.
 double scene_cost(const ExperimentConfig& cfg, double triangles);
 /// The rays of a ray set as the model counts them (a secondary set at most one per primary pixel).

@@ -113,9 +113,11 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
   for (const Case& scene : cases()) {
     SCOPED_TRACE(scene.name);
     const BuildInput input = BuildInput::from_triangles(scene.triangles);
-    // Random rays, and rays in groups of eight that the packet kernels trace as packets.
+    // Random rays, and rays in groups of eight that the packet kernels trace as packets: near each other,
+    // and each in a direction and interval of its own within one octant.
     auto rays = test::random_rays(scene.triangles, 800, 5);
     for (const Ray& r : test::coherent_rays(scene.triangles, 400, 6)) rays.push_back(r);
+    for (const Ray& r : test::diverging_rays(scene.triangles, 400, 8)) rays.push_back(r);
     // An odd count: bvh2_packed traces rays in pairs and the last one alone.
     rays.push_back(test::random_rays(scene.triangles, 1, 7).front());
     std::vector<Hit> reference(rays.size());

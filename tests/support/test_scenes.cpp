@@ -1,5 +1,6 @@
 #include "tests/support/test_scenes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -121,6 +122,33 @@ std::vector<Ray> coherent_rays(const std::vector<Triangle>& scene, std::size_t c
         const float d = lead.dir[axis];
         ray.dir[axis] = d == 0.0f ? d : std::copysign(std::fabs(d * (1.0f + 0.05f * jitter(rng))), d);
       }
+    }
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
+                                std::size_t group) {
+  const std::vector<Ray> leaders = random_rays(scene, (count + group - 1) / group, seed);
+  Aabb box;
+  for (const auto& t : scene) box.extend(t.bounds());
+  const float size = length(box.extent()) + 1e-3f;
+  std::mt19937_64 rng(seed ^ 0x2545f4914f6cdd1dull);
+  std::uniform_real_distribution<float> jitter(-1.0f, 1.0f), share(0.05f, 1.0f);
+  std::vector<Ray> rays;
+  rays.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Ray& lead = leaders[i / group];
+    Ray ray = lead;
+    if (i % group != 0) {
+      for (int axis = 0; axis < 3; ++axis) {
+        ray.org[axis] += jitter(rng) * 0.1f * size;
+        const float d = lead.dir[axis];
+        ray.dir[axis] = d == 0.0f ? d : std::copysign(share(rng), d);
+      }
+      if (i % 3 == 1) ray.tmax = std::min(lead.tmax, share(rng) * size);
+      if (i % 4 == 2) ray.tmin = std::min(ray.tmax, 0.01f * size);
     }
     rays.push_back(ray);
   }

@@ -27,4 +27,11 @@ std::vector<Ray> random_rays(const std::vector<Triangle>& scene, std::size_t cou
 std::vector<Ray> coherent_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
                                std::size_t group = 8);
 
+/// random_rays in groups of `group` that agree on the sign bit of each direction component (so that a
+/// packet kernel takes each group as one packet) and on nothing else: each ray after a group's first
+/// starts anywhere within a tenth of the scene's size of it, in a direction of its own within that
+/// octant, and ends at an interval of its own (some shorter, some starting later than the first's).
+std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
+                                std::size_t group = 8);
+
 }  // namespace sahbench::test

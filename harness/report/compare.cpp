@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cmath>
@@ -106,7 +107,8 @@ Run latest_run(const std::filesystem::path& path, bool deterministic_only) {
                       "builder_params, layout, threads, ray_set, frame: {})",
                       path.string(), f.lines[it->second], f.lines[i], run.id, it->first));
     if (is_embree(f, i)) continue;
-    for (const MetricRule& rule : deterministic_metrics()) checked_number(f, i, rule.column);
+    for (const MetricRule& rule : deterministic_metrics())
+      if (f.has_column(rule.column)) checked_number(f, i, rule.column);
   }
   return run;
 }
@@ -174,16 +176,19 @@ const std::vector<MetricRule>& deterministic_metrics() {
   // Same code, same input, same seed: these are reproducible to the bit on one build configuration; the
   // small tolerances absorb only printing precision.
   static const std::vector<MetricRule> rules = {
-      {"sah_cost", true, 1e-6}, {"nodes", true, 0.0},          {"leaves", true, 0.0},
-      {"max_depth", true, 0.0}, {"nodes_per_ray", true, 1e-6}, {"prims_per_ray", true, 1e-6},
-      {"mem_bytes", true, 0.0}, {"refs_per_prim", true, 1e-6}, {"mismatches", true, 0.0},
+      {"sah_cost", true, 1e-6},      {"nodes", true, 0.0},
+      {"leaves", true, 0.0},         {"max_depth", true, 0.0},
+      {"nodes_per_ray", true, 1e-6}, {"prims_per_ray", true, 1e-6},
+      {"mem_bytes", true, 0.0},      {"refs_per_prim", true, 1e-6},
+      {"mismatches", true, 0.0},     {"leaves_per_ray", true, 1e-6, true},
   };
   return rules;
 }
 
 std::vector<std::string> required_columns(bool deterministic_only) {
   std::vector<std::string> columns = key_columns();
-  for (const MetricRule& rule : deterministic_metrics()) columns.push_back(rule.column);
+  for (const MetricRule& rule : deterministic_metrics())
+    if (!rule.optional) columns.push_back(rule.column);
   if (!deterministic_only)
     for (const TimingMetric& t : kTimingMetrics) columns.push_back(std::string(t.prefix) + "_samples");
   return columns;
@@ -197,6 +202,16 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   std::vector<Finding> findings;
   std::vector<JsonEntry> smaller, bigger;
   std::vector<std::string> unanchored;  // cells with an anchor in the baseline only
+  std::vector<MetricRule> metrics;      // the deterministic metrics both files have
+  std::vector<std::string> one_sided;   // optional metrics one file lacks: "column (not in FILE)"
+  for (const MetricRule& rule : deterministic_metrics()) {
+    if (bf.has_column(rule.column) && cf.has_column(rule.column))
+      metrics.push_back(rule);
+    else
+      one_sided.push_back(
+          fmt::format("{} (not in {})", rule.column,
+                      (bf.has_column(rule.column) ? options.current : options.baseline).string()));
+  }
 
   for (const auto& [key, bi] : base.cells) {
     if (is_embree(bf, bi)) continue;
@@ -207,7 +222,7 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
     }
     const std::size_t ci = *ci_found;
     ++result.compared_cells;
-    for (const MetricRule& rule : deterministic_metrics()) {
+    for (const MetricRule& rule : metrics) {
       const auto vb = checked_number(bf, bi, rule.column), vc = checked_number(cf, ci, rule.column);
       // An empty metric (no reference: no mismatches) must be empty in both.
       if (!vb && !vc) continue;
@@ -258,6 +273,10 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
              options.baseline.string(), options.current.string(), result.compared_cells, result.missing_cells,
              result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
              options.deterministic_only ? " (deterministic metrics only)" : "");
+  if (!one_sided.empty())
+    fmt::print(out,
+               "Not compared, a column one of the files lacks (a CSV from before it was written): {}.\n\n",
+               fmt::join(one_sided, ", "));
   if (!options.deterministic_only)
     fmt::print(
         out,

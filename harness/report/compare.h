@@ -27,11 +27,14 @@ struct CompareOptions {
 };
 
 /// One deterministic metric: its column, whether larger is worse, and the relative tolerance within
-/// which a change is noise (0: must be equal).
+/// which a change is noise (0: must be equal). A column added after baselines were committed is
+/// `optional`: compared where both files have it, and named in the summary where one lacks it, so that
+/// an older baseline still gates every other metric.
 struct MetricRule {
   const char* column;
   bool larger_is_worse;
   double tolerance;
+  bool optional = false;
 };
 const std::vector<MetricRule>& deterministic_metrics();
 
@@ -47,8 +50,8 @@ struct CompareResult {
 };
 
 /// The required columns: the cell key (scene, builder, builder_params, layout, threads, ray_set, frame),
-/// run_id, run_fingerprint and each deterministic metric, and, unless deterministic_only, the samples
-/// (build_ms_samples, trace_mrays_samples).
+/// run_id, run_fingerprint and each deterministic metric but the optional ones, and, unless
+/// deterministic_only, the samples (build_ms_samples, trace_mrays_samples).
 std::vector<std::string> required_columns(bool deterministic_only);
 
 /// Compares the latest run of options.current with the latest run of options.baseline; prints the

@@ -53,6 +53,7 @@ const std::vector<std::string>& columns() {
                                              "max_depth",
                                              "nodes_per_ray",
                                              "prims_per_ray",
+                                             "leaves_per_ray",
                                              "mem_bytes",
                                              "refs_per_prim",
                                              "mismatches",
@@ -135,6 +136,7 @@ std::vector<CsvRow> make_run(const RunSpec& spec) {
       r["max_depth"] = "16";
       r["nodes_per_ray"] = set == 0 ? "8.492" : "19.689";
       r["prims_per_ray"] = set == 0 ? "1.306" : "4.299";
+      r["leaves_per_ray"] = set == 0 ? "2.104" : "5.311";
       r["mem_bytes"] = "774896";
       r["refs_per_prim"] = "1.0000";
       r["mismatches"] = "0";
@@ -253,6 +255,39 @@ TEST(HarnessCompare, AnExtraNodeVisitIsCaught) {
           [](CsvRow& row) { row["nodes_per_ray"] = std::to_string(std::stod(row["nodes_per_ray"]) + 1.0); }),
       true);
   EXPECT_EQ(r.regressions, 1);
+}
+
+TEST(HarnessCompare, AnExtraLeafVisitIsCaught) {
+  const CompareResult r = run_compare(edited("extra_leaf",
+                                             [](CsvRow& row) {
+                                               row["leaves_per_ray"] =
+                                                   std::to_string(std::stod(row["leaves_per_ray"]) + 0.5);
+                                             }),
+                                      true);
+  EXPECT_EQ(r.regressions, 1);
+}
+
+// leaves_per_ray came after the first committed baselines: a baseline without it still gates every
+// other metric, and the summary says which column was not compared.
+TEST(HarnessCompare, ABaselineFromBeforeLeavesPerRayGatesTheRest) {
+  std::vector<std::string> header = columns();
+  std::erase(header, std::string("leaves_per_ray"));
+  const auto old_baseline = write("before_leaves", make_run({}), header);
+  std::string text;
+  const CompareResult same = run_compare(baseline(), true, old_baseline, &text);
+  EXPECT_EQ(same.regressions, 0);
+  EXPECT_EQ(same.compared_cells, 2);
+  EXPECT_NE(text.find("Not compared, a column one of the files lacks (a CSV from before it was written): "
+                      "leaves_per_ray (not in " +
+                      old_baseline.string() + ")"),
+            std::string::npos)
+      << text;
+  const auto worse = edited("worse_sah_with_leaves", [](CsvRow& row) {
+    row["sah_cost"] = times(row["sah_cost"], 1.001);
+    row["leaves_per_ray"] = "99.0";
+  });
+  EXPECT_EQ(run_compare(worse, true, old_baseline).regressions, 1);  // the SAH; leaves_per_ray not compared
+  EXPECT_EQ(run_compare(worse, true).regressions, 2);                // both, against a baseline that has it
 }
 
 TEST(HarnessCompare, ABetterSplitIsAnImprovementNotARegression) {

@@ -7,6 +7,17 @@
 #include "core/aabb.h"
 
 namespace sahbench::test {
+namespace {
+
+// The diagonal of `box`, scaled by its largest extent first so that the squares of a scene 1e21 across
+// do not overflow float (the huge scenes of the layout tests would otherwise get infinite ray origins).
+float diagonal(const Aabb& box) {
+  const Vec3 e = box.extent();
+  const float m = std::max({e.x, e.y, e.z});
+  return m > 0.0f ? m * length(e * (1.0f / m)) : 0.0f;
+}
+
+}  // namespace
 
 std::vector<Triangle> random_triangles(std::size_t count, uint64_t seed, float extent, float max_edge) {
   std::mt19937_64 rng(seed);
@@ -48,7 +59,7 @@ std::vector<Ray> random_rays(const std::vector<Triangle>& scene, std::size_t cou
   Aabb box;
   for (const auto& t : scene) box.extend(t.bounds());
   const Vec3 c = box.center();
-  const float r = length(box.extent()) * 0.5f + 1.0f;
+  const float r = diagonal(box) * 0.5f + 1.0f;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   std::uniform_int_distribution<int> kind(0, 7);
@@ -108,7 +119,7 @@ std::vector<Ray> coherent_rays(const std::vector<Triangle>& scene, std::size_t c
   const std::vector<Ray> leaders = random_rays(scene, (count + group - 1) / group, seed);
   Aabb box;
   for (const auto& t : scene) box.extend(t.bounds());
-  const float spread = length(box.extent()) * 0.01f + 1e-3f;
+  const float spread = diagonal(box) * 0.01f + 1e-3f;
   std::mt19937_64 rng(seed ^ 0x9e3779b97f4a7c15ull);
   std::uniform_real_distribution<float> jitter(-1.0f, 1.0f);
   std::vector<Ray> rays;
@@ -133,7 +144,7 @@ std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t 
   const std::vector<Ray> leaders = random_rays(scene, (count + group - 1) / group, seed);
   Aabb box;
   for (const auto& t : scene) box.extend(t.bounds());
-  const float size = length(box.extent()) + 1e-3f;
+  const float size = diagonal(box) + 1e-3f;
   std::mt19937_64 rng(seed ^ 0x2545f4914f6cdd1dull);
   std::uniform_real_distribution<float> jitter(-1.0f, 1.0f), share(0.05f, 1.0f);
   std::vector<Ray> rays;

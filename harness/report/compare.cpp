@@ -201,16 +201,21 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   CompareResult result;
   std::vector<Finding> findings;
   std::vector<JsonEntry> smaller, bigger;
-  std::vector<std::string> unanchored;  // cells with an anchor in the baseline only
-  std::vector<MetricRule> metrics;      // the deterministic metrics both files have
-  std::vector<std::string> one_sided;   // optional metrics one file lacks: "column (not in FILE)"
+  std::vector<std::string> unanchored;   // cells with an anchor in the baseline only
+  std::vector<MetricRule> metrics;       // the deterministic metrics compared
+  std::vector<std::string> not_in_base;  // optional metrics the baseline predates
   for (const MetricRule& rule : deterministic_metrics()) {
-    if (bf.has_column(rule.column) && cf.has_column(rule.column))
+    const bool in_base = bf.has_column(rule.column), in_cur = cf.has_column(rule.column);
+    if (in_base && in_cur) {
       metrics.push_back(rule);
-    else
-      one_sided.push_back(
-          fmt::format("{} (not in {})", rule.column,
-                      (bf.has_column(rule.column) ? options.current : options.baseline).string()));
+      continue;
+    }
+    // latest_run has refused a file without a required column; an optional one is excused only in the
+    // baseline: a new run that lost a column the baseline gates would otherwise pass unchecked.
+    if (in_base)
+      throw Error(fmt::format("{}:1: the header has no column '{}' (the baseline {} has it)",
+                              options.current.string(), rule.column, options.baseline.string()));
+    not_in_base.push_back(rule.column);
   }
 
   for (const auto& [key, bi] : base.cells) {
@@ -273,10 +278,9 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
              options.baseline.string(), options.current.string(), result.compared_cells, result.missing_cells,
              result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
              options.deterministic_only ? " (deterministic metrics only)" : "");
-  if (!one_sided.empty())
-    fmt::print(out,
-               "Not compared, a column one of the files lacks (a CSV from before it was written): {}.\n\n",
-               fmt::join(one_sided, ", "));
+  if (!not_in_base.empty())
+    fmt::print(out, "Not compared: {}, which the baseline {} has no column for (a CSV from before it).\n\n",
+               fmt::join(not_in_base, ", "), options.baseline.string());
   if (!options.deterministic_only)
     fmt::print(
         out,

@@ -28,8 +28,8 @@ struct CompareOptions {
 
 /// One deterministic metric: its column, whether larger is worse, and the relative tolerance within
 /// which a change is noise (0: must be equal). A column added after baselines were committed is
-/// `optional`: compared where both files have it, and named in the summary where one lacks it, so that
-/// an older baseline still gates every other metric.
+/// `optional`: a baseline from before it still gates every other metric, and the summary names the
+/// metric it could not compare; a new run without a column its baseline has is an Error.
 struct MetricRule {
   const char* column;
   bool larger_is_worse;

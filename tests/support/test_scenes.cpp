@@ -145,7 +145,14 @@ std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t 
   Aabb box;
   for (const auto& t : scene) box.extend(t.bounds());
   const float size = diagonal(box) + 1e-3f;
+  // Origins spread over a tenth of the scene: far enough apart that the rays part below the root, near
+  // enough that they still share its top levels, as a packet's rays do.
+  constexpr float kSpread = 0.1f;
+  // A later start, as a fraction of the diagonal: past the triangles next to the origin in most scenes.
+  constexpr float kLateStart = 0.01f;
   std::mt19937_64 rng(seed ^ 0x2545f4914f6cdd1dull);
+  // Magnitudes of direction components and shortened intervals: bounded away from 0, so that no
+  // component of a nonzero sign becomes a zero one and no interval becomes empty.
   std::uniform_real_distribution<float> jitter(-1.0f, 1.0f), share(0.05f, 1.0f);
   std::vector<Ray> rays;
   rays.reserve(count);
@@ -154,12 +161,12 @@ std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t 
     Ray ray = lead;
     if (i % group != 0) {
       for (int axis = 0; axis < 3; ++axis) {
-        ray.org[axis] += jitter(rng) * 0.1f * size;
+        ray.org[axis] += jitter(rng) * kSpread * size;
         const float d = lead.dir[axis];
         ray.dir[axis] = d == 0.0f ? d : std::copysign(share(rng), d);
       }
       if (i % 3 == 1) ray.tmax = std::min(lead.tmax, share(rng) * size);
-      if (i % 4 == 2) ray.tmin = std::min(ray.tmax, 0.01f * size);
+      if (i % 4 == 2) ray.tmin = std::min(ray.tmax, kLateStart * size);
     }
     rays.push_back(ray);
   }

@@ -28,9 +28,11 @@ std::vector<Ray> coherent_rays(const std::vector<Triangle>& scene, std::size_t c
                                std::size_t group = 8);
 
 /// random_rays in groups of `group` that agree on the sign bit of each direction component (so that a
-/// packet kernel takes each group as one packet) and on nothing else: each ray after a group's first
-/// starts anywhere within a tenth of the scene's size of it, in a direction of its own within that
-/// octant, and ends at an interval of its own (some shorter, some starting later than the first's).
+/// packet kernel takes each group as one packet, unless box=fma sends a ray with a zero component alone)
+/// and little else: each ray after a group's first starts up to a tenth of the scene's diagonal from it
+/// on each axis, with each nonzero direction component of its own magnitude (so, unless the first ray is
+/// axis-parallel, in a direction of its own within the octant), and every third ray ends sooner and every
+/// fourth starts later than the first.
 std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
                                 std::size_t group = 8);
 

@@ -40,7 +40,10 @@ TopDownConfig top_down_config(const ParamSet& p) {
 // Wide trees are traced by the bvh4/bvh8 layouts, which test 4 triangles at once (traversal/wide_bvh.h).
 constexpr uint32_t kWideSahBlock = 4;
 
-// sah_block is declared by the wide builders only; the binary ones cost every primitive (block 1).
+// sah_block is declared by the wide builders, and by binned_sah (default 1, every primitive costed) so
+// that a binary tree meant for a wide collapse can be built with the wide leaves' costs, e.g. as the
+// source of a pass the collapse then reads (wide_collapse over reinsert over binned_sah with
+// sah_block=4): built per primitive, its smaller leaves survive the pass and the collapse.
 std::vector<ParamSpec> binned_params(uint32_t default_block = 0) {
   auto params = top_down_params();
   if (default_block != 0)
@@ -73,7 +76,7 @@ uint32_t arity_of(const ParamSet& p) {
 
 BuilderInfo binned_sah_info() {
   return {
-      "binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", binned_params(),
+      "binned_sah", "binned SAH (Wald 2007), parallel binning and partitioning", binned_params(1),
       [](const BuildInput& input, const ParamSet& p) { return build_binned_sah(input, binned_config(p)); },
       [](const ParamSet& p) { check_config(top_down_config(p), "binned_sah"); }};
 }

@@ -47,6 +47,7 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back({"binned_sah", {{"bins", "256"}}});
   out.push_back({"binned_sah", {{"bins", "16"}, {"adaptive_bins", "0"}}});
   out.push_back({"binned_sah", {{"max_leaf", "1"}}});
+  out.push_back({"binned_sah", {{"sah_block", "4"}}});
   out.push_back({"binned_sah", {{"min_leaf", "4"}, {"max_leaf", "16"}, {"c_trav", "3"}}});
   out.push_back({"sweep_sah", {{"max_leaf", "1"}}});
   out.push_back({"wide_binned_sah", {{"arity", "4"}}});
@@ -66,6 +67,9 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back({"treelet", {{"treelet_size", "10"}, {"iterations", "1"}, {"source.max_leaf", "1"}}});
   out.push_back({"treelet", {{"source", "reinsert"}, {"source.source", "sweep_sah"}}});
   out.push_back({"wide_collapse", {{"source", "reinsert"}, {"source.iterations", "2"}}});
+  out.push_back(
+      {"wide_collapse",
+       {{"source", "reinsert"}, {"source.source", "binned_sah"}, {"source.source.sah_block", "4"}}});
   out.push_back({"wide_collapse", {{"arity", "4"}, {"method", "greedy"}, {"source", "treelet"}}});
   out.push_back({"wide_collapse", {{"source", "binned_sah"}, {"source.max_leaf", "2"}}});
   // Spatial splits tried at every node: without unsplitting, with the fewest slabs everywhere; and with

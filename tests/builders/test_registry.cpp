@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "builders/registry.h"
+#include "core/build_input.h"
+#include "core/bvh_stats.h"
 #include "core/error.h"
 #include "tests/support/test_scenes.h"
 
@@ -19,6 +23,28 @@ void expect_error(F&& f, std::initializer_list<std::string> fragments) {
   }
 }
 
+// binned_sah's sah_block reaches its build: costed per block of four, as a wide collapse will test its
+// leaves, the tree has fewer, fuller leaves and a lower SAH in those costs than the tree costed per
+// primitive.
+TEST(BuilderRegistry, BinnedSahCostsLeavesPerBlock) {
+  const BuildInput input = BuildInput::from_triangles(test::random_triangles(4000, 21));
+  const BuilderInfo& info = find_builder("binned_sah");
+  const Bvh per_prim = info.build(input, resolve_params(info.name, info.params, {}));
+  const Bvh per_block = info.build(input, resolve_params(info.name, info.params, {{"sah_block", "4"}}));
+  auto leaves = [](const Bvh& bvh) {
+    return std::count_if(bvh.nodes.begin(), bvh.nodes.end(), [](const Node& n) { return n.is_leaf(); });
+  };
+  EXPECT_LT(leaves(per_block), leaves(per_prim));
+  SahCost block4;
+  block4.block = 4;
+  EXPECT_LT(sah_cost(per_block, block4), sah_cost(per_prim, block4));
+  expect_error(
+      [&] {
+        info.check(resolve_params(info.name, info.params, {{"sah_block", "3"}}));
+      },
+      {"binned_sah: sah_block = 3 must be a power of two up to 16"});
+}
+
 TEST(BuilderRegistry, KnowsBinnedAndSweep) {
   EXPECT_EQ(find_builder("binned_sah").name, "binned_sah");
   EXPECT_EQ(find_builder("sweep_sah").name, "sweep_sah");
@@ -28,9 +54,9 @@ TEST(BuilderRegistry, KnowsBinnedAndSweep) {
 TEST(BuilderRegistry, DefaultsAppearInCsvForm) {
   const auto& info = find_builder("binned_sah");
   EXPECT_EQ(resolve_params(info.name, info.params, {}).to_string(),
-            "bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
+            "bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;sah_block=1");
   EXPECT_EQ(resolve_params(info.name, info.params, {{"bins", "16"}, {"c_trav", "0.5"}}).to_string(),
-            "bins=16;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=0.5;c_isect=1");
+            "bins=16;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=0.5;c_isect=1;sah_block=1");
 }
 
 TEST(BuilderRegistry, BottomUpAndPresplitDefaultsAppearInCsvForm) {
@@ -110,7 +136,7 @@ TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
                                                          {"source.source.max_leaf", "4"}});
   EXPECT_EQ(chain.to_string(),
             "arity=8;method=sah;source=reinsert(source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;"
-            "max_leaf=4;c_trav=1;c_isect=1);iterations=2;batch=0.05;c_trav=1;c_isect=1);"
+            "max_leaf=4;c_trav=1;c_isect=1;sah_block=1);iterations=2;batch=0.05;c_trav=1;c_isect=1);"
             "source_c_trav_scale=1;bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;"
             "sah_block=4");
   const SourceSpec& reinsert = chain.get_source("source");
@@ -121,7 +147,7 @@ TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
   EXPECT_FALSE(resolve_named("wide_collapse", {{"source.bins", "32"}}).get_source("source").shared());
   // A pass's default source is built with its own defaults.
   EXPECT_EQ(resolve_named("treelet", {}).to_string(),
-            "source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1);"
+            "source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;sah_block=1);"
             "treelet_size=7;iterations=3;c_trav=1;c_isect=1");
 }
 

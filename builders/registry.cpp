@@ -98,15 +98,22 @@ BuilderInfo wide_binned_sah_info() {
           arity_of};
 }
 
-// wide_collapse's source_c_trav_scale. At 1 the binary tree is built with the SAH constants of the
-// collapse, and its leaves of 5-8 triangles, which the collapse keeps, traced the bunny's diffuse rays
-// 4% slower than Embree's own 8-wide tree (embree_bvh arity=8) did on the same kernels. Built with a
-// smaller c_trav, the source is finer and the SAH collapse picks the leaves (Ylitie et al. 2017 build
-// theirs down to single triangles): with c_trav = 2 and a scale of 0.25, the bunny's diffuse rays ran
-// 3-6% faster and the dragon's and the terrain's shadow rays 1-4%, for about 10% more build time (issue
-// 4's note, stop 16); with min_leaf = 4 as well, which leaves the wide tree the same, 3-8% more (stop 17).
-// The default keeps the build the plain binned SAH's.
-constexpr double kSourceTravScale = 1.0;
+// wide_collapse's SAH constants follow Ylitie, Karras and Laine 2017 ("Efficient incoherent ray traversal
+// on GPUs through compressed wide BVHs"): the binary source is built nearly down to single triangles
+// (c_trav scaled by kSourceTravScale), and the SAH collapse chooses the wide leaves, pricing a node visit
+// at three leaf block tests (they price it at 1 against 0.3 per triangle). A coarser source fixes the
+// leaves before the collapse can weigh them; c_trav = 1 and a scale of 1 give Embree's constants and a
+// faster build (configs/claim.toml measures both).
+constexpr double kWideCollapseTrav = 3.0;
+constexpr double kSourceTravScale = 0.0625;
+
+// Sets the default of the parameter `name` in `params`.
+void set_default(std::vector<ParamSpec>& params, const std::string& name, double value) {
+  const auto it =
+      std::find_if(params.begin(), params.end(), [&](const ParamSpec& p) { return p.name == name; });
+  if (it == params.end()) throw Error("no parameter " + name + " to give a default");
+  it->default_value = value;
+}
 
 // The parameters that wide_collapse only passes on to a shared source. Set away from their defaults
 // while the source has parameters of its own, they would be recorded but do nothing: an error.
@@ -123,6 +130,7 @@ void check_unshared(const ParamSet& p, const char* builder) {
 
 BuilderInfo wide_collapse_info() {
   auto params = binned_params(kWideSahBlock);
+  set_default(params, "c_trav", kWideCollapseTrav);
   params.insert(
       params.begin(),
       {arity_param(),
@@ -136,7 +144,10 @@ BuilderInfo wide_collapse_info() {
            {"binned_sah", "sweep_sah", "sbvh"}),
        {"source_c_trav_scale", ParamType::kFloat, kSourceTravScale, 0, 1,
         "the binary source is built with c_trav times this (below 1: a finer source, whose leaves "
-        "method=sah merges back where its SAH says so)"}});
+        "method=sah merges back where its SAH says so)"},
+       {"reinsert_iterations", ParamType::kInt, double(ReinsertParams{}.iterations), 0, 1000,
+        "rounds of the reinsert pass on the binary tree, whatever its source, before the collapse, "
+        "stopping early once a round gains little (0: the source's tree collapsed as built)"}});
   return {"wide_collapse",
           "a binary SAH tree collapsed to `arity` children per node; build time includes the binary build",
           std::move(params),
@@ -165,6 +176,16 @@ BuilderInfo wide_collapse_info() {
               tree = build_sbvh(input, sbvh);
             } else {
               tree = build_binned_sah(input, binary);
+            }
+            // A top-down build places each split by its own node's cost alone; reinsertion then lowers
+            // the inner nodes' area where the greedy splits left boxes that overlap (Bittner et al. 2013).
+            // The wide tree's inner nodes are a subset of the binary tree's, so the collapse keeps most
+            // of that gain (not all: its optimum over another binary tree may differ).
+            if (const uint32_t rounds = p.get_uint("reinsert_iterations"); rounds > 0) {
+              ReinsertParams optimise;
+              optimise.iterations = rounds;
+              optimise.cost = sah_cost_of(p);
+              tree = reinsert(tree, optimise);
             }
             if (p.get_choice("method") == "greedy") return collapse_greedy(tree, arity_of(p));
             return collapse_sah(tree, arity_of(p), sah_cost_of(p), p.get_uint("max_leaf"));
@@ -318,17 +339,19 @@ BuilderInfo reinsert_info() {
       {"iterations", ParamType::kInt, double(defaults.iterations), 0, 1000,
        "rounds of search and reinsertion (0: the source's tree)"},
       {"batch", ParamType::kFloat, defaults.batch, 1e-6, 1,
-       "fraction of the nodes, the largest first, searched for a better place per round"}};
+       "fraction of the nodes, the largest first, searched for a better place per round"},
+      {"min_gain", ParamType::kFloat, defaults.min_gain, 0, 0.5,
+       "a round that lowers the inner nodes' summed area by less than this fraction is the last"}};
   for (auto& p : pass_cost_params()) params.push_back(std::move(p));
-  return {
-      "reinsert",
-      "pass: reinsertion of subtrees where the SAH drops most (Bittner, Hapala and Havran 2013; parallel "
-      "search as Meister and Bittner 2018); never raises the source's SAH",
-      std::move(params),
-      [](const BuildInput& input, const ParamSet& p) {
-        return reinsert(build_source(input, p), {p.get_uint("iterations"), p.get("batch"), sah_cost_of(p)});
-      },
-      {}};
+  return {"reinsert",
+          "pass: reinsertion of subtrees where the SAH drops most (Bittner, Hapala and Havran 2013; parallel "
+          "search as Meister and Bittner 2018); never raises the source's SAH",
+          std::move(params),
+          [](const BuildInput& input, const ParamSet& p) {
+            return reinsert(build_source(input, p),
+                            {p.get_uint("iterations"), p.get("batch"), p.get("min_gain"), sah_cost_of(p)});
+          },
+          {}};
 }
 
 BuilderInfo treelet_info() {

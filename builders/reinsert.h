@@ -18,6 +18,9 @@ struct ReinsertParams {
   uint32_t iterations = 8;
   /// Fraction of the nodes (the largest by area) searched for a better place per iteration.
   double batch = 0.05;
+  /// An iteration that lowers the inner nodes' summed area by less than this fraction of it is the
+  /// last: the search has converged, and further rounds cost a round's time for a smaller gain still.
+  double min_gain = 1e-3;
   SahCost cost;
 };
 

@@ -143,6 +143,33 @@ TEST(Optimizers, NoIterationsGiveTheSourceTree) {
   }
 }
 
+TEST(Optimizers, ReinsertStopsOnceARoundGainsLittle) {
+  // min_gain ends the search after the first round that lowers the inner area by less than that share:
+  // at 0.5 no round qualifies, so the first is the last; at 0 every round that gains at all is run. Tiny
+  // spheres inside a huge cube leave the binned tree room that later rounds still find.
+  const Scene scene = load_scene("proc:multiscale:tris=20000");
+  const BuilderInfo& binned = find_builder("binned_sah");
+  const Bvh source = binned.build(BuildInput::from_triangles(scene.triangles),
+                                  resolve_params(binned.name, binned.params, {}));
+  const SahCost cost;
+  ReinsertParams one, converged, exhaustive;
+  one.iterations = 1;
+  one.min_gain = 0.0;
+  converged.iterations = 8;
+  converged.min_gain = 0.5;
+  exhaustive.iterations = 8;
+  exhaustive.min_gain = 0.0;
+  const Bvh after_one = reinsert(source, one);
+  EXPECT_LT(sah_cost(after_one, cost), sah_cost(source, cost));
+  EXPECT_TRUE(reinsert(source, converged) == after_one);
+  EXPECT_LT(sah_cost(reinsert(source, exhaustive), cost), sah_cost(after_one, cost));
+  for (double bad : {-0.1, 1.0}) {
+    ReinsertParams p;
+    p.min_gain = bad;
+    EXPECT_THROW(reinsert(source, p), Error) << bad;
+  }
+}
+
 TEST(Optimizers, RefuseWideTreesAndBadSizes) {
   const auto tris = test::random_triangles(500, 4);
   const BuilderInfo& wide = find_builder("wide_binned_sah");

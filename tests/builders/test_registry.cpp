@@ -126,8 +126,8 @@ ParamSet resolve_named(const std::string& name, const ParamOverrides& overrides)
 TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
   // wide_collapse's sources named alone share its parameters and are written by name, as before chains.
   EXPECT_EQ(resolve_named("wide_collapse", {}).to_string(),
-            "arity=8;method=sah;source=binned_sah;source_c_trav_scale=1;bins=32;adaptive_bins=1;min_leaf=1;"
-            "max_leaf=8;c_trav=1;c_isect=1;sah_block=4");
+            "arity=8;method=sah;source=binned_sah;source_c_trav_scale=0.0625;reinsert_iterations=8;bins=32;"
+            "adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=3;c_isect=1;sah_block=4");
   EXPECT_TRUE(resolve_named("wide_collapse", {{"source", "sbvh"}}).get_source("source").shared());
   // Any source with a parameter of its own, and any other source, is written with all of its values.
   const ParamSet chain = resolve_named("wide_collapse", {{"source", "reinsert"},
@@ -136,9 +136,9 @@ TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
                                                          {"source.source.max_leaf", "4"}});
   EXPECT_EQ(chain.to_string(),
             "arity=8;method=sah;source=reinsert(source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;"
-            "max_leaf=4;c_trav=1;c_isect=1;sah_block=1);iterations=2;batch=0.05;c_trav=1;c_isect=1);"
-            "source_c_trav_scale=1;bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;"
-            "sah_block=4");
+            "max_leaf=4;c_trav=1;c_isect=1;sah_block=1);iterations=2;batch=0.05;min_gain=0.001;c_trav=1;"
+            "c_isect=1);source_c_trav_scale=0.0625;reinsert_iterations=8;bins=32;adaptive_bins=1;"
+            "min_leaf=1;max_leaf=8;c_trav=3;c_isect=1;sah_block=4");
   const SourceSpec& reinsert = chain.get_source("source");
   ASSERT_FALSE(reinsert.shared());
   EXPECT_EQ(reinsert.name(), "reinsert");

@@ -98,12 +98,13 @@ BuilderInfo wide_binned_sah_info() {
           arity_of};
 }
 
-// wide_collapse's SAH constants follow Ylitie, Karras and Laine 2017 ("Efficient incoherent ray traversal
-// on GPUs through compressed wide BVHs"): the binary source is built nearly down to single triangles
-// (c_trav scaled by kSourceTravScale), and the SAH collapse chooses the wide leaves, pricing a node visit
-// at three leaf block tests (they price it at 1 against 0.3 per triangle). A coarser source fixes the
-// leaves before the collapse can weigh them; c_trav = 1 and a scale of 1 give Embree's constants and a
-// faster build (configs/claim.toml measures both).
+// wide_collapse's SAH constants, after Ylitie, Karras and Laine 2017 ("Efficient incoherent ray traversal
+// on GPUs through compressed wide BVHs"), who build the binary source down to single triangles and let
+// the SAH collapse choose the wide leaves: the source is built with c_trav scaled by kSourceTravScale,
+// splitting far below the leaves the collapse then keeps, and the collapse prices a node visit at three
+// 4-triangle block tests. The two values were tuned on configs/tune.toml's scenes (configs/wide.toml
+// keeps the history). c_trav = 1 and a scale of 1 are Embree's constants, the plain collapse, faster to
+// build (configs/claim.toml measures both).
 constexpr double kWideCollapseTrav = 3.0;
 constexpr double kSourceTravScale = 0.0625;
 
@@ -115,17 +116,24 @@ void set_default(std::vector<ParamSpec>& params, const std::string& name, double
   it->default_value = value;
 }
 
-// The parameters that wide_collapse only passes on to a shared source. Set away from their defaults
-// while the source has parameters of its own, they would be recorded but do nothing: an error.
+// The parameters that wide_collapse applies only to a shared source, its own binary build. Set away
+// from their defaults while the source has parameters of its own, they would be recorded but do nothing:
+// an error that says what to write instead.
 void check_unshared(const ParamSet& p, const char* builder) {
   if (p.get_source("source").shared()) return;
   for (const ParamSpec& spec : find_builder(builder).params)
-    for (const char* name : {"bins", "adaptive_bins", "min_leaf", "source_c_trav_scale"})
-      if (spec.name == name && p.get(name) != spec.default_value)
+    for (const char* name :
+         {"bins", "adaptive_bins", "min_leaf", "source_c_trav_scale", "reinsert_iterations"})
+      if (spec.name == name && p.get(name) != spec.default_value) {
+        const std::string instead = spec.name == "source_c_trav_scale"
+                                        ? "give the source its own c_trav (source.c_trav=...)"
+                                    : spec.name == "reinsert_iterations"
+                                        ? "name the pass as the source (source=reinsert,source.source=...)"
+                                        : "give it to the source (source." + spec.name + "=...)";
         throw Error(std::string(builder) + ": " + name +
                     " applies only to a source named alone (binned_sah, sweep_sah or sbvh), not to source=" +
-                    p.get_source("source").name() +
-                    " with parameters of its own; give it to the source (source." + name + "=...)");
+                    p.get_source("source").name() + " with parameters of its own; " + instead);
+      }
 }
 
 BuilderInfo wide_collapse_info() {
@@ -146,8 +154,8 @@ BuilderInfo wide_collapse_info() {
         "the binary source is built with c_trav times this (below 1: a finer source, whose leaves "
         "method=sah merges back where its SAH says so)"},
        {"reinsert_iterations", ParamType::kInt, double(ReinsertParams{}.iterations), 0, 1000,
-        "rounds of the reinsert pass on the binary tree, whatever its source, before the collapse, "
-        "stopping early once a round gains little (0: the source's tree collapsed as built)"}});
+        "rounds of the reinsert pass on a source named alone before the collapse, stopping early once "
+        "a round finds little to gain (0: that source's tree collapsed as built)"}});
   return {"wide_collapse",
           "a binary SAH tree collapsed to `arity` children per node; build time includes the binary build",
           std::move(params),
@@ -180,8 +188,9 @@ BuilderInfo wide_collapse_info() {
             // A top-down build places each split by its own node's cost alone; reinsertion then lowers
             // the inner nodes' area where the greedy splits left boxes that overlap (Bittner et al. 2013).
             // The wide tree's inner nodes are a subset of the binary tree's, so the collapse keeps most
-            // of that gain (not all: its optimum over another binary tree may differ).
-            if (const uint32_t rounds = p.get_uint("reinsert_iterations"); rounds > 0) {
+            // of that gain (not all: its optimum over another binary tree may differ). A source with
+            // parameters of its own (a chain, a tree file) is collapsed as given.
+            if (const uint32_t rounds = p.get_uint("reinsert_iterations"); spec.shared() && rounds > 0) {
               ReinsertParams optimise;
               optimise.iterations = rounds;
               optimise.cost = sah_cost_of(p);
@@ -340,8 +349,9 @@ BuilderInfo reinsert_info() {
        "rounds of search and reinsertion (0: the source's tree)"},
       {"batch", ParamType::kFloat, defaults.batch, 1e-6, 1,
        "fraction of the nodes, the largest first, searched for a better place per round"},
-      {"min_gain", ParamType::kFloat, defaults.min_gain, 0, 0.5,
-       "a round that lowers the inner nodes' summed area by less than this fraction is the last"}};
+      {"min_gain", ParamType::kFloat, defaults.min_gain, 0, kMaxMinGain,
+       "a round whose search finds less than this fraction of the inner nodes' summed area to gain is "
+       "the last"}};
   for (auto& p : pass_cost_params()) params.push_back(std::move(p));
   return {"reinsert",
           "pass: reinsertion of subtrees where the SAH drops most (Bittner, Hapala and Havran 2013; parallel "

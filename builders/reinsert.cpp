@@ -61,13 +61,16 @@ class Reinserter {
       // Moves found against the same tree interact through the boxes of shared ancestors, so together
       // they may raise the cost; fewer, the best first, interact less, and one alone lowers it by its gain.
       bool improved = false;
-      bool converged = false;
+      // Convergence is judged on what the search found, each move's gain against the tree as it stood,
+      // not on what the round kept: a round cut short by the halving below gains little by construction.
+      double found = 0.0;
+      for (const Move& m : moves) found += m.gain;
+      const bool last = found < best_area * params_.min_gain;
       for (std::size_t count = moves.size(); count > 0 && !improved; count /= 2) {
         apply(moves, count);
         const LinkedTree::Summary after = tree_.refit(&levels_);
         improved = after.inner_area < best_area * (1.0 - kMinRelativeGain) && after.height <= kMaxDepth;
         if (improved) {
-          converged = after.inner_area > best_area * (1.0 - params_.min_gain);
           best = tree_.nodes;
           best_root = tree_.root;
           best_area = after.inner_area;
@@ -77,7 +80,7 @@ class Reinserter {
           tree_.refit(&levels_);  // the levels of the tree restored
         }
       }
-      if (!improved || converged) return;
+      if (!improved || last) return;
     }
   }
 
@@ -228,8 +231,9 @@ class Reinserter {
 Bvh reinsert(const Bvh& source, const ReinsertParams& params) {
   if (!(params.batch > 0.0 && params.batch <= 1.0))
     throw Error("reinsert: batch = " + std::to_string(params.batch) + " is outside (0, 1]");
-  if (!(params.min_gain >= 0.0 && params.min_gain < 1.0))
-    throw Error("reinsert: min_gain = " + std::to_string(params.min_gain) + " is outside [0, 1)");
+  if (!(params.min_gain >= 0.0 && params.min_gain <= kMaxMinGain))
+    throw Error("reinsert: min_gain = " + std::to_string(params.min_gain) + " is outside [0, " +
+                std::to_string(kMaxMinGain) + "]");
   LinkedTree tree(source, "reinsert");
   if (tree.nodes.size() < 3 || params.iterations == 0) return source;
   Reinserter(tree, params).run();

@@ -18,11 +18,15 @@ struct ReinsertParams {
   uint32_t iterations = 8;
   /// Fraction of the nodes (the largest by area) searched for a better place per iteration.
   double batch = 0.05;
-  /// An iteration that lowers the inner nodes' summed area by less than this fraction of it is the
-  /// last: the search has converged, and further rounds cost a round's time for a smaller gain still.
+  /// An iteration whose search finds moves that together would lower the inner nodes' summed area by
+  /// less than this fraction of it is the last: what is left to gain is small next to a round's time.
   double min_gain = 1e-3;
   SahCost cost;
 };
+
+/// The largest min_gain accepted: above it, a search that finds half of the tree's area to gain would
+/// still be taken as converged.
+inline constexpr double kMaxMinGain = 0.5;
 
 /// The tree `source` (binary) with nodes moved to lower its SAH. Never returns a tree of higher SAH cost
 /// (by `params.cost`, as core/bvh_stats.h computes it) than `source`: an iteration whose moves together

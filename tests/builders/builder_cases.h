@@ -56,7 +56,7 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back({"wide_collapse", {{"arity", "4"}, {"source", "sweep_sah"}}});
   out.push_back({"wide_collapse", {{"method", "greedy"}, {"arity", "4"}, {"max_leaf", "1"}}});
   out.push_back({"wide_collapse", {{"source", "sbvh"}}});
-  // configs/wide.toml's finer row.
+  // A source finer than the plain collapse's, coarser than the default's, with min_leaf 4.
   out.push_back({"wide_collapse", {{"c_trav", "2"}, {"source_c_trav_scale", "0.25"}, {"min_leaf", "4"}}});
   out.push_back({"wide_collapse", {{"source_c_trav_scale", "0"}, {"source", "sbvh"}}});
   // The passes over every kind of binary source, and composed: a pass over a pass, the collapse over each.

@@ -158,6 +158,35 @@ TEST(Collapse, ReinsertsTheBinaryTreeBeforeCollapsing) {
   EXPECT_GT(lower, 0) << "the pass lowered no scene's SAH by 0.1%";
 }
 
+TEST(Collapse, ASourceWithParametersOfItsOwnIsCollapsedAsGiven) {
+  // Reinsertion and the source's scaled c_trav belong to the collapse's own binary build: a source given
+  // parameters of its own (a chain, a tree file) is collapsed as it comes, and setting either for it is
+  // an error that says what to write instead.
+  // Tiny spheres inside a huge cube: a scene whose tree reinsertion changes.
+  const Scene scene = load_scene("proc:multiscale:tris=20000");
+  const BuildInput input = BuildInput::from_triangles(scene.triangles);
+  const Bvh explicit_source =
+      build("wide_collapse",
+            {{"source", "binned_sah"}, {"source.c_trav", "0.1875"}, {"source.sah_block", "4"}}, input);
+  EXPECT_TRUE(explicit_source == build("wide_collapse", {{"reinsert_iterations", "0"}}, input));
+  EXPECT_FALSE(explicit_source == build("wide_collapse", {}, input));
+  const BuilderInfo& info = find_builder("wide_collapse");
+  auto error_of = [&](const ParamOverrides& o) -> std::string {
+    try {
+      info.check(resolve_params(info.name, info.params, o));
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  const std::string rounds = error_of({{"source", "ploc"}, {"reinsert_iterations", "0"}});
+  EXPECT_NE(rounds.find("reinsert_iterations applies only to a source named alone"), std::string::npos)
+      << rounds;
+  EXPECT_NE(rounds.find("source=reinsert"), std::string::npos) << rounds;
+  const std::string scale = error_of({{"source", "ploc"}, {"source_c_trav_scale", "1"}});
+  EXPECT_NE(scale.find("source.c_trav="), std::string::npos) << scale;
+}
+
 TEST(Collapse, OverflowingCostsKeepInnerNodesWhereLeavesWouldBeTooLarge) {
   // Boxes of half-area beyond float's range cost inf, and with c_trav = 0 an inner node's cost is
   // 0 * inf = NaN, so no split candidate is finite and neither side of leaf-or-node compares true. The
@@ -198,6 +227,11 @@ TEST(Collapse, ParametersAreCheckedByName) {
   EXPECT_EQ(info.arity(p), 4u);
   EXPECT_THROW(resolve_params(info.name, info.params, {{"source_c_trav_scale", "1.5"}}), Error);
   EXPECT_THROW(resolve_params(info.name, info.params, {{"source_c_trav_scale", "-1"}}), Error);
+  EXPECT_THROW(resolve_params(info.name, info.params, {{"reinsert_iterations", "1001"}}), Error);
+  EXPECT_THROW(resolve_params(info.name, info.params, {{"reinsert_iterations", "-1"}}), Error);
+  const BuilderInfo& pass = find_builder("reinsert");
+  EXPECT_THROW(resolve_params(pass.name, pass.params, {{"min_gain", "0.6"}}), Error);
+  EXPECT_THROW(resolve_params(pass.name, pass.params, {{"min_gain", "-0.1"}}), Error);
   EXPECT_THROW(info.check(resolve_params(info.name, info.params, {{"arity", "5"}})), Error);
   EXPECT_THROW(
       find_builder("wide_binned_sah")

@@ -150,7 +150,7 @@ const bool registered = [] {
 }();
 
 // One bvh2 node visit: both child boxes of a common-format node in one intersect_pair, as
-// traverse_binary tests them.
+// BinaryWalk tests them.
 void BM_Bvh2NodeVisit(benchmark::State& state) {
   const Bvh& tree = binary_tree(kPrims * 16);
   std::vector<const Node*> inner;

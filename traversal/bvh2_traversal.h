@@ -88,74 +88,111 @@ struct StackEntry {
 // pushes the other with its entry distance, and a popped node entered beyond the closest hit is skipped.
 // It visits the nodes that the general loop below visits, in the same order (on equal entry distances
 // the second child first, as that loop's insertion sort), so results and counters are the same.
+//
+// One step at a time: a step is one inner node, or one leaf and the pops after it, so that two walks can
+// be stepped in turn (trace_binary_pair below). The walk starts with the root's box test and counts the
+// ray, as the general loop does.
 template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
-Hit traverse_binary(const Bvh& bvh, const Triangle* triangles, const Ray& ray, const BoxTest& box_test,
-                    const TriangleTest& triangle_test, float tmax,
-                    [[maybe_unused]] TraversalCounters* counters, AnyHitOrder any_order) {
-  const Node* nodes = bvh.nodes.data();
-  const uint32_t* refs = bvh.prim_refs.data();
-  const float tmin = ray.tmin;
-  StackEntry stack[kStackCapacity];
-  uint32_t size = 0;
-  uint32_t current = 0;
-  Hit best;
-  float best_t = tmax;
-  while (true) {
-    const Node& node = nodes[current];
+class BinaryWalk {
+ public:
+  /// A walk of `ray` (one BoxTest takes, see FmaRayBox::takes) through the binary `bvh` over `triangles`;
+  /// any hit visits children in `any_order` (resolved).
+  BinaryWalk(const Bvh& bvh, const Triangle* triangles, const Ray& ray,
+             [[maybe_unused]] TraversalCounters* counters, AnyHitOrder any_order)
+      : box_test_(ray),
+        triangle_test_(ray),
+        nodes_(bvh.nodes.data()),
+        refs_(bvh.prim_refs.data()),
+        triangles_(triangles),
+        counters_(counters),
+        any_order_(any_order),
+        tmin_(ray.tmin),
+        best_t_(far_limit(ray)) {
+    if constexpr (kCount) ++counters_->rays;
+    if (bvh.nodes.empty() || !traceable(ray)) return;
+    if constexpr (kCount) ++counters_->box_tests;
+    float t_root;
+    active_ = box_test_.intersect(nodes_[0].bounds, tmin_, best_t_, t_root);
+  }
+
+  /// Whether the walk has steps left; once false, hit() is its answer.
+  bool active() const { return active_; }
+  const Hit& hit() const { return best_; }
+
+  /// One step; returns active().
+  [[gnu::always_inline]] bool step() {
+    const Node& node = nodes_[current_];
     if (!node.is_leaf()) {
       if constexpr (kCount) {
-        ++counters->inner_visits;
-        counters->box_tests += 2;
+        ++counters_->inner_visits;
+        counters_->box_tests += 2;
       }
       const uint32_t first = node.first;
       float t0, t1;
       const unsigned hits =
-          box_test.intersect_pair(nodes[first].bounds, nodes[first + 1].bounds, tmin, best_t, t0, t1);
+          box_test_.intersect_pair(nodes_[first].bounds, nodes_[first + 1].bounds, tmin_, best_t_, t0, t1);
       if (hits == 3) {
         bool second_first = !(t0 < t1);
         if constexpr (kAnyHit) {
-          if (any_order == AnyHitOrder::kStored) second_first = false;
-          if (any_order == AnyHitOrder::kNearestStored) second_first = t1 < t0;
+          if (any_order_ == AnyHitOrder::kStored) second_first = false;
+          if (any_order_ == AnyHitOrder::kNearestStored) second_first = t1 < t0;
         }
-        if (size == kStackCapacity) [[unlikely]]
-          throw_stack_overflow(current, 2);
-        stack[size++] = second_first ? StackEntry{first, t0} : StackEntry{first + 1, t1};
-        current = second_first ? first + 1 : first;
-        continue;
+        if (size_ == kStackCapacity) [[unlikely]]
+          throw_stack_overflow(current_, 2);
+        stack_[size_++] = second_first ? StackEntry{first, t0} : StackEntry{first + 1, t1};
+        current_ = second_first ? first + 1 : first;
+        return true;
       }
       if (hits != 0) {
-        current = first + (hits >> 1);
-        continue;
+        current_ = first + (hits >> 1);
+        return true;
       }
     } else {
       if constexpr (kCount) {
-        ++counters->leaf_visits;
-        counters->prim_tests += node.prim_count;
+        ++counters_->leaf_visits;
+        counters_->prim_tests += node.prim_count;
       }
       const uint32_t end = node.first + node.prim_count;
       for (uint32_t r = node.first; r < end; ++r) {
-        const uint32_t prim = refs[r];
+        const uint32_t prim = refs_[r];
         float t, u, v;
-        const bool hit = kAnyHit ? intersect_any(triangle_test, triangles[prim], tmin, best_t, t, u, v)
-                                 : triangle_test.intersect(triangles[prim], tmin, best_t, t, u, v);
+        const bool hit = kAnyHit ? intersect_any(triangle_test_, triangles_[prim], tmin_, best_t_, t, u, v)
+                                 : triangle_test_.intersect(triangles_[prim], tmin_, best_t_, t, u, v);
         if (!hit) continue;
         if constexpr (kAnyHit) {
-          return {prim, t, u, v};
-        } else if (t < best_t || prim < best.prim) {
-          best = {prim, t, u, v};
-          best_t = t;
+          best_ = {prim, t, u, v};
+          return active_ = false;
+        } else if (t < best_t_ || prim < best_.prim) {
+          best_ = {prim, t, u, v};
+          best_t_ = t;
         }
       }
     }
     // Next: the top of the stack, skipping nodes entered beyond the closest hit (equal is kept for the
     // tie rule).
     do {
-      if (size == 0) return best;
-      --size;
-    } while (!kAnyHit && stack[size].t_entry > best_t);
-    current = stack[size].node;
+      if (size_ == 0) return active_ = false;
+      --size_;
+    } while (!kAnyHit && stack_[size_].t_entry > best_t_);
+    current_ = stack_[size_].node;
+    return true;
   }
-}
+
+ private:
+  BoxTest box_test_;
+  TriangleTest triangle_test_;
+  const Node* nodes_;
+  const uint32_t* refs_;
+  const Triangle* triangles_;
+  [[maybe_unused]] TraversalCounters* counters_;
+  AnyHitOrder any_order_;
+  float tmin_, best_t_;
+  uint32_t current_ = 0;
+  uint32_t size_ = 0;
+  bool active_ = false;
+  Hit best_;
+  StackEntry stack_[kStackCapacity];
+};
 
 // The one traversal loop. kAnyHit stops at the first hit in [tmin, tmax]; otherwise the interval's end
 // shrinks to the closest hit so far. kCount adds the statistics, compiled out of the timed kernels.
@@ -168,7 +205,7 @@ Hit traverse_binary(const Bvh& bvh, const Triangle* triangles, const Ray& ray, c
 // Ties: a hit at exactly the current closest t replaces it only when its primitive index is lower, so
 // among hits at the same float t the lowest index wins, as in the brute-force reference.
 //
-// kBinaryLoop sends binary trees to traverse_binary; the tests turn it off to check that both loops agree.
+// kBinaryLoop sends binary trees to BinaryWalk; the tests turn it off to check that both loops agree.
 template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount, bool kBinaryLoop = true>
 Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
              [[maybe_unused]] TraversalCounters* counters, AnyHitOrder order) {
@@ -177,6 +214,12 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
     if (!FmaRayBox::takes(ray)) [[unlikely]]
       return traverse<TriangleTest, RobustRayBox, kAnyHit, kCount, kBinaryLoop>(bvh, triangles, ray, counters,
                                                                                 order);
+  }
+  if (kBinaryLoop && bvh.arity == 2) {
+    const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
+    BinaryWalk<TriangleTest, BoxTest, kAnyHit, kCount> walk(bvh, triangles.data(), ray, counters, any_order);
+    while (walk.active()) walk.step();
+    return walk.hit();
   }
   if constexpr (kCount) ++counters->rays;
   if (bvh.nodes.empty() || !traceable(ray)) return {};
@@ -190,9 +233,6 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
   const float tmax = far_limit(ray);
   if (!box_test.intersect(bvh.nodes[0].bounds, ray.tmin, tmax, t_entry)) return {};
   const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
-  if (kBinaryLoop && bvh.arity == 2)
-    return traverse_binary<TriangleTest, BoxTest, kAnyHit, kCount>(bvh, triangles.data(), ray, box_test,
-                                                                   triangle_test, tmax, counters, any_order);
   stack[size++] = {0, t_entry};
 
   Hit best;
@@ -268,6 +308,34 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
     }
   }
   return best;
+}
+
+// Two rays through a binary tree, their walks stepped in turn: a walk is one chain of dependent loads,
+// tests and branches, and two independent chains let the core overlap one ray's latency with the other's
+// work (the software counterpart of a GPU's warps hiding memory latency; Aila and Laine 2009). Each ray's
+// answer is the one traverse gives it.
+template <class TriangleTest, class BoxTest, bool kAnyHit>
+void trace_binary_pair(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray_a,
+                       const Ray& ray_b, AnyHitOrder order, Hit& hit_a, Hit& hit_b) {
+  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
+    if (!FmaRayBox::takes(ray_a) || !FmaRayBox::takes(ray_b)) [[unlikely]] {
+      hit_a = traverse<TriangleTest, BoxTest, kAnyHit, false>(bvh, triangles, ray_a, nullptr, order);
+      hit_b = traverse<TriangleTest, BoxTest, kAnyHit, false>(bvh, triangles, ray_b, nullptr, order);
+      return;
+    }
+  }
+  const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
+  BinaryWalk<TriangleTest, BoxTest, kAnyHit, false> a(bvh, triangles.data(), ray_a, nullptr, any_order);
+  BinaryWalk<TriangleTest, BoxTest, kAnyHit, false> b(bvh, triangles.data(), ray_b, nullptr, any_order);
+  bool more_a = a.active(), more_b = b.active();
+  while (more_a && more_b) {
+    more_a = a.step();
+    more_b = b.step();
+  }
+  while (more_a) more_a = a.step();
+  while (more_b) more_b = b.step();
+  hit_a = a.hit();
+  hit_b = b.hit();
 }
 
 }  // namespace detail

@@ -38,12 +38,12 @@ class Bvh2Layout final : public CompiledLayout {
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) hits[i] = closest_hit<Tri, Box>(*bvh_, triangles_, rays[i]);
+      trace_in_pairs<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
     });
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) occluded[i] = any_hit<Tri, Box>(*bvh_, triangles_, rays[i], order_);
+      trace_in_pairs<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
     });
   }
   TraceCounts count_closest(std::span<const Ray> rays) const override {
@@ -73,6 +73,21 @@ class Bvh2Layout final : public CompiledLayout {
   std::size_t bytes() const override { return bvh_->bytes(); }
 
  private:
+  // Rays [begin, end) two at a time (detail::trace_binary_pair), the last one alone; `put(i, hit)` takes
+  // each answer. Any hit visits children in order_.
+  template <bool kAnyHit, class Put>
+  void trace_in_pairs(std::span<const Ray> rays, std::size_t begin, std::size_t end, Put&& put) const {
+    std::size_t i = begin;
+    for (; i + 1 < end; i += 2) {
+      Hit a, b;
+      detail::trace_binary_pair<Tri, Box, kAnyHit>(*bvh_, triangles_, rays[i], rays[i + 1], order_, a, b);
+      put(i, a);
+      put(i + 1, b);
+    }
+    if (i < end)
+      put(i, detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, rays[i], nullptr, order_));
+  }
+
   const Bvh* bvh_ = nullptr;
   std::span<const Triangle> triangles_;
   Bvh owned_;  // once refitted

@@ -163,7 +163,7 @@ class PairSlabs {
 #endif
 };
 
-// The while-while loop of traverse_binary (bvh2_traversal.h) on PairNodes, one step at a time: the same
+// The while-while loop of BinaryWalk (bvh2_traversal.h) on PairNodes, one step at a time: the same
 // visits in the same order, with a child's box read from its parent's line and a leaf's triangles reached
 // without a node. A step is one inner node, or one leaf and the pops after it, so that two walks can be
 // stepped in turn (trace_pair below).

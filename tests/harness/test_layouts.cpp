@@ -122,7 +122,7 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
     for (const Ray& r : test::coherent_rays(scene.triangles, 400, 6, kWidePacket)) rays.push_back(r);
     ASSERT_EQ(rays.size() % kWidePacket, 0u);
     for (const Ray& r : test::diverging_rays(scene.triangles, 400, 8, kWidePacket)) rays.push_back(r);
-    // An odd count: bvh2_packed traces rays in pairs and the last one alone.
+    // An odd count: the binary layouts trace rays in pairs and the last one alone.
     rays.push_back(test::random_rays(scene.triangles, 1, 7).front());
     std::vector<Hit> reference(rays.size());
     std::vector<uint8_t> reference_any(rays.size());

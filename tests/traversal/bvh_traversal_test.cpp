@@ -59,7 +59,7 @@ std::string disagreement(const Hit& got, const Hit& ref, std::span<const Triangl
 template <class K>
 class TravBvhKernels : public ::testing::Test {
  protected:
-  // The binary trees' own loop (traverse_binary) against the general loop on the same binary tree: the
+  // The binary trees' own loop (BinaryWalk) against the general loop on the same binary tree: the
   // same hit and the same counters, for closest hit and for any hit in each child order.
   static void check_binary_loop(const Bvh& bvh, std::span<const Triangle> tris, const Ray& ray,
                                 std::size_t i) {

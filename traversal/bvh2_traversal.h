@@ -310,10 +310,23 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
   return best;
 }
 
-// Two rays through a binary tree, their walks stepped in turn: a walk is one chain of dependent loads,
-// tests and branches, and two independent chains let the core overlap one ray's latency with the other's
-// work (the software counterpart of a GPU's warps hiding memory latency; Aila and Laine 2009). Each ray's
-// answer is the one traverse gives it.
+// Two walks (BinaryWalk, PackedWalk) stepped in turn until one ends, then the other alone: a walk is one
+// chain of dependent loads, tests and branches, and two independent chains let the core overlap one
+// ray's latency with the other's work (the software counterpart of a GPU's warps hiding memory latency;
+// Aila and Laine 2009).
+template <class Walk>
+[[gnu::always_inline]] inline void step_in_turn(Walk& a, Walk& b) {
+  bool more_a = a.active(), more_b = b.active();
+  while (more_a && more_b) {
+    more_a = a.step();
+    more_b = b.step();
+  }
+  while (more_a) more_a = a.step();
+  while (more_b) more_b = b.step();
+}
+
+// Two rays through a binary tree, their walks stepped in turn (step_in_turn). Each ray's answer is the
+// one traverse gives it.
 template <class TriangleTest, class BoxTest, bool kAnyHit>
 void trace_binary_pair(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray_a,
                        const Ray& ray_b, AnyHitOrder order, Hit& hit_a, Hit& hit_b) {
@@ -327,13 +340,7 @@ void trace_binary_pair(const Bvh& bvh, std::span<const Triangle> triangles, cons
   const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
   BinaryWalk<TriangleTest, BoxTest, kAnyHit, false> a(bvh, triangles.data(), ray_a, nullptr, any_order);
   BinaryWalk<TriangleTest, BoxTest, kAnyHit, false> b(bvh, triangles.data(), ray_b, nullptr, any_order);
-  bool more_a = a.active(), more_b = b.active();
-  while (more_a && more_b) {
-    more_a = a.step();
-    more_b = b.step();
-  }
-  while (more_a) more_a = a.step();
-  while (more_b) more_b = b.step();
+  step_in_turn(a, b);
   hit_a = a.hit();
   hit_b = b.hit();
 }

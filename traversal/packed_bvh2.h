@@ -288,10 +288,8 @@ Hit traverse_packed(const PackedBvh2& tree, const Ray& ray, TraversalCounters* c
   return walk.hit();
 }
 
-// Two rays, their walks stepped in turn: a walk is one chain of dependent loads, tests and branches, and
-// two independent chains let the core overlap one ray's latency with the other's work (the software
-// counterpart of a GPU's warps hiding memory latency; Aila and Laine 2009). Each ray's answer is the
-// one traverse_packed gives it.
+// Two rays, their walks stepped in turn (step_in_turn, bvh2_traversal.h). Each ray's answer is the one
+// traverse_packed gives it.
 template <class TriangleTest, class BoxTest, bool kAnyHit>
 void trace_pair(const PackedBvh2& tree, const Ray& ray_a, const Ray& ray_b, AnyHitOrder any_order, Hit& hit_a,
                 Hit& hit_b) {
@@ -304,13 +302,7 @@ void trace_pair(const PackedBvh2& tree, const Ray& ray_a, const Ray& ray_b, AnyH
   }
   PackedWalk<TriangleTest, BoxTest, kAnyHit, false> a(tree, ray_a, nullptr, any_order);
   PackedWalk<TriangleTest, BoxTest, kAnyHit, false> b(tree, ray_b, nullptr, any_order);
-  bool more_a = a.active(), more_b = b.active();
-  while (more_a && more_b) {
-    more_a = a.step();
-    more_b = b.step();
-  }
-  while (more_a) more_a = a.step();
-  while (more_b) more_b = b.step();
+  step_in_turn(a, b);
   hit_a = a.hit();
   hit_b = b.hit();
 }

@@ -16,7 +16,9 @@ string(REPLACE "\n" ";" lines "${symbols}")
 set(found 0)
 set(offending "")
 foreach(line IN LISTS lines)
-  if(line MATCHES " [tTwW] (.*sahbench::wide_(sse|avx2|avx512)::([A-Za-z_0-9]+).*)$")
+  # The function's own name: the first after the namespace, before any template arguments (which may
+  # name the namespace's types again, e.g. trace_packet_batch<wide_avx512::Lanes16, ...>).
+  if(line MATCHES " [tTwW] ([^<(]*sahbench::wide_(sse|avx2|avx512)::([A-Za-z_0-9]+).*)$")
     set(symbol "${CMAKE_MATCH_1}")
     set(function "${CMAKE_MATCH_3}")
     math(EXPR found "${found} + 1")

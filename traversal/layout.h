@@ -55,17 +55,18 @@ class CompiledLayout {
 ///   box = robust | fast | fma           (ray/box test)
 ///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto: kernel_variant.h's
 ///                                                preferred_kernel_isa, AVX-512 on Intel, else up to AVX2)
-///   packet = 1 | 8                      (SIMD layouts only: rays traced one at a time, or eight at a
-///                                        time by the packet kernels of wide_packets.inl, avx2 and avx512)
+///   packet = 1 | 8 | 16                 (SIMD layouts only: rays traced one at a time, or 8 or 16 at a
+///                                        time by the packet kernels of wide_packets.inl: 8 with avx2
+///                                        and avx512, 16 with avx512)
 /// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2", "bvh8:packet=8".
-/// The rays of a packet in the packet kernels (layout option packet=8).
-inline constexpr uint32_t kWidePacket = 8;
+/// The largest packet of the packet kernels (layout option packet=16): ray chunks hold whole packets.
+inline constexpr uint32_t kMaxWidePacket = 16;
 
 struct LayoutSpec {
   std::string name;
   KernelVariant variant;
   KernelIsa isa = KernelIsa::kAuto;
-  /// Rays per packet: 1 (single-ray kernels) or kWidePacket.
+  /// Rays per packet: 1 (single-ray kernels), 8 or 16.
   uint32_t packet = 1;
 
   /// The canonical text: the name, then the options that differ from the defaults, in the order above.

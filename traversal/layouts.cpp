@@ -203,12 +203,10 @@ LayoutSpec parse_layout_spec(std::string_view text) {
       if (!isa) throw Error(where + ": isa = '" + value + "' is not one of auto, scalar, sse, avx2, avx512");
       spec.isa = *isa;
     } else if (key == "packet" && info.has_isa) {
-      if (value == "1")
-        spec.packet = 1;
-      else if (value == std::to_string(kWidePacket))
-        spec.packet = kWidePacket;
+      if (value == "1" || value == "8" || value == "16")
+        spec.packet = static_cast<uint32_t>(std::stoul(value));
       else
-        throw Error(where + ": packet = '" + value + "' is not one of 1, " + std::to_string(kWidePacket));
+        throw Error(where + ": packet = '" + value + "' is not one of 1, 8, 16");
     } else {
       throw Error(where + ": unknown option '" + key + "' (known: tri, box, anyhit" +
                   (info.has_isa ? ", isa, packet)" : ")"));

@@ -401,13 +401,13 @@ WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& 
   return nullptr;
 }
 
-WideKernel find_wide_packet_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant,
-                                   bool any_hit) {
+WideKernel find_wide_packet_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit,
+                                   uint32_t packet) {
 #if defined(SAHBENCH_HAVE_X86_KERNELS)
   if (isa == KernelIsa::kAvx2)
-    return detail::wide_packet_kernel_avx2(width, variant.triangle, variant.box, any_hit);
+    return detail::wide_packet_kernel_avx2(width, variant.triangle, variant.box, any_hit, packet);
   if (isa == KernelIsa::kAvx512)
-    return detail::wide_packet_kernel_avx512(width, variant.triangle, variant.box, any_hit);
+    return detail::wide_packet_kernel_avx512(width, variant.triangle, variant.box, any_hit, packet);
 #endif
   return nullptr;
 }

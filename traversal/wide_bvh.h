@@ -250,9 +250,11 @@ using WideKernel = void (*)(const WideBatch&);
 WideKernel find_wide_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit,
                             bool counting);
 
-/// The packet kernel (wide_packets.inl: eight rays at a time) for a width, variant and query, compiled for
-/// `isa`: kAvx2 or kAvx512. Null for another instruction set or a combination not compiled in.
-WideKernel find_wide_packet_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit);
+/// The packet kernel (wide_packets.inl: `packet` rays at a time, 8 or 16) for a width, variant and query,
+/// compiled for `isa`: kAvx2 (8) or kAvx512 (8 and 16). Null for another instruction set, packet width or
+/// a combination not compiled in.
+WideKernel find_wide_packet_kernel(KernelIsa isa, uint32_t width, const KernelVariant& variant, bool any_hit,
+                                   uint32_t packet);
 
 /// Micro-benchmark loops (bench/): `ray_count` rays each against `count` nodes (of the width asked) or
 /// triangle blocks in turn, returning a checksum.

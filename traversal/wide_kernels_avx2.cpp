@@ -17,8 +17,9 @@ WideKernel wide_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind bo
   return wide_avx2::select_kernel<false>(width, tri, box, any_hit);
 }
 
-WideKernel wide_packet_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
-  return wide_avx2::select_packet_kernel(width, tri, box, any_hit);
+WideKernel wide_packet_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
+                                   uint32_t packet) {
+  return wide_avx2::select_packet_kernel(width, tri, box, any_hit, packet);
 }
 
 WideBenchLoops wide_bench_loops_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box) {

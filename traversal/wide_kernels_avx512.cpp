@@ -17,8 +17,9 @@ WideKernel wide_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind 
   return wide_avx512::select_kernel<false>(width, tri, box, any_hit);
 }
 
-WideKernel wide_packet_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
-  return wide_avx512::select_packet_kernel(width, tri, box, any_hit);
+WideKernel wide_packet_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
+                                     uint32_t packet) {
+  return wide_avx512::select_packet_kernel(width, tri, box, any_hit, packet);
 }
 
 WideBenchLoops wide_bench_loops_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box) {

@@ -25,8 +25,10 @@ WideKernel wide_kernel_scalar(uint32_t width, TriangleTestKind tri, BoxTestKind 
 WideKernel wide_kernel_sse(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit);
 WideKernel wide_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit);
 WideKernel wide_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit);
-WideKernel wide_packet_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit);
-WideKernel wide_packet_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit);
+WideKernel wide_packet_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
+                                   uint32_t packet);
+WideKernel wide_packet_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
+                                     uint32_t packet);
 #endif
 
 }  // namespace sahbench::detail

@@ -15,7 +15,7 @@ namespace {
 // Rays per kernel call: their WideRay set-ups (80 bytes each) stay in L1 and one task amortises the
 // scheduling, as kRayChunk does for the binary layouts.
 constexpr std::size_t kWideChunk = 256;
-static_assert(kWideChunk % kWidePacket == 0, "chunks hold whole packets");
+static_assert(kWideChunk % kMaxWidePacket == 0, "chunks hold whole packets");
 
 template <uint32_t N>
 class WideLayout final : public CompiledLayout {
@@ -34,15 +34,15 @@ class WideLayout final : public CompiledLayout {
     // The counting kernels are the single-ray ones for packets too: the counts describe the tree and the
     // rays, not the order in which a packet visits nodes.
     closest_ = packet == 1 ? find_wide_kernel(isa, N, variant, false, false)
-                           : find_wide_packet_kernel(isa, N, variant, false);
+                           : find_wide_packet_kernel(isa, N, variant, false, packet);
     any_ = packet == 1 ? find_wide_kernel(isa, N, variant, true, false)
-                       : find_wide_packet_kernel(isa, N, variant, true);
+                       : find_wide_packet_kernel(isa, N, variant, true, packet);
     count_closest_ = find_wide_kernel(KernelIsa::kScalar, N, variant, false, true);
     count_any_ = find_wide_kernel(KernelIsa::kScalar, N, variant, true, true);
     if (!closest_ || !any_ || !count_closest_ || !count_any_)
       throw Error("layout bvh" + std::to_string(N) + ": no " + std::string(to_string(isa)) +
-                  (packet == 1 ? "" : " packet") + " kernels compiled in" +
-                  (packet == 1 ? "" : " (packet kernels: isa avx2 or avx512)"));
+                  (packet == 1 ? "" : " " + std::to_string(packet) + "-ray packet") + " kernels compiled in" +
+                  (packet == 1 ? "" : " (packet=8: isa avx2 or avx512; packet=16: isa avx512)"));
   }
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
@@ -125,6 +125,10 @@ std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& b
                                                     std::span<const Triangle> triangles,
                                                     const LayoutSpec& spec) {
   KernelIsa isa = spec.isa == KernelIsa::kAuto ? preferred_kernel_isa() : spec.isa;
+  // Sixteen-ray packets have AVX-512 kernels only: auto takes them wherever the CPU has AVX-512, also
+  // where it prefers AVX2 for the other kernels.
+  if (spec.isa == KernelIsa::kAuto && spec.packet == 16 && kernel_isa_available(KernelIsa::kAvx512))
+    isa = KernelIsa::kAvx512;
   if (!kernel_isa_available(isa))
     throw Error("layout '" + spec.text() + "': isa " + std::string(to_string(isa)) +
                 " is not available on this CPU or build (auto would pick " +

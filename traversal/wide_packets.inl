@@ -1,32 +1,141 @@
-// Packet kernels on the wide layouts: eight rays traverse the tree together, each node fetched once for
-// all of them and each child box tested against the eight rays in one 8-lane slab test (Wald, Slusallek,
-// Benthin and Wagner 2001, "Interactive Rendering with Coherent Ray Tracing"; on wide nodes, Embree's
-// BVHNIntersectorK, Wald et al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing").
-// Compiled for AVX2 and AVX-512 only (wide_kernels_avx2.cpp, wide_kernels_avx512.cpp include it after
-// wide_kernels.inl, whose helpers it uses).
+// Packet kernels on the wide layouts: K rays traverse the tree together, each node fetched once for all
+// of them and each child box tested against the K rays in one K-lane slab test (Wald, Slusallek, Benthin
+// and Wagner 2001, "Interactive Rendering with Coherent Ray Tracing"; on wide nodes, Embree's
+// BVHNIntersectorK, Wald et al. 2014, "Embree: A Kernel Framework for Efficient CPU Ray Tracing"). K is 8
+// (an AVX register; AVX2 and AVX-512) or 16 (an AVX-512 register). Compiled for AVX2 and AVX-512 only
+// (wide_kernels_avx2.cpp, wide_kernels_avx512.cpp include it after wide_kernels.inl, whose helpers it
+// uses).
 //
-// Packets are the batch's rays eight at a time, in the ray set's own order, as Embree's rtcIntersect8 is
-// fed (primary rays in rows of pixels). A packet goes down the tree together only when its rays agree on
-// the sign of each direction component, so that one near and one far plane per axis serve all eight, and
-// (box=fma) every ray is in that test's domain; otherwise its rays are traced one at a time by the
-// single-ray kernel. Each lane computes the slab test of intersect_children with the same operations in
-// the same order, and leaves are tested ray by ray with intersect_leaf (tri=mtn: a triangle against all
-// the rays at once where most of the packet enters the leaf, packet_leaf_mtn), so every ray gets a hit of
-// the single-ray tests; only the order in which nodes and triangles are visited differs.
+// Packets are the batch's rays K at a time, in the ray set's own order, as Embree's rtcIntersect8 and
+// rtcIntersect16 are fed (primary rays in rows of pixels). A packet goes down the tree together only when
+// its rays agree on the sign of each direction component, so that one near and one far plane per axis
+// serve all K, and (box=fma) every ray is in that test's domain; otherwise its rays are traced one at a
+// time by the single-ray kernel. Each lane computes the slab test of intersect_children with the same
+// operations in the same order, and leaves are tested ray by ray with intersect_leaf (tri=mtn: a triangle
+// against all the rays at once where most of the packet enters the leaf, packet_leaf_mtn), so every ray
+// gets a hit of the single-ray tests; only the order in which nodes and triangles are visited differs.
 
-inline constexpr uint32_t kPacketWidth = 8;
 // A packet's rays go on one at a time below a node that this many or fewer of them enter: a packet's
-// node visit tests every child against all eight lanes, which costs about what a single ray's visits of
-// the node would cost for each active ray.
+// node visit tests every child against all K lanes in one register, which costs about what a single
+// ray's visits of the node would cost for each active ray (for K = 16 too: one AVX-512 instruction does
+// what one AVX instruction does for eight).
 inline constexpr int kPacketSwitch = 3;
 
-// The eight rays' slab constants, one lane each, and the planes they share.
-struct alignas(32) PacketRays {
-  __m256 org[3];
-  __m256 dir[3];
-  __m256 inv[3];
-  __m256 org_inv[3];
-  __m256 tmin;
+// The lanes of a packet of eight rays: one AVX register, masks as the low bits of an integer.
+struct Lanes8 {
+  static constexpr uint32_t kWidth = 8;
+  using V = __m256;
+  using Ops = Ops256;  // intersect_mtn_lanes's operations on the same vectors
+  SAHBENCH_KERNEL_INLINE static V load(const float* p) { return _mm256_load_ps(p); }
+  SAHBENCH_KERNEL_INLINE static void store(float* p, V v) { _mm256_store_ps(p, v); }
+  SAHBENCH_KERNEL_INLINE static V set1(float x) { return _mm256_set1_ps(x); }
+  SAHBENCH_KERNEL_INLINE static V broadcast(const float* p) { return _mm256_broadcast_ss(p); }
+  SAHBENCH_KERNEL_INLINE static V sub(V a, V b) { return _mm256_sub_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static V mul(V a, V b) { return _mm256_mul_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static V fmsub(V a, V b, V c) { return _mm256_fmsub_ps(a, b, c); }
+  SAHBENCH_KERNEL_INLINE static V max(V a, V b) { return _mm256_max_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static V min(V a, V b) { return _mm256_min_ps(a, b); }
+  // The lanes where a <= b (false where either is NaN).
+  SAHBENCH_KERNEL_INLINE static uint32_t le(V a, V b) {
+    return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)));
+  }
+  // The lanes that are not NaN.
+  SAHBENCH_KERNEL_INLINE static uint32_t ordered(V a) {
+    return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a, a, _CMP_ORD_Q)));
+  }
+  // The lanes of `mask` as an all-ones vector mask.
+  SAHBENCH_KERNEL_INLINE static V mask_vector(uint32_t mask) {
+    const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    const __m256i m = _mm256_and_si256(_mm256_set1_epi32(static_cast<int>(mask)), bits);
+    return _mm256_castsi256_ps(_mm256_cmpeq_epi32(m, bits));
+  }
+  // `a` in the lanes of `mask`, `b` in the others.
+  SAHBENCH_KERNEL_INLINE static V select(uint32_t mask, V a, V b) {
+    return _mm256_blendv_ps(b, a, mask_vector(mask));
+  }
+  // The smallest lane (no NaN among them).
+  SAHBENCH_KERNEL_INLINE static float min_lane(V t) {
+    V m = _mm256_min_ps(t, _mm256_permute2f128_ps(t, t, 1));
+    m = _mm256_min_ps(m, _mm256_permute_ps(m, _MM_SHUFFLE(1, 0, 3, 2)));
+    m = _mm256_min_ps(m, _mm256_permute_ps(m, _MM_SHUFFLE(2, 3, 0, 1)));
+    return _mm256_cvtss_f32(m);
+  }
+};
+
+#if defined(SAHBENCH_WIDE_AVX512)
+// intersect_mtn_lanes's operations on sixteen lanes. Its masks are vectors (all ones where true), as in
+// Ops256, moved to and from the mask registers of AVX-512 (AVX-512DQ's vpmovm2d and vpmovd2m).
+struct Ops512 {
+  using V = __m512;
+  SAHBENCH_KERNEL_INLINE static __m512 set1(float x) { return _mm512_set1_ps(x); }
+  SAHBENCH_KERNEL_INLINE static __m512 add(__m512 a, __m512 b) { return _mm512_add_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m512 sub(__m512 a, __m512 b) { return _mm512_sub_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m512 mul(__m512 a, __m512 b) { return _mm512_mul_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m512 div(__m512 a, __m512 b) { return _mm512_div_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m512 fmadd(__m512 a, __m512 b, __m512 c) {
+    return _mm512_fmadd_ps(a, b, c);
+  }
+  SAHBENCH_KERNEL_INLINE static __m512 fmsub(__m512 a, __m512 b, __m512 c) {
+    return _mm512_fmsub_ps(a, b, c);
+  }
+  SAHBENCH_KERNEL_INLINE static __m512 and_(__m512 a, __m512 b) { return _mm512_and_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m512 xor_(__m512 a, __m512 b) { return _mm512_xor_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m512 from_mask(__mmask16 m) {
+    return _mm512_castsi512_ps(_mm512_movm_epi32(m));
+  }
+  SAHBENCH_KERNEL_INLINE static __m512 ge(__m512 a, __m512 b) {
+    return from_mask(_mm512_cmp_ps_mask(a, b, _CMP_GE_OQ));
+  }
+  SAHBENCH_KERNEL_INLINE static __m512 le(__m512 a, __m512 b) {
+    return from_mask(_mm512_cmp_ps_mask(a, b, _CMP_LE_OQ));
+  }
+  SAHBENCH_KERNEL_INLINE static int movemask(__m512 a) {
+    return static_cast<int>(_mm512_movepi32_mask(_mm512_castps_si512(a)));
+  }
+  SAHBENCH_KERNEL_INLINE static void store(float* p, __m512 a) { _mm512_storeu_ps(p, a); }
+};
+
+// The lanes of a packet of sixteen rays: one AVX-512 register, masks in mask registers.
+struct Lanes16 {
+  static constexpr uint32_t kWidth = 16;
+  using V = __m512;
+  using Ops = Ops512;
+  SAHBENCH_KERNEL_INLINE static V load(const float* p) { return _mm512_load_ps(p); }
+  SAHBENCH_KERNEL_INLINE static void store(float* p, V v) { _mm512_store_ps(p, v); }
+  SAHBENCH_KERNEL_INLINE static V set1(float x) { return _mm512_set1_ps(x); }
+  SAHBENCH_KERNEL_INLINE static V broadcast(const float* p) { return _mm512_set1_ps(*p); }
+  SAHBENCH_KERNEL_INLINE static V sub(V a, V b) { return _mm512_sub_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static V mul(V a, V b) { return _mm512_mul_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static V fmsub(V a, V b, V c) { return _mm512_fmsub_ps(a, b, c); }
+  // The zero-masked forms with every lane kept: GCC 12's unmasked ones pass an undefined vector as their
+  // unused source, which -Wuninitialized reports.
+  SAHBENCH_KERNEL_INLINE static V max(V a, V b) { return _mm512_maskz_max_ps(0xFFFF, a, b); }
+  SAHBENCH_KERNEL_INLINE static V min(V a, V b) { return _mm512_maskz_min_ps(0xFFFF, a, b); }
+  SAHBENCH_KERNEL_INLINE static uint32_t le(V a, V b) { return _mm512_cmp_ps_mask(a, b, _CMP_LE_OQ); }
+  SAHBENCH_KERNEL_INLINE static uint32_t ordered(V a) { return _mm512_cmp_ps_mask(a, a, _CMP_ORD_Q); }
+  SAHBENCH_KERNEL_INLINE static V mask_vector(uint32_t mask) {
+    return Ops512::from_mask(static_cast<__mmask16>(mask));
+  }
+  SAHBENCH_KERNEL_INLINE static V select(uint32_t mask, V a, V b) {
+    return _mm512_mask_blend_ps(static_cast<__mmask16>(mask), b, a);
+  }
+  // Halves taken zero-masked too, for the reason above.
+  SAHBENCH_KERNEL_INLINE static float min_lane(V t) {
+    return Lanes8::min_lane(
+        _mm256_min_ps(_mm512_maskz_extractf32x8_ps(0xFF, t, 0), _mm512_maskz_extractf32x8_ps(0xFF, t, 1)));
+  }
+};
+#endif
+
+// The K rays' slab constants, one lane each, and the planes they share.
+template <class P>
+struct PacketRays {
+  using V = typename P::V;
+  V org[3];
+  V dir[3];
+  V inv[3];
+  V org_inv[3];
+  V tmin;
   uint32_t near_plane[3];
   uint32_t far_plane[3];
   uint32_t mtn_in_double;  // tri=mtn: the lanes whose ray the float test cannot take (WideRay::mtn_in_double)
@@ -34,8 +143,9 @@ struct alignas(32) PacketRays {
 
 // A child slot entered by some of the packet's rays: their entry distances, NaN in the other lanes (a
 // NaN entry compares false with everything, so those lanes never take the entry up again).
-struct alignas(32) PacketEntry {
-  __m256 t_entry;
+template <class P>
+struct PacketEntry {
+  typename P::V t_entry;
   uint32_t child;
   uint32_t count;  // 0: inner node `child`; else a leaf of `count` blocks from `child`
 };
@@ -53,11 +163,12 @@ SAHBENCH_KERNEL_INLINE bool packet_coherent(const WideRay* rays, uint32_t n) {
   return true;
 }
 
-SAHBENCH_KERNEL_INLINE PacketRays make_packet(const WideRay* rays, uint32_t n) {
-  alignas(32) float lanes[13][kPacketWidth];
-  PacketRays p;
+template <class P>
+SAHBENCH_KERNEL_INLINE PacketRays<P> make_packet(const WideRay* rays, uint32_t n) {
+  alignas(64) float lanes[13][P::kWidth];
+  PacketRays<P> p;
   p.mtn_in_double = 0;
-  for (uint32_t j = 0; j < kPacketWidth; ++j) {
+  for (uint32_t j = 0; j < P::kWidth; ++j) {
     const WideRay& r = rays[j < n ? j : 0];  // unused lanes copy ray 0 and are never active
     for (uint32_t axis = 0; axis < 3; ++axis) {
       lanes[axis][j] = r.org[axis];
@@ -69,40 +180,42 @@ SAHBENCH_KERNEL_INLINE PacketRays make_packet(const WideRay* rays, uint32_t n) {
     p.mtn_in_double |= static_cast<uint32_t>(r.mtn_in_double) << j;
   }
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    p.org[axis] = _mm256_load_ps(lanes[axis]);
-    p.dir[axis] = _mm256_load_ps(lanes[3 + axis]);
-    p.inv[axis] = _mm256_load_ps(lanes[6 + axis]);
-    p.org_inv[axis] = _mm256_load_ps(lanes[9 + axis]);
+    p.org[axis] = P::load(lanes[axis]);
+    p.dir[axis] = P::load(lanes[3 + axis]);
+    p.inv[axis] = P::load(lanes[6 + axis]);
+    p.org_inv[axis] = P::load(lanes[9 + axis]);
     p.near_plane[axis] = rays[0].near_plane[axis];
     p.far_plane[axis] = rays[0].far_plane[axis];
   }
-  p.tmin = _mm256_load_ps(lanes[12]);
+  p.tmin = P::load(lanes[12]);
   return p;
 }
 
 // One box, given as six planes `stride` floats apart (min x, max x, min y, ...), against the packet's
 // rays within [tmin, tmax] per lane: the entry distances, and in `mask` the lanes that enter it. A lane
 // whose tmax is NaN enters nothing.
-template <BoxTestKind kBox>
-SAHBENCH_KERNEL_INLINE __m256 packet_enter(const float* planes, uint32_t stride, const PacketRays& p,
-                                           __m256 tmax, uint32_t& mask) {
-  __m256 t_near = p.tmin, t_far = tmax;
+template <class P, BoxTestKind kBox>
+SAHBENCH_KERNEL_INLINE typename P::V packet_enter(const float* planes, uint32_t stride,
+                                                  const PacketRays<P>& p, typename P::V tmax,
+                                                  uint32_t& mask) {
+  using V = typename P::V;
+  V t_near = p.tmin, t_far = tmax;
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    const __m256 near = _mm256_broadcast_ss(planes + p.near_plane[axis] * stride);
-    const __m256 far = _mm256_broadcast_ss(planes + p.far_plane[axis] * stride);
-    __m256 t0, t1;
+    const V near = P::broadcast(planes + p.near_plane[axis] * stride);
+    const V far = P::broadcast(planes + p.far_plane[axis] * stride);
+    V t0, t1;
     if constexpr (kBox == BoxTestKind::kFma) {
-      t0 = _mm256_fmsub_ps(near, p.inv[axis], p.org_inv[axis]);
-      t1 = _mm256_fmsub_ps(far, p.inv[axis], p.org_inv[axis]);
+      t0 = P::fmsub(near, p.inv[axis], p.org_inv[axis]);
+      t1 = P::fmsub(far, p.inv[axis], p.org_inv[axis]);
     } else {
-      t0 = _mm256_mul_ps(_mm256_sub_ps(near, p.org[axis]), p.inv[axis]);
-      t1 = _mm256_mul_ps(_mm256_sub_ps(far, p.org[axis]), p.inv[axis]);
-      if constexpr (kBox == BoxTestKind::kRobust) t1 = _mm256_mul_ps(t1, _mm256_set1_ps(kWideFarScale));
+      t0 = P::mul(P::sub(near, p.org[axis]), p.inv[axis]);
+      t1 = P::mul(P::sub(far, p.org[axis]), p.inv[axis]);
+      if constexpr (kBox == BoxTestKind::kRobust) t1 = P::mul(t1, P::set1(kWideFarScale));
     }
-    t_near = _mm256_max_ps(t0, t_near);
-    t_far = _mm256_min_ps(t1, t_far);
+    t_near = P::max(t0, t_near);
+    t_far = P::min(t1, t_far);
   }
-  mask = static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(t_near, t_far, _CMP_LE_OQ)));
+  mask = P::le(t_near, t_far);
   return t_near;
 }
 
@@ -119,36 +232,22 @@ SAHBENCH_KERNEL_INLINE uint32_t occupied_slots(const WideNode<N>& node) {
         _mm_movemask_ps(_mm_cmp_ps(_mm_load_ps(node.planes[0]), _mm256_castps256_ps128(inf), _CMP_NEQ_UQ)));
 }
 
-// The lanes of `mask` as an all-ones vector mask.
-SAHBENCH_KERNEL_INLINE __m256 lane_mask(uint32_t mask) {
-  const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
-  const __m256i m = _mm256_and_si256(_mm256_set1_epi32(static_cast<int>(mask)), bits);
-  return _mm256_castsi256_ps(_mm256_cmpeq_epi32(m, bits));
-}
-
-// The smallest of `t`'s lanes (no NaN among them).
-SAHBENCH_KERNEL_INLINE float horizontal_min(__m256 t) {
-  __m256 m = _mm256_min_ps(t, _mm256_permute2f128_ps(t, t, 1));
-  m = _mm256_min_ps(m, _mm256_permute_ps(m, _MM_SHUFFLE(1, 0, 3, 2)));
-  m = _mm256_min_ps(m, _mm256_permute_ps(m, _MM_SHUFFLE(2, 3, 0, 1)));
-  return _mm256_cvtss_f32(m);
-}
-
 // tri=mtn: the triangles of a leaf against the packet's rays in `lanes`, one triangle at a time in eight
 // lanes (intersect_mtn_lanes with the rays in the lanes), as Embree's packet intersectors test their
 // Triangle4 against K rays. Each lane computes mtn_lane's operations, so a ray's hit is a hit of the
 // single-ray test; a triangle the float test cannot take (NormalBlock::in_double) goes through mtn_lane
 // ray by ray. Updates best and best_t as intersect_leaf does (any hit: a ray that hits gets a NaN
 // best_t).
-template <bool kAnyHit>
+template <class P, bool kAnyHit>
 SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const NormalBlock* blocks, uint32_t count, const WideRay* rays,
-                                            const PacketRays& p, uint32_t lanes, Hit* best, float* best_t) {
+                                            const PacketRays<P>& p, uint32_t lanes, Hit* best,
+                                            float* best_t) {
   for (uint32_t b = 0; b < count && lanes; ++b) {
     const NormalBlock& block = blocks[b];
     for (uint32_t i = 0; i < kBlockWidth && lanes; ++i) {
       const uint32_t prim = block.tri.prim[i];
       if (prim == kInvalidPrim) continue;
-      alignas(32) float t[kPacketWidth], u[kPacketWidth], v[kPacketWidth];
+      alignas(64) float t[P::kWidth], u[P::kWidth], v[P::kWidth];
       uint32_t hits = 0;
       if (block.in_double >> i & 1u) [[unlikely]] {
         for (uint32_t m = lanes; m; m &= m - 1) {
@@ -157,11 +256,11 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const NormalBlock* blocks, uint32_t 
         }
       } else {
         auto load = [&](int part, int axis) __attribute__((always_inline)) {
-          return _mm256_broadcast_ss(&mtn_part(block, part)[axis][i]);
+          return P::broadcast(&mtn_part(block, part)[axis][i]);
         };
-        const RayLanes<Ops256> r{
-            {p.org[0], p.org[1], p.org[2]}, {p.dir[0], p.dir[1], p.dir[2]}, p.tmin, _mm256_load_ps(best_t)};
-        hits = intersect_mtn_lanes<__m256, Ops256>(lane_mask(lanes), load, r, t, u, v);
+        const RayLanes<typename P::Ops> r{
+            {p.org[0], p.org[1], p.org[2]}, {p.dir[0], p.dir[1], p.dir[2]}, p.tmin, P::load(best_t)};
+        hits = intersect_mtn_lanes<typename P::V, typename P::Ops>(P::mask_vector(lanes), load, r, t, u, v);
       }
       for (; hits; hits &= hits - 1) {
         const uint32_t j = static_cast<uint32_t>(__builtin_ctz(hits));
@@ -183,16 +282,18 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const NormalBlock* blocks, uint32_t 
 // skips, per lane, entries beyond that ray's closest hit so far; any hit visits them in kOrder as
 // descend() does, kNearestStored taken as kStored (the nearest of eight rays is not one child), and
 // drops each ray from the packet at its first hit.
-template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, AnyHitOrder kOrder>
+template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, AnyHitOrder kOrder>
 inline void trace_packet(const float* root_planes, const WideUnit* arena, const WideRay* rays, uint32_t n,
                          Hit* hits, uint8_t* occluded) {
-  const PacketRays p = make_packet(rays, n);
-  const __m256 nan = _mm256_set1_ps(__builtin_nanf(""));
-  alignas(32) float best_t[kPacketWidth];
-  for (uint32_t j = 0; j < kPacketWidth; ++j) best_t[j] = j < n ? rays[j].tmax : __builtin_nanf("");
-  Hit best[kPacketWidth];
+  using V = typename P::V;
+  constexpr uint32_t K = P::kWidth;
+  const PacketRays<P> p = make_packet<P>(rays, n);
+  const V nan = P::set1(__builtin_nanf(""));
+  alignas(64) float best_t[K];
+  for (uint32_t j = 0; j < K; ++j) best_t[j] = j < n ? rays[j].tmax : __builtin_nanf("");
+  Hit best[K];
   uint32_t root_mask;
-  __m256 t_root = packet_enter<kBox>(root_planes, 1, p, _mm256_load_ps(best_t), root_mask);
+  const V t_root = packet_enter<P, kBox>(root_planes, 1, p, P::load(best_t), root_mask);
   if (root_mask == 0) {
     for (uint32_t j = 0; j < n; ++j) {
       if constexpr (kAnyHit)
@@ -202,21 +303,20 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
     }
     return;
   }
-  PacketEntry stack[kWideStackCapacity];
+  PacketEntry<P> stack[kWideStackCapacity];
   uint32_t size = 0;
-  PacketEntry entry{_mm256_blendv_ps(nan, t_root, lane_mask(root_mask)), 0, 0};
+  PacketEntry<P> entry{P::select(root_mask, t_root, nan), 0, 0};
   while (true) {
     // The lanes for which the entry is still worth visiting: entered, and (closest hit) not beyond the
     // closest hit so far; equal is kept for the tie rule. A ray dropped by any hit has a NaN best_t.
-    const __m256 tmax = _mm256_load_ps(best_t);
-    const uint32_t lanes =
-        static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(entry.t_entry, tmax, _CMP_LE_OQ)));
+    const V tmax = P::load(best_t);
+    const uint32_t lanes = P::le(entry.t_entry, tmax);
     if (lanes != 0) {
       if (entry.count == 0 && __builtin_popcount(lanes) <= kPacketSwitch) {
         // Few rays left in this subtree: each goes on alone (Embree's hybrid traversal), with its own
         // stack, from its entry into the node.
-        alignas(32) float t_entry[kPacketWidth];
-        _mm256_store_ps(t_entry, entry.t_entry);
+        alignas(64) float t_entry[K];
+        P::store(t_entry, entry.t_entry);
         for (uint32_t m = lanes; m; m &= m - 1) {
           const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
           if (trace_subtree<N, kTri, kBox, kAnyHit, false, kOrder, IntOrder::kNone>(
@@ -227,11 +327,11 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
         const BlockOf<kTri>* blocks = &at<BlockOf<kTri>>(arena, entry.child);
         uint32_t alone = lanes;  // the rays that test the leaf one at a time
         if constexpr (kTri == TriangleTestKind::kMollerTrumboreNormal) {
-          // A triangle against eight lanes costs about what one ray against a block of four does, so the
+          // A triangle against K lanes costs about what one ray against a block of four does, so the
           // packet test pays where more than half the packet is in the leaf.
           const uint32_t together = lanes & ~p.mtn_in_double;
-          if (__builtin_popcount(together) > static_cast<int>(kPacketWidth / 2)) {
-            packet_leaf_mtn<kAnyHit>(blocks, entry.count, rays, p, together, best, best_t);
+          if (__builtin_popcount(together) > static_cast<int>(K / 2)) {
+            packet_leaf_mtn<P, kAnyHit>(blocks, entry.count, rays, p, together, best, best_t);
             alone = lanes & p.mtn_in_double;
           }
         }
@@ -241,28 +341,24 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
             best_t[j] = __builtin_nanf("");
         }
         if constexpr (kAnyHit) {
-          if (_mm256_movemask_ps(_mm256_cmp_ps(_mm256_load_ps(best_t), _mm256_load_ps(best_t), _CMP_ORD_Q)) ==
-              0)
-            break;
+          if (P::ordered(P::load(best_t)) == 0) break;
         }
       } else {
         const WideNode<N>& node = at<WideNode<N>>(arena, entry.child);
-        const __m256 active_tmax = _mm256_blendv_ps(nan, tmax, lane_mask(lanes));
-        PacketEntry entered[N];
+        const V active_tmax = P::select(lanes, tmax, nan);
+        PacketEntry<P> entered[N];
         uint64_t keys[N < 4 ? 4 : N];
         uint32_t k = 0;
         for (uint32_t slots = occupied_slots(node); slots; slots &= slots - 1) {
           const uint32_t i = static_cast<uint32_t>(__builtin_ctz(slots));
           uint32_t mask;
-          const __m256 t = packet_enter<kBox>(&node.planes[0][i], N, p, active_tmax, mask);
+          const V t = packet_enter<P, kBox>(&node.planes[0][i], N, p, active_tmax, mask);
           if (mask == 0) continue;
-          const __m256 inside = lane_mask(mask);
-          entered[k] = {_mm256_blendv_ps(nan, t, inside), node.child[i], node.count[i]};
+          entered[k] = {P::select(mask, t, nan), node.child[i], node.count[i]};
           if constexpr (kAnyHit && kOrder != AnyHitOrder::kNearest) {
             keys[k] = k;
           } else {
-            const float nearest =
-                horizontal_min(_mm256_blendv_ps(_mm256_set1_ps(__builtin_inff()), t, inside));
+            const float nearest = P::min_lane(P::select(mask, t, P::set1(__builtin_inff())));
             keys[k] = (static_cast<uint64_t>(ordered_bits(nearest + 0.0f)) << 32) | (N - 1 - k);
           }
           ++k;
@@ -299,19 +395,19 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
   }
 }
 
-// A batch in packets of kPacketWidth rays; the packets that are not coherent go ray by ray through the
+// A batch in packets of P::kWidth rays; the packets that are not coherent go ray by ray through the
 // single-ray kernel (trace_ray), with the robust box test for the rays box=fma does not take.
-template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>
+template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>
 void trace_packet_batch(const WideBatch& batch) {
+  constexpr uint32_t K = P::kWidth;
   auto run = [&]<AnyHitOrder kOrder>() {
-    for (std::size_t first = 0; first < batch.count; first += kPacketWidth) {
-      const uint32_t n =
-          static_cast<uint32_t>(batch.count - first < kPacketWidth ? batch.count - first : kPacketWidth);
+    for (std::size_t first = 0; first < batch.count; first += K) {
+      const uint32_t n = static_cast<uint32_t>(batch.count - first < K ? batch.count - first : K);
       const WideRay* rays = batch.rays + first;
       if (packet_coherent<kBox>(rays, n)) {
-        trace_packet<N, kTri, kBox, kAnyHit, kOrder>(batch.root_planes, batch.arena, rays, n,
-                                                     kAnyHit ? nullptr : batch.hits + first,
-                                                     kAnyHit ? batch.occluded + first : nullptr);
+        trace_packet<P, N, kTri, kBox, kAnyHit, kOrder>(batch.root_planes, batch.arena, rays, n,
+                                                        kAnyHit ? nullptr : batch.hits + first,
+                                                        kAnyHit ? batch.occluded + first : nullptr);
         continue;
       }
       for (uint32_t j = 0; j < n; ++j) {
@@ -336,11 +432,20 @@ void trace_packet_batch(const WideBatch& batch) {
   run.template operator()<AnyHitOrder::kNearest>();
 }
 
-// The packet kernels of this instruction set (select_variant's table).
-inline WideKernel select_packet_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit) {
-  return select_variant(
-      width, tri, box, any_hit,
-      []<uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>() -> WideKernel {
-        return &trace_packet_batch<N, kTri, kBox, kAnyHit>;
-      });
+// The packet kernels of this instruction set (select_variant's table) for packets of `packet` rays: 8, or
+// (AVX-512) 16; nullptr for a width this set has no kernels for.
+inline WideKernel select_packet_kernel(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
+                                       uint32_t packet) {
+  auto table = [&]<class P>() {
+    return select_variant(
+        width, tri, box, any_hit,
+        []<uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>() -> WideKernel {
+          return &trace_packet_batch<P, N, kTri, kBox, kAnyHit>;
+        });
+  };
+  if (packet == Lanes8::kWidth) return table.template operator()<Lanes8>();
+#if defined(SAHBENCH_WIDE_AVX512)
+  if (packet == Lanes16::kWidth) return table.template operator()<Lanes16>();
+#endif
+  return nullptr;
 }

@@ -250,7 +250,8 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
           : where_ratios + ": ratio to Embree (quality=medium, rtcIntersect1/rtcOccluded1) in the same run;");
   if (any_packets)
     table.legend.push_back(
-        "our packet layouts (packet=8) against Embree's packets instead (rtcIntersect8/16, rtcOccluded8/16, "
+        "our packet layouts (packet=8, 16) against Embree's packets instead (rtcIntersect8/16, "
+        "rtcOccluded8/16, "
         "whichever width is faster in the cell), in the same mode;");
   table.legend.push_back(
       "for build + layout and rays/s the geometric mean of the ratios of rounds paired with Embree's, with " +

@@ -46,7 +46,7 @@ bool runs_exact_kernels(std::string_view builder, std::string_view layout);
 /// fastest of Embree's packet widths in the same cell.
 bool is_packet_anchor(const CsvRow& row, bool robust);
 
-/// Whether a row of ours traces packets (a layout with packet=8).
+/// Whether a row of ours traces packets (a layout with packet=8 or packet=16).
 bool runs_packets(std::string_view builder, std::string_view layout);
 
 /// One result CSV: read_csv's rows, and the line each starts on (the header is line 1; a quoted field

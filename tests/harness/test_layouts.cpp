@@ -64,12 +64,18 @@ std::vector<std::string> specs_for(const LayoutInfo& layout, test::Skips& skips)
     out.push_back(layout.name + ":tri=mtn,box=fma,anyhit=" + order + ",isa=" + std::string(to_string(best)));
   }
   // The packet kernels (AVX2 and AVX-512 only) with every variant on the widest set, and the default
-  // variant on the other.
+  // variant on the other; 16-ray packets on AVX-512.
   if (best == KernelIsa::kAvx2 || best == KernelIsa::kAvx512) {
     add_variants(",isa=" + std::string(to_string(best)) + ",packet=8");
     for (const char* order : {"nearest", "stored", "nearest_stored"})
       out.push_back(layout.name + ":anyhit=" + order + ",packet=8,isa=" + std::string(to_string(best)));
-    if (best == KernelIsa::kAvx512) out.push_back(layout.name + ":isa=avx2,packet=8");
+    if (best == KernelIsa::kAvx512) {
+      out.push_back(layout.name + ":isa=avx2,packet=8");
+      // Sixteen-ray packets (AVX-512 only), every variant and any-hit order.
+      add_variants(",isa=avx512,packet=16");
+      for (const char* order : {"nearest", "stored", "nearest_stored"})
+        out.push_back(layout.name + ":anyhit=" + order + ",packet=16,isa=avx512");
+    }
   } else {
     (void)skips.have_isa(KernelIsa::kAvx2);  // records why the packet kernels were not tested
   }
@@ -114,14 +120,14 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
   for (const Case& scene : cases()) {
     SCOPED_TRACE(scene.name);
     const BuildInput input = BuildInput::from_triangles(scene.triangles);
-    // Random rays, and rays in groups of kWidePacket that the packet kernels trace as packets (packets are
-    // cut from the start of each chunk, a multiple of kWidePacket rays): near each other, and each in a
+    // Random rays, and rays in groups of kMaxWidePacket that the packet kernels trace as packets (packets are
+    // cut from the start of each chunk, a multiple of kMaxWidePacket rays): near each other, and each in a
     // direction and interval of its own within one octant.
     auto rays = test::random_rays(scene.triangles, 800, 5);
-    ASSERT_EQ(rays.size() % kWidePacket, 0u);
-    for (const Ray& r : test::coherent_rays(scene.triangles, 400, 6, kWidePacket)) rays.push_back(r);
-    ASSERT_EQ(rays.size() % kWidePacket, 0u);
-    for (const Ray& r : test::diverging_rays(scene.triangles, 400, 8, kWidePacket)) rays.push_back(r);
+    ASSERT_EQ(rays.size() % kMaxWidePacket, 0u);
+    for (const Ray& r : test::coherent_rays(scene.triangles, 400, 6, kMaxWidePacket)) rays.push_back(r);
+    ASSERT_EQ(rays.size() % kMaxWidePacket, 0u);
+    for (const Ray& r : test::diverging_rays(scene.triangles, 400, 8, kMaxWidePacket)) rays.push_back(r);
     // An odd count: the binary layouts trace rays in pairs and the last one alone.
     rays.push_back(test::random_rays(scene.triangles, 1, 7).front());
     std::vector<Hit> reference(rays.size());
@@ -534,7 +540,7 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
             std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);
-  EXPECT_NE(error_of("bvh8:packet=4").find("packet = '4' is not one of 1, 8"), std::string::npos);
+  EXPECT_NE(error_of("bvh8:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
   EXPECT_NE(error_of("bvh2:packet=8").find("unknown option 'packet'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:box").find("'box' is not of the form key=value"), std::string::npos);
   EXPECT_NE(error_of("bvh8:box=fast,box=robust").find("'box' is given twice"), std::string::npos);
@@ -555,8 +561,20 @@ TEST(Layouts, WideLayoutsRejectWiderTreesAndReportTheirIsa) {
     compile_layout("bvh8:isa=scalar,packet=8", wide8, tris);
     ADD_FAILURE() << "scalar packet kernels accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("no scalar packet kernels compiled in"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("no scalar 8-ray packet kernels compiled in"), std::string::npos)
         << e.what();
+  }
+  // Sixteen-ray packets have AVX-512 kernels only.
+  if (kernel_isa_available(KernelIsa::kAvx2)) {
+    try {
+      compile_layout("bvh8:isa=avx2,packet=16", wide8, tris);
+      ADD_FAILURE() << "avx2 16-ray packet kernels accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("no avx2 16-ray packet kernels compiled in (packet=8: isa avx2 or "
+                                           "avx512; packet=16: isa avx512)"),
+                std::string::npos)
+          << e.what();
+    }
   }
 }
 

@@ -12,7 +12,6 @@
 
 #include "core/error.h"
 #include "harness/config/config.h"
-#include "harness/embree/embree_layouts.h"
 #include "harness/run/cell_pipeline.h"
 #include "harness/run/run_common.h"
 #include "harness/run/shard_plan.h"
@@ -63,7 +62,7 @@ void run_plan_command(const PlanCommandOptions& options, std::ostream& out, std:
                     cfg.path.string()));
   for (const BuilderRun& run : cfg.builders) require_resolved(run);
   const std::vector<std::string> scenes = scenes_to_run(cfg, log);
-  const ShardPlan plan = plan_shards(cfg, scenes, supported_embree_layouts(log), options.shards);
+  const ShardPlan plan = plan_shards(cfg, scenes, runnable_layouts(cfg, log), options.shards);
   const double scale = options.calibrate ? seconds_per_model_ns(log) : 0.0;
 
   fmt::print(out, "# plan of {}: {} cells, {} scenes, {} shards\n\n", cfg.path.string(), plan.cells.size(),

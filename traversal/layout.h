@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -94,6 +95,9 @@ std::span<const LayoutInfo> layouts();
 const LayoutInfo& find_layout(std::string_view name);
 /// Parses and checks a layout spec; an unknown layout, key or value is an error naming it.
 LayoutSpec parse_layout_spec(std::string_view text);
+/// Why this CPU and build cannot run `spec` (an instruction set it lacks: `isa=avx512`, or `packet=16`,
+/// without AVX-512), or nullopt. A run skips such a layout, as it skips Embree's packets the CPU lacks.
+std::optional<std::string> layout_unavailable(const LayoutSpec& spec);
 /// Compiles `bvh` with the layout `spec` names.
 std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,
                                                std::span<const Triangle> triangles);

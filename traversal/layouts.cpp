@@ -214,7 +214,17 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     if (comma == std::string_view::npos) break;
     rest = rest.substr(comma + 1);
   }
+  // Packet kernels exist for AVX2 and AVX-512 (8 rays) and AVX-512 (16 rays) only.
+  const bool packet_isa = spec.isa == KernelIsa::kAuto || spec.isa == KernelIsa::kAvx512 ||
+                          (spec.packet == 8 && spec.isa == KernelIsa::kAvx2);
+  if (spec.packet != 1 && !packet_isa)
+    throw Error(where + ": no " + std::string(to_string(spec.isa)) + " kernels for packet=" +
+                std::to_string(spec.packet) + " (packet=8: isa avx2 or avx512; packet=16: isa avx512)");
   return spec;
+}
+
+std::optional<std::string> layout_unavailable(const LayoutSpec& spec) {
+  return find_layout(spec.name).has_isa ? wide_layout_unavailable(spec) : std::nullopt;
 }
 
 std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,

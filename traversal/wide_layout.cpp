@@ -121,18 +121,33 @@ class WideLayout final : public CompiledLayout {
 
 }  // namespace
 
-std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh,
-                                                    std::span<const Triangle> triangles,
-                                                    const LayoutSpec& spec) {
-  KernelIsa isa = spec.isa == KernelIsa::kAuto ? preferred_kernel_isa() : spec.isa;
+KernelIsa wide_layout_isa(const LayoutSpec& spec) {
   // Sixteen-ray packets have AVX-512 kernels only: auto takes them wherever the CPU has AVX-512, also
   // where it prefers AVX2 for the other kernels.
   if (spec.isa == KernelIsa::kAuto && spec.packet == 16 && kernel_isa_available(KernelIsa::kAvx512))
-    isa = KernelIsa::kAvx512;
+    return KernelIsa::kAvx512;
+  return spec.isa == KernelIsa::kAuto ? preferred_kernel_isa() : spec.isa;
+}
+
+std::optional<std::string> wide_layout_unavailable(const LayoutSpec& spec) {
+  const KernelIsa isa = wide_layout_isa(spec);
+  if (spec.packet == 16 && isa != KernelIsa::kAvx512)
+    return "16-ray packets need AVX-512, which this CPU or build lacks (auto would pick " +
+           std::string(to_string(isa)) + ")";
+  if (spec.packet == 8 && isa != KernelIsa::kAvx2 && isa != KernelIsa::kAvx512)
+    return "8-ray packets need AVX2 or AVX-512, which this CPU or build lacks (auto would pick " +
+           std::string(to_string(isa)) + ")";
   if (!kernel_isa_available(isa))
-    throw Error("layout '" + spec.text() + "': isa " + std::string(to_string(isa)) +
-                " is not available on this CPU or build (auto would pick " +
-                std::string(to_string(preferred_kernel_isa())) + ")");
+    return "isa " + std::string(to_string(isa)) + " is not available on this CPU or build (auto would pick " +
+           std::string(to_string(preferred_kernel_isa())) + ")";
+  return std::nullopt;
+}
+
+std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh,
+                                                    std::span<const Triangle> triangles,
+                                                    const LayoutSpec& spec) {
+  if (const auto why = wide_layout_unavailable(spec)) throw Error("layout '" + spec.text() + "': " + *why);
+  const KernelIsa isa = wide_layout_isa(spec);
   const AnyHitOrder any_hit_order = resolve_any_hit_order(bvh, spec.variant.any_hit);
   const BlockForm form = block_form_for(spec.variant.triangle);
   if (width == 4)

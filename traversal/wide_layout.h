@@ -2,11 +2,20 @@
 // The 4- and 8-wide SIMD layouts (traversal/wide_bvh.h) behind the CompiledLayout interface.
 
 #include <memory>
+#include <optional>
 #include <span>
+#include <string>
 
 #include "traversal/layout.h"
 
 namespace sahbench {
+
+/// The instruction set a wide layout's kernels run with: `spec.isa`, or for kAuto the preferred one
+/// (preferred_kernel_isa), AVX-512 for 16-ray packets wherever the CPU has it.
+KernelIsa wide_layout_isa(const LayoutSpec& spec);
+
+/// Why this CPU and build cannot run the wide layout `spec` (its ISA is missing), or nullopt.
+std::optional<std::string> wide_layout_unavailable(const LayoutSpec& spec);
 
 /// Compiles `bvh` into a `width`-wide layout (4 or 8) whose kernels use `spec`'s variant and ISA
 /// (kAuto: the widest available). Throws Error when the ISA is not available here, naming it.

@@ -133,7 +133,7 @@ class AnimationRunner {
     id_ = open.id;
     finished_ = std::move(open.finished);
     CsvWriter& csv = *open.csv;
-    embree_layouts_ = supported_embree_layouts(log_);
+    layouts_ = runnable_layouts(cfg_, log_);
 
     // Scenes are loaded one at a time; the plan counts cells as each scene's frames become known.
     log_ << fmt::format("run {} (fingerprint {}): animation experiment, {} frames per scene; writing {}\n",
@@ -147,7 +147,7 @@ class AnimationRunner {
 
  private:
   std::vector<CellLayout> layouts_for(const AnimatedBuilder& b) const {
-    return sahbench::layouts_for(*b.run, cfg_.layouts, embree_layouts_);
+    return sahbench::layouts_for(*b.run, layouts_);
   }
 
   bool wanted(const std::string& scene, const AnimatedBuilder& b, const std::string& layout, int threads,
@@ -462,7 +462,7 @@ class AnimationRunner {
   void queue_embree(const FrameData& frame, const FrameJob& job, int threads, std::vector<TraceCell>& cells) {
     const AnimatedBuilder& b = *job.builder;
     const bool refit = b.variant == Variant::kEmbreeRefit;
-    for (const auto& layout : embree_layouts_) {
+    for (const auto& layout : layouts_.embree) {
       for (std::size_t s = 0; s < frame.sets.size(); ++s) {
         const RaySet& rs = frame.sets[s];
         if (!wanted(frame.scene.name, b, layout.name, threads, rs.name, frame.index)) continue;
@@ -550,7 +550,7 @@ class AnimationRunner {
   std::ostream& log_;
   Environment env_;
   std::vector<AnimatedBuilder> builders_;
-  std::vector<EmbreeLayout> embree_layouts_;
+  RunLayouts layouts_;
   std::filesystem::path output_;
   std::string continue_with_;  // the command that resumes this run, for the interrupt message
   RunIdentity id_;

@@ -55,13 +55,12 @@ std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream
   return out;
 }
 
-std::vector<CellLayout> layouts_for(const BuilderRun& b, const std::vector<LayoutSpec>& configured,
-                                    std::span<const EmbreeLayout> embree) {
+std::vector<CellLayout> layouts_for(const BuilderRun& b, const RunLayouts& layouts) {
   std::vector<CellLayout> out;
   if (b.is_embree()) {
-    for (const auto& l : embree) out.push_back({l.name, nullptr});
+    for (const auto& l : layouts.embree) out.push_back({l.name, nullptr});
   } else {
-    for (const auto& l : configured)
+    for (const auto& l : layouts.ours)
       if (find_layout(l.name).arity == b.arity) out.push_back({l.text(), &l});
   }
   return out;

@@ -23,6 +23,7 @@
 #include "harness/run/ray_sets.h"
 #include "harness/run/run_options.h"
 #include "harness/run/run_session.h"
+#include "harness/run/static_plan.h"
 #include "scenes/scene.h"
 #include "traversal/layout.h"
 
@@ -42,13 +43,12 @@ std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream
 /// A layout a cell is traced with: one of ours, with its spec as the config parsed it, or one of Embree's.
 struct CellLayout {
   std::string name;                  ///< the CSV's layout column: LayoutSpec::text() or Embree's name
-  const LayoutSpec* ours = nullptr;  ///< into the config's layouts; null for Embree's
+  const LayoutSpec* ours = nullptr;  ///< into RunLayouts::ours; null for Embree's
 };
 
-/// The layouts that trace `b`'s trees: every one of `embree` for Embree, else those of `configured`
-/// (which must outlive the result) with the arity of `b`'s trees.
-std::vector<CellLayout> layouts_for(const BuilderRun& b, const std::vector<LayoutSpec>& configured,
-                                    std::span<const EmbreeLayout> embree);
+/// The layouts that trace `b`'s trees: every one of `layouts.embree` for Embree, else those of
+/// `layouts.ours` (which must outlive the result) with the arity of `b`'s trees.
+std::vector<CellLayout> layouts_for(const BuilderRun& b, const RunLayouts& layouts);
 
 /// "camera eye (x, y, z) target (x, y, z) up (x, y, z) fov F": the view of a [[camera]], for `notes`.
 std::string camera_note(const CameraConfig& camera);

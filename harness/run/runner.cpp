@@ -63,16 +63,16 @@ class ExperimentRunner {
     id_ = open.id;
     const std::set<std::string>& finished = open.finished;
     CsvWriter& csv = *open.csv;
-    supported_embree_layouts_ = supported_embree_layouts(log_);
+    layouts_ = runnable_layouts(cfg_, log_);
     // Plan: the static plan's cells, or one shard's of them; then which of each scene are still to do.
     if (options_.shard) {
-      const ShardPlan plan = plan_shards(cfg_, scenes, supported_embree_layouts_, options_.shard->count);
+      const ShardPlan plan = plan_shards(cfg_, scenes, layouts_, options_.shard->count);
       shard_cells_ = plan.keys_of(options_.shard->index);
       log_ << fmt::format("shard {}: {} of the plan's {} cells (anchors to Embree included)\n",
                           options_.shard->text(), shard_cells_.size(), plan.cells.size());
       cells_ = plan.cells;
     } else {
-      cells_ = static_cells(cfg_, scenes, supported_embree_layouts_);
+      cells_ = static_cells(cfg_, scenes, layouts_);
     }
     std::size_t total = 0;
     for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
@@ -102,7 +102,7 @@ class ExperimentRunner {
 
  private:
   std::vector<CellLayout> layouts_for(const BuilderRun& b) const {
-    return sahbench::layouts_for(b, cfg_.layouts, supported_embree_layouts_);
+    return sahbench::layouts_for(b, layouts_);
   }
 
   // Keys of the cells of `scene` that are neither finished (resume) nor filtered out (--only, --shard).
@@ -312,7 +312,7 @@ class ExperimentRunner {
     const BuilderRun& b = *job.builder;
     const TimingSummary build_t = job.source.time();
     const EmbreeBuild& embree = *job.embree;
-    for (const auto& layout : supported_embree_layouts_) {
+    for (const auto& layout : layouts_.embree) {
       for (std::size_t s = 0; s < group.sets.size(); ++s) {
         const RaySet& rs = group.sets[s];
         if (!group.wanted(b, layout.name, rs)) continue;
@@ -330,7 +330,7 @@ class ExperimentRunner {
   std::ostream& log_;
   Environment env_;
   const std::vector<BuilderRun>& builders_ = cfg_.builders;
-  std::vector<EmbreeLayout> supported_embree_layouts_;
+  RunLayouts layouts_;
   std::vector<PlannedCell> cells_;     // the static plan (static_plan.h)
   std::set<std::string> shard_cells_;  // with --shard: the keys of that shard's cells
   std::filesystem::path output_;

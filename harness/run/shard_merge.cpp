@@ -160,18 +160,21 @@ MergeSummary merge_shards(const MergeOptions& options, std::ostream& log) {
                         "shards' config with --config",
                         config_path.string(), name));
   }
-  // Embree's layouts depend on the CPU the shards ran on (no 16-wide packets without AVX-512): take those
-  // their rows have, not this machine's.
-  std::vector<EmbreeLayout> embree_layouts;
-  for (const EmbreeLayout& l : kEmbreeLayouts) {
-    const bool seen = std::any_of(files.begin(), files.end(), [&](const ShardFile& f) {
+  // The layouts a run skips depend on the CPU the shards ran on (no 16-wide packets without AVX-512):
+  // take those their rows have, not this machine's.
+  const auto seen = [&](bool embree, const std::string& layout) {
+    return std::any_of(files.begin(), files.end(), [&](const ShardFile& f) {
       return std::any_of(f.rows.begin(), f.rows.end(), [&](const CsvRow& r) {
-        return field(r, "builder") == "embree" && field(r, "layout") == l.name;
+        return (field(r, "builder") == "embree") == embree && field(r, "layout") == layout;
       });
     });
-    if (seen) embree_layouts.push_back(l);
-  }
-  const ShardPlan plan = plan_shards(cfg, scenes, embree_layouts, n);
+  };
+  RunLayouts layouts;
+  for (const LayoutSpec& l : cfg.layouts)
+    if (seen(false, l.text())) layouts.ours.push_back(l);
+  for (const EmbreeLayout& l : kEmbreeLayouts)
+    if (seen(true, l.name)) layouts.embree.push_back(l);
+  const ShardPlan plan = plan_shards(cfg, scenes, layouts, n);
   std::map<std::string, std::size_t> cell_of;
   for (std::size_t i = 0; i < plan.cells.size(); ++i) cell_of.emplace(plan.cells[i].key, i);
 

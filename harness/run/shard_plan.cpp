@@ -155,12 +155,12 @@ bool ShardPlan::owns(std::size_t i, int k) const {
 }
 
 ShardPlan plan_shards(const ExperimentConfig& cfg, const std::vector<std::string>& scenes,
-                      std::span<const EmbreeLayout> embree_layouts, int shards) {
+                      const RunLayouts& layouts, int shards) {
   if (shards < 1) throw Error(fmt::format("{} shards: at least 1", shards));
   ShardPlan plan;
   plan.shards = shards;
   plan.scenes = scenes;
-  plan.cells = static_cells(cfg, scenes, embree_layouts);
+  plan.cells = static_cells(cfg, scenes, layouts);
   plan.owners.resize(plan.cells.size());
   plan.cost.assign(static_cast<std::size_t>(shards), 0.0);
   std::map<std::string, double> triangles;

@@ -83,6 +83,6 @@ struct ShardPlan {
 /// thread count also pays that group's scene cost and anchor cells (longest processing time first,
 /// Graham 1969, with the shared setup counted). The same inputs give the same plan on every machine.
 ShardPlan plan_shards(const ExperimentConfig& cfg, const std::vector<std::string>& scenes,
-                      std::span<const EmbreeLayout> embree_layouts, int shards);
+                      const RunLayouts& layouts, int shards);
 
 }  // namespace sahbench

@@ -1,17 +1,33 @@
 #include "harness/run/static_plan.h"
 
+#include <fmt/format.h>
+
+#include <ostream>
+
 #include "harness/run/result_row.h"
 #include "harness/run/run_common.h"
 
 namespace sahbench {
 
+RunLayouts runnable_layouts(const ExperimentConfig& cfg, std::ostream& log) {
+  RunLayouts out;
+  for (const LayoutSpec& spec : cfg.layouts) {
+    if (const auto why = layout_unavailable(spec))
+      log << fmt::format("skipping layout {}: {}\n", spec.text(), *why);
+    else
+      out.ours.push_back(spec);
+  }
+  out.embree = supported_embree_layouts(log);
+  return out;
+}
+
 std::vector<PlannedCell> static_cells(const ExperimentConfig& cfg, const std::vector<std::string>& scenes,
-                                      std::span<const EmbreeLayout> embree_layouts) {
+                                      const RunLayouts& layouts) {
   std::vector<PlannedCell> out;
   for (const auto& scene : scenes)
     for (std::size_t b = 0; b < cfg.builders.size(); ++b) {
       const BuilderRun& run = cfg.builders[b];
-      for (const CellLayout& layout : layouts_for(run, cfg.layouts, embree_layouts))
+      for (const CellLayout& layout : layouts_for(run, layouts))
         for (const int threads : cfg.threads)
           for (const auto& rs : cfg.ray_sets)
             out.push_back({scene, b, layout.name, threads, rs.name,

@@ -4,14 +4,26 @@
 // read the same list, so a shard is a filter on it and never a second expansion.
 
 #include <cstddef>
-#include <span>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
 #include "harness/config/config.h"
 #include "harness/embree/embree_layouts.h"
+#include "traversal/layout.h"
 
 namespace sahbench {
+
+/// The layouts a run traces: the config's own and Embree's, less those the CPU cannot run.
+struct RunLayouts {
+  std::vector<LayoutSpec> ours;
+  std::vector<EmbreeLayout> embree;
+};
+
+/// The layouts of `cfg` this machine runs: ours that its CPU and build can run (layout_unavailable) and
+/// Embree's that its CPU supports (supported_embree_layouts). Each one skipped gets a line on `log`
+/// naming it and why, so one config runs on CPUs with and without AVX-512.
+RunLayouts runnable_layouts(const ExperimentConfig& cfg, std::ostream& log);
 
 /// One cell of a static experiment (frame 0).
 struct PlannedCell {
@@ -23,10 +35,10 @@ struct PlannedCell {
   std::string key;  ///< cell_key (result_row.h), as a row of this cell has it
 };
 
-/// Every cell of `cfg` over `scenes` (scenes_to_run), with Embree's rows in `embree_layouts`: for each
-/// scene, builder run, layout of its arity (layouts_for), thread count and ray set.
+/// Every cell of `cfg` over `scenes` (scenes_to_run) traced with `layouts`: for each scene, builder run,
+/// layout of its arity (layouts_for), thread count and ray set.
 std::vector<PlannedCell> static_cells(const ExperimentConfig& cfg, const std::vector<std::string>& scenes,
-                                      std::span<const EmbreeLayout> embree_layouts);
+                                      const RunLayouts& layouts);
 
 /// Whether the cell is an anchor of the ratios to Embree (harness/report/result_cells.h): Embree's
 /// medium-quality BVH, in its default or robust mode, in any of its layouts: one ray at a time

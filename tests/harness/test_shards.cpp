@@ -73,13 +73,16 @@ ExperimentConfig plan_config() {
   return parse_experiment_config(kPlanConfig, "shards.toml");
 }
 
-const std::vector<EmbreeLayout> kLayouts(std::begin(kEmbreeLayouts), std::end(kEmbreeLayouts));
+// Every layout of the config and every one of Embree's, whatever this CPU runs.
+RunLayouts all_layouts(const ExperimentConfig& cfg) {
+  return {cfg.layouts, std::vector<EmbreeLayout>(std::begin(kEmbreeLayouts), std::end(kEmbreeLayouts))};
+}
 
 TEST(ShardPlan, IsDeterministic) {
   const ExperimentConfig cfg = plan_config();
   for (int n = 1; n <= 7; ++n) {
-    const ShardPlan a = plan_shards(cfg, cfg.scenes, kLayouts, n),
-                    b = plan_shards(cfg, cfg.scenes, kLayouts, n);
+    const ShardPlan a = plan_shards(cfg, cfg.scenes, all_layouts(cfg), n),
+                    b = plan_shards(cfg, cfg.scenes, all_layouts(cfg), n);
     EXPECT_EQ(a.owners, b.owners) << n << " shards";
     for (int k = 0; k < n; ++k) EXPECT_EQ(a.keys_of(k), b.keys_of(k));
   }
@@ -87,12 +90,12 @@ TEST(ShardPlan, IsDeterministic) {
 
 TEST(ShardPlan, ShardsCoverTheCellSetWithNoCellTwiceAndCarryTheirAnchors) {
   const ExperimentConfig cfg = plan_config();
-  const std::vector<PlannedCell> all = static_cells(cfg, cfg.scenes, kLayouts);
+  const std::vector<PlannedCell> all = static_cells(cfg, cfg.scenes, all_layouts(cfg));
   std::set<std::string> keys;
   for (const auto& c : all) keys.insert(c.key);
   ASSERT_EQ(keys.size(), all.size());
   for (int n = 1; n <= 7; ++n) {
-    const ShardPlan plan = plan_shards(cfg, cfg.scenes, kLayouts, n);
+    const ShardPlan plan = plan_shards(cfg, cfg.scenes, all_layouts(cfg), n);
     ASSERT_EQ(plan.cells.size(), all.size());
     std::map<std::string, int> times;  // non-anchor cell -> shards that run it
     std::set<std::string> covered;

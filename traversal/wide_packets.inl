@@ -395,34 +395,47 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
   }
 }
 
-// A batch in packets of P::kWidth rays; the packets that are not coherent go ray by ray through the
-// single-ray kernel (trace_ray), with the robust box test for the rays box=fma does not take.
+// Rays [begin, end) of a packet batch one at a time, through the single-ray batch kernel (trace_batch) as
+// the single-ray layout traces them: two walks stepped in turn and, box=fma, on the integer path where
+// the rays allow it.
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>
+void trace_alone(const WideBatch& batch, std::size_t begin, std::size_t end) {
+  if (begin == end) return;
+  WideBatch part = batch;
+  part.rays = batch.rays + begin;
+  part.count = end - begin;
+  part.hits = kAnyHit ? nullptr : batch.hits + begin;
+  part.occluded = kAnyHit ? batch.occluded + begin : nullptr;
+  part.counts = nullptr;
+  part.int_order = IntOrder::kFree;
+  part.robust_box = false;
+  for (std::size_t i = begin; i < end; ++i) {
+    part.int_order = std::min(part.int_order, batch.rays[i].int_order);
+    part.robust_box |= batch.rays[i].robust_box;
+  }
+  trace_batch<N, kTri, kBox, kAnyHit, false>(part);
+}
+
+// A batch in packets of P::kWidth rays, in the batch's order; the rays of packets that are not coherent
+// (packet_coherent) go one at a time (trace_alone), each run of such packets in one call. Splitting such
+// a packet by octant into smaller packets, as Embree's hybrid kernels do, was slower on the shadow and
+// diffuse rays of configs/tune.toml than tracing its rays alone.
 template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>
 void trace_packet_batch(const WideBatch& batch) {
   constexpr uint32_t K = P::kWidth;
   auto run = [&]<AnyHitOrder kOrder>() {
+    std::size_t alone = 0;  // the first ray of the run of incoherent packets before `first`
     for (std::size_t first = 0; first < batch.count; first += K) {
       const uint32_t n = static_cast<uint32_t>(batch.count - first < K ? batch.count - first : K);
       const WideRay* rays = batch.rays + first;
-      if (packet_coherent<kBox>(rays, n)) {
-        trace_packet<P, N, kTri, kBox, kAnyHit, kOrder>(batch.root_planes, batch.arena, rays, n,
-                                                        kAnyHit ? nullptr : batch.hits + first,
-                                                        kAnyHit ? batch.occluded + first : nullptr);
-        continue;
-      }
-      for (uint32_t j = 0; j < n; ++j) {
-        const Hit hit =
-            kBox == BoxTestKind::kFma && rays[j].robust_box
-                ? trace_ray<N, kTri, BoxTestKind::kRobust, kAnyHit, false, kOrder, IntOrder::kNone>(
-                      batch.root_planes, batch.arena, rays[j], nullptr)
-                : trace_ray<N, kTri, kBox, kAnyHit, false, kOrder, IntOrder::kNone>(
-                      batch.root_planes, batch.arena, rays[j], nullptr);
-        if constexpr (kAnyHit)
-          batch.occluded[first + j] = hit.prim != kInvalidPrim;
-        else
-          batch.hits[first + j] = hit;
-      }
+      if (!packet_coherent<kBox>(rays, n)) continue;
+      trace_alone<N, kTri, kBox, kAnyHit>(batch, alone, first);
+      alone = first + n;
+      trace_packet<P, N, kTri, kBox, kAnyHit, kOrder>(batch.root_planes, batch.arena, rays, n,
+                                                      kAnyHit ? nullptr : batch.hits + first,
+                                                      kAnyHit ? batch.occluded + first : nullptr);
     }
+    trace_alone<N, kTri, kBox, kAnyHit>(batch, alone, batch.count);
   };
   if constexpr (kAnyHit) {
     if (batch.any_hit_order == AnyHitOrder::kStored) return run.template operator()<AnyHitOrder::kStored>();

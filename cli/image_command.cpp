@@ -131,6 +131,8 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   const BuilderInfo& info = *spec.info;
   const ParamSet& params = spec.values;
   const LayoutSpec layout_spec = parse_layout_spec(options.layout);
+  if (const auto why = layout_unavailable(layout_spec))
+    throw Error("--layout '" + layout_spec.text() + "': " + *why);
 
   if (options.eye.empty() != options.target.empty())
     throw Error("--eye and --target go together: give both, or neither for the scene's own view");

@@ -8,10 +8,10 @@ if(NOT status EQUAL 0)
   message(FATAL_ERROR "${NM} -C ${LIBRARY} failed (${status})")
 endif()
 # Functions of the SIMD kernels' namespaces that are meant to be called: the entry points, the
-# per-ray, per-pair and per-packet loop bodies, the benchmark loops, the tests' one-node test and the watertight
-# block test (kept as a call on purpose).
+# per-ray, per-pair and per-packet loop bodies, a packet batch's run of lone rays (trace_alone), the
+# benchmark loops, the tests' one-node test and the watertight block test (kept as a call on purpose).
 set(allowed
-    "trace_batch|trace_packet_batch|trace_ray|trace_ray_pair|trace_packet|node_test_loop|node_test_one|block_test_loop|intersect_block_watertight")
+    "trace_batch|trace_packet_batch|trace_alone|trace_ray|trace_ray_pair|trace_packet|node_test_loop|node_test_one|block_test_loop|intersect_block_watertight")
 string(REPLACE "\n" ";" lines "${symbols}")
 set(found 0)
 set(offending "")

@@ -95,9 +95,14 @@ std::span<const LayoutInfo> layouts();
 const LayoutInfo& find_layout(std::string_view name);
 /// Parses and checks a layout spec; an unknown layout, key or value is an error naming it.
 LayoutSpec parse_layout_spec(std::string_view text);
-/// Why this CPU and build cannot run `spec` (an instruction set it lacks: `isa=avx512`, or `packet=16`,
-/// without AVX-512), or nullopt. A run skips such a layout, as it skips Embree's packets the CPU lacks.
-std::optional<std::string> layout_unavailable(const LayoutSpec& spec);
+/// Why this CPU and build cannot run `spec`, or nullopt: an instruction set it lacks (`isa=avx512` or
+/// `packet=16` without AVX-512, `isa=avx2` or `packet=8` without AVX2, `isa=sse` without SSE 4.2). A run
+/// skips such a layout, as it skips Embree's packets the CPU lacks. `widest` caps what the CPU is taken
+/// to have (kAuto: no cap), so that a test can ask what a CPU without AVX-512 would do.
+std::optional<std::string> layout_unavailable(const LayoutSpec& spec, KernelIsa widest = KernelIsa::kAuto);
+/// Whether some CPU may lack what `spec` needs: packets, or an instruction set above scalar. Every CPU
+/// runs the others (`isa=auto` falls back to what the CPU has).
+bool layout_depends_on_cpu(const LayoutSpec& spec);
 /// Compiles `bvh` with the layout `spec` names.
 std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,
                                                std::span<const Triangle> triangles);

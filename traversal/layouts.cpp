@@ -223,8 +223,13 @@ LayoutSpec parse_layout_spec(std::string_view text) {
   return spec;
 }
 
-std::optional<std::string> layout_unavailable(const LayoutSpec& spec) {
-  return find_layout(spec.name).has_isa ? wide_layout_unavailable(spec) : std::nullopt;
+std::optional<std::string> layout_unavailable(const LayoutSpec& spec, KernelIsa widest) {
+  return find_layout(spec.name).has_isa ? wide_layout_unavailable(spec, widest) : std::nullopt;
+}
+
+bool layout_depends_on_cpu(const LayoutSpec& spec) {
+  return find_layout(spec.name).has_isa &&
+         (spec.packet != 1 || (spec.isa != KernelIsa::kAuto && spec.isa != KernelIsa::kScalar));
 }
 
 std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,

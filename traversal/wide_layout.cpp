@@ -121,25 +121,35 @@ class WideLayout final : public CompiledLayout {
 
 }  // namespace
 
-KernelIsa wide_layout_isa(const LayoutSpec& spec) {
-  // Sixteen-ray packets have AVX-512 kernels only: auto takes them wherever the CPU has AVX-512, also
-  // where it prefers AVX2 for the other kernels.
-  if (spec.isa == KernelIsa::kAuto && spec.packet == 16 && kernel_isa_available(KernelIsa::kAvx512))
-    return KernelIsa::kAvx512;
-  return spec.isa == KernelIsa::kAuto ? preferred_kernel_isa() : spec.isa;
+namespace {
+
+// Whether kernels for `isa` run here, on a CPU capped at `widest` (kAuto: no cap).
+bool available_up_to(KernelIsa isa, KernelIsa widest) {
+  return kernel_isa_available(isa) &&
+         (widest == KernelIsa::kAuto || static_cast<int>(isa) <= static_cast<int>(widest));
 }
 
-std::optional<std::string> wide_layout_unavailable(const LayoutSpec& spec) {
-  const KernelIsa isa = wide_layout_isa(spec);
+}  // namespace
+
+KernelIsa wide_layout_isa(const LayoutSpec& spec, KernelIsa widest) {
+  // Sixteen-ray packets have AVX-512 kernels only: auto takes them wherever the CPU has AVX-512, also
+  // where it prefers AVX2 for the other kernels.
+  if (spec.isa == KernelIsa::kAuto && spec.packet == 16 && available_up_to(KernelIsa::kAvx512, widest))
+    return KernelIsa::kAvx512;
+  if (spec.isa != KernelIsa::kAuto) return spec.isa;
+  const KernelIsa preferred = preferred_kernel_isa();
+  return available_up_to(preferred, widest) ? preferred : best_kernel_isa(widest);
+}
+
+std::optional<std::string> wide_layout_unavailable(const LayoutSpec& spec, KernelIsa widest) {
+  const KernelIsa isa = wide_layout_isa(spec, widest);
+  const std::string picks = " (auto would pick " + std::string(to_string(wide_layout_isa({}, widest))) + ")";
   if (spec.packet == 16 && isa != KernelIsa::kAvx512)
-    return "16-ray packets need AVX-512, which this CPU or build lacks (auto would pick " +
-           std::string(to_string(isa)) + ")";
+    return "16-ray packets need AVX-512, which this CPU or build lacks" + picks;
   if (spec.packet == 8 && isa != KernelIsa::kAvx2 && isa != KernelIsa::kAvx512)
-    return "8-ray packets need AVX2 or AVX-512, which this CPU or build lacks (auto would pick " +
-           std::string(to_string(isa)) + ")";
-  if (!kernel_isa_available(isa))
-    return "isa " + std::string(to_string(isa)) + " is not available on this CPU or build (auto would pick " +
-           std::string(to_string(preferred_kernel_isa())) + ")";
+    return "8-ray packets need AVX2 or AVX-512, which this CPU or build lacks" + picks;
+  if (!available_up_to(isa, widest))
+    return "isa " + std::string(to_string(isa)) + " is not available on this CPU or build" + picks;
   return std::nullopt;
 }
 

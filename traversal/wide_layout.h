@@ -11,11 +11,14 @@
 namespace sahbench {
 
 /// The instruction set a wide layout's kernels run with: `spec.isa`, or for kAuto the preferred one
-/// (preferred_kernel_isa), AVX-512 for 16-ray packets wherever the CPU has it.
-KernelIsa wide_layout_isa(const LayoutSpec& spec);
+/// (preferred_kernel_isa), AVX-512 for 16-ray packets wherever the CPU has it. `widest` caps what the
+/// CPU is taken to have (kAuto: no cap), so that a test can ask what a CPU without AVX-512 would do.
+KernelIsa wide_layout_isa(const LayoutSpec& spec, KernelIsa widest = KernelIsa::kAuto);
 
-/// Why this CPU and build cannot run the wide layout `spec` (its ISA is missing), or nullopt.
-std::optional<std::string> wide_layout_unavailable(const LayoutSpec& spec);
+/// Why this CPU and build (capped at `widest`) cannot run the wide layout `spec`: its instruction set,
+/// or its packet width's, is missing. Nullopt when it can.
+std::optional<std::string> wide_layout_unavailable(const LayoutSpec& spec,
+                                                   KernelIsa widest = KernelIsa::kAuto);
 
 /// Compiles `bvh` into a `width`-wide layout (4 or 8) whose kernels use `spec`'s variant and ISA
 /// (kAuto: the widest available). Throws Error when the ISA is not available here, naming it.

@@ -409,9 +409,12 @@ void trace_alone(const WideBatch& batch, std::size_t begin, std::size_t end) {
   part.counts = nullptr;
   part.int_order = IntOrder::kFree;
   part.robust_box = false;
+  // As make_wide_rays: a ray that takes the robust box test does not lower the others' path.
   for (std::size_t i = begin; i < end; ++i) {
-    part.int_order = std::min(part.int_order, batch.rays[i].int_order);
-    part.robust_box |= batch.rays[i].robust_box;
+    if (batch.rays[i].robust_box)
+      part.robust_box = true;
+    else
+      part.int_order = std::min(part.int_order, batch.rays[i].int_order);
   }
   trace_batch<N, kTri, kBox, kAnyHit, false>(part);
 }

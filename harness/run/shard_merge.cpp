@@ -161,7 +161,8 @@ MergeSummary merge_shards(const MergeOptions& options, std::ostream& log) {
                         config_path.string(), name));
   }
   // The layouts a run skips depend on the CPU the shards ran on (no 16-wide packets without AVX-512):
-  // take those their rows have, not this machine's.
+  // take those their rows have, not this machine's. A layout of ours that every CPU runs is planned
+  // whether or not it has rows, so that its cells count as missing when none came back.
   const auto seen = [&](bool embree, const std::string& layout) {
     return std::any_of(files.begin(), files.end(), [&](const ShardFile& f) {
       return std::any_of(f.rows.begin(), f.rows.end(), [&](const CsvRow& r) {
@@ -170,8 +171,12 @@ MergeSummary merge_shards(const MergeOptions& options, std::ostream& log) {
     });
   };
   RunLayouts layouts;
-  for (const LayoutSpec& l : cfg.layouts)
-    if (seen(false, l.text())) layouts.ours.push_back(l);
+  for (const LayoutSpec& l : cfg.layouts) {
+    if (!layout_depends_on_cpu(l) || seen(false, l.text()))
+      layouts.ours.push_back(l);
+    else
+      log << fmt::format("layout {}: no rows in any shard, taken as skipped by the shards' CPU\n", l.text());
+  }
   for (const EmbreeLayout& l : kEmbreeLayouts)
     if (seen(true, l.name)) layouts.embree.push_back(l);
   const ShardPlan plan = plan_shards(cfg, scenes, layouts, n);

@@ -18,6 +18,10 @@ RunLayouts runnable_layouts(const ExperimentConfig& cfg, std::ostream& log) {
       out.ours.push_back(spec);
   }
   out.embree = supported_embree_layouts(log);
+  for (const BuilderRun& b : cfg.builders)
+    if (!b.is_embree() && layouts_for(b, out).empty())
+      log << fmt::format("skipping builder {}: none of its layouts (arity {}) runs on this CPU\n", b.label(),
+                         b.arity);
   return out;
 }
 

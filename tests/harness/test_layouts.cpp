@@ -579,6 +579,27 @@ TEST(Layouts, UnavailableLayoutsSayWhy) {
   EXPECT_EQ(layout_unavailable(parse_layout_spec("bvh2")), std::nullopt);
   EXPECT_EQ(layout_unavailable(parse_layout_spec("bvh8:isa=scalar")), std::nullopt);
   EXPECT_EQ(layout_unavailable(parse_layout_spec("bvh8")), std::nullopt);
+  // As a CPU without AVX-512 (or without AVX2) would answer, on any CPU.
+  const auto capped = [](const char* spec, KernelIsa widest) {
+    return layout_unavailable(parse_layout_spec(spec), widest).value_or("");
+  };
+  EXPECT_EQ(capped("bvh8", KernelIsa::kAvx2), "");
+  EXPECT_EQ(capped("bvh8:isa=scalar", KernelIsa::kScalar), "");
+  EXPECT_NE(capped("bvh8:packet=16", KernelIsa::kAvx2).find("16-ray packets need AVX-512"),
+            std::string::npos);
+  EXPECT_NE(capped("bvh4:isa=avx512", KernelIsa::kAvx2).find("isa avx512 is not available"),
+            std::string::npos);
+  EXPECT_NE(capped("bvh8:packet=8", KernelIsa::kSse).find("8-ray packets need AVX2 or AVX-512"),
+            std::string::npos);
+  if (kernel_isa_available(KernelIsa::kAvx2)) {
+    EXPECT_EQ(capped("bvh8:packet=8", KernelIsa::kAvx2), "");
+  }
+  // Only packets and instruction sets above scalar depend on the CPU.
+  EXPECT_FALSE(layout_depends_on_cpu(parse_layout_spec("bvh2")));
+  EXPECT_FALSE(layout_depends_on_cpu(parse_layout_spec("bvh8")));
+  EXPECT_FALSE(layout_depends_on_cpu(parse_layout_spec("bvh8:isa=scalar")));
+  EXPECT_TRUE(layout_depends_on_cpu(parse_layout_spec("bvh8:packet=8")));
+  EXPECT_TRUE(layout_depends_on_cpu(parse_layout_spec("bvh4:isa=sse")));
   const auto packets16 = layout_unavailable(parse_layout_spec("bvh8:packet=16"));
   const auto avx512 = layout_unavailable(parse_layout_spec("bvh4:isa=avx512"));
   if (kernel_isa_available(KernelIsa::kAvx512)) {

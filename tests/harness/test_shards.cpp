@@ -336,6 +336,59 @@ TEST(ShardMerge, RefusesDifferentFingerprintsMissingShardsAndDuplicatedCells) {
   EXPECT_FALSE(std::filesystem::exists(merged));
 }
 
+// Shards run on CPUs that skip a layout (16-ray packets without AVX-512) merge without its cells; a
+// layout every CPU runs is planned all the same, so its cells are missing when its rows are.
+TEST(ShardMerge, TakesLayoutsTheShardsCpuSkippedAsSkipped) {
+  const auto config = dir() / "merge_skipped.toml";
+  std::ofstream(config) << fmt::format(R"([experiment]
+name = "merge_skipped"
+output = "{}"
+scenes = ["proc:sphere:tris=1500"]
+layouts = ["bvh8", "bvh8:packet=8"]
+reference = "brute_force"
+[repetitions]
+build = 1
+build_warmup = 0
+trace = 1
+trace_warmup = 0
+[[builder]]
+name = "wide_collapse"
+[[builder]]
+name = "embree"
+[[ray_set]]
+kind = "primary"
+width = 16
+height = 16
+)",
+                                       (dir() / "merge_skipped.csv").string());
+  const auto shards = run_shards(config, 2);
+  // The shards as a CPU without the layout would have written them: without its rows.
+  const auto without = [&](const std::string& layout) {
+    std::vector<std::filesystem::path> out;
+    for (std::size_t k = 0; k < shards.size(); ++k) {
+      const auto rows = read_csv(shards[k]);
+      const auto path = dir() / fmt::format("merge_skipped_without_{}.csv", k);
+      std::filesystem::remove(path);
+      CsvWriter csv(path, result_columns());
+      for (const CsvRow& row : rows)
+        if (row.at("layout") != layout) csv.append(row);
+      out.push_back(path);
+    }
+    return out;
+  };
+  const auto merged = dir() / "merge_skipped_merged.csv";
+  std::filesystem::remove(merged);
+  std::ostringstream log;
+  merge_shards({merged, without("bvh8:packet=8"), std::nullopt}, log);
+  EXPECT_NE(log.str().find("layout bvh8:packet=8: no rows in any shard, taken as skipped"), std::string::npos)
+      << log.str();
+  for (const CsvRow& row : read_csv(merged)) EXPECT_NE(row.at("layout"), "bvh8:packet=8");
+  std::filesystem::remove(merged);
+  const std::string missing = error_of([&] { merge_shards({merged, without("bvh8"), std::nullopt}, log); });
+  EXPECT_NE(missing.find("missing"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("|bvh8|"), std::string::npos) << missing;
+}
+
 TEST(ShardRun, ResumeContinuesOnlyItsOwnShard) {
   const auto config = write_run_config("resume_shard", 7);
   const auto shards = run_shards(config, 2);

@@ -421,8 +421,8 @@ void trace_alone(const WideBatch& batch, std::size_t begin, std::size_t end) {
 
 // A batch in packets of P::kWidth rays, in the batch's order; the rays of packets that are not coherent
 // (packet_coherent) go one at a time (trace_alone), each run of such packets in one call. Splitting such
-// a packet by octant into smaller packets, as Embree's hybrid kernels do, was slower on the shadow and
-// diffuse rays of configs/tune.toml than tracing its rays alone.
+// a packet by octant into smaller packets, as Embree's hybrid kernels do, was slower than tracing its
+// rays alone on most shadow and diffuse cells of configs/tune.toml (README, "Packets").
 template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>
 void trace_packet_batch(const WideBatch& batch) {
   constexpr uint32_t K = P::kWidth;

@@ -130,6 +130,13 @@ class StressRunner {
     log_ << fmt::format(
         "stress run {}: {} cases, builders {}, {} layout variants, Embree modes {}; writing {}\n", run_id_,
         cfg_.cases.size(), builder_labels(), cfg_.layouts.size(), cfg_.embree_robust.size(), output.string());
+    // As `sahbench run`: a layout the CPU cannot run is skipped with its reason.
+    for (const LayoutSpec& spec : cfg_.layouts) {
+      if (const auto why = layout_unavailable(spec))
+        log_ << fmt::format("skipping layout {}: {}\n", spec.text(), *why);
+      else
+        layouts_.push_back(spec);
+    }
     const auto start = std::chrono::steady_clock::now();
     for (const StressCaseSpec& spec : cfg_.cases) {
       if (!options_.only.empty() && spec.name.find(options_.only) == std::string::npos) continue;
@@ -281,7 +288,7 @@ class StressRunner {
   std::vector<LayoutSpec> layouts_for(uint32_t arity, std::set<uint32_t>& arities_with_variants) const {
     const bool all_variants = arities_with_variants.insert(arity).second;
     std::vector<LayoutSpec> out;
-    for (const LayoutSpec& spec : cfg_.layouts) {
+    for (const LayoutSpec& spec : layouts_) {
       if (find_layout(spec.name).arity != arity) continue;
       if (all_variants || spec.variant == KernelVariant{}) out.push_back(spec);
     }
@@ -443,6 +450,7 @@ class StressRunner {
   }
 
   const StressConfig& cfg_;
+  std::vector<LayoutSpec> layouts_;  // those of cfg_ this CPU runs
   const StressOptions& options_;
   std::ostream& log_;
   Environment env_;

@@ -212,6 +212,35 @@ TEST(HarnessStressConfig, DefaultsCoverEveryBuilderLayoutAndVariant) {
 }
 
 // The reduced suite: every kind at a small size, every builder, every layout variant, both Embree modes.
+// A layout the CPU cannot run (16-ray packets without AVX-512) is skipped with its reason, as in `run`.
+TEST(HarnessStress, SkipsLayoutsTheCpuCannotRun) {
+  StressConfig cfg;
+  cfg.path = "skip";
+  cfg.name = "skip";
+  cfg.trace_reps = 1;
+  cfg.trace_warmup = 0;
+  cfg.build_time_limit_s = 60;
+  for (const auto& b : all_builder_specs())
+    if (b.name == "wide_collapse") cfg.builders.push_back(b);
+  ASSERT_FALSE(cfg.builders.empty());
+  cfg.layouts = {parse_layout_spec("bvh8"), parse_layout_spec("bvh8:packet=16")};
+  cfg.cases.push_back(StressCaseSpec{"sphere", "sphere", 1, 80, 120});
+  const auto csv = std::filesystem::temp_directory_path() / "sahbench_test_stress_skip.csv";
+  std::filesystem::remove(csv);
+  std::ostringstream log;
+  const StressSummary summary = run_stress(cfg, {"", csv, ""}, log);
+  EXPECT_TRUE(summary.failures.empty()) << log.str();
+  std::set<std::string> traced;
+  for (const CsvRow& r : read_csv(csv))
+    if (r.at("builder") != "embree" && !r.at("layout").empty()) traced.insert(r.at("layout"));
+  const bool skipped =
+      log.str().find("skipping layout bvh8:packet=16: 16-ray packets need AVX-512") != std::string::npos;
+  EXPECT_EQ(skipped, !kernel_isa_available(KernelIsa::kAvx512)) << log.str();
+  const std::set<std::string> expected =
+      skipped ? std::set<std::string>{"bvh8"} : std::set<std::string>{"bvh8", "bvh8:packet=16"};
+  EXPECT_EQ(traced, expected);
+}
+
 TEST(HarnessStress, ReducedSuiteKeepsItsGuarantees) {
   register_embree_builders();
   StressConfig cfg;

@@ -143,14 +143,16 @@ KernelIsa wide_layout_isa(const LayoutSpec& spec, KernelIsa widest) {
 
 std::optional<std::string> wide_layout_unavailable(const LayoutSpec& spec, KernelIsa widest) {
   const KernelIsa isa = wide_layout_isa(spec, widest);
-  const std::string picks = " (auto would pick " + std::string(to_string(wide_layout_isa({}, widest))) + ")";
+  std::string why;
   if (spec.packet == 16 && isa != KernelIsa::kAvx512)
-    return "16-ray packets need AVX-512, which this CPU or build lacks" + picks;
-  if (spec.packet == 8 && isa != KernelIsa::kAvx2 && isa != KernelIsa::kAvx512)
-    return "8-ray packets need AVX2 or AVX-512, which this CPU or build lacks" + picks;
-  if (!available_up_to(isa, widest))
-    return "isa " + std::string(to_string(isa)) + " is not available on this CPU or build" + picks;
-  return std::nullopt;
+    why = "16-ray packets need AVX-512, which this CPU or build lacks";
+  else if (spec.packet == 8 && isa != KernelIsa::kAvx2 && isa != KernelIsa::kAvx512)
+    why = "8-ray packets need AVX2 or AVX-512, which this CPU or build lacks";
+  else if (!available_up_to(isa, widest))
+    why = "isa " + std::string(to_string(isa)) + " is not available on this CPU or build";
+  else
+    return std::nullopt;
+  return why + " (auto would pick " + std::string(to_string(wide_layout_isa({}, widest))) + ")";
 }
 
 std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh,

@@ -9,14 +9,20 @@
 
 namespace sahbench {
 
-RunLayouts runnable_layouts(const ExperimentConfig& cfg, std::ostream& log) {
-  RunLayouts out;
-  for (const LayoutSpec& spec : cfg.layouts) {
+std::vector<LayoutSpec> runnable_specs(const std::vector<LayoutSpec>& specs, std::ostream& log) {
+  std::vector<LayoutSpec> out;
+  for (const LayoutSpec& spec : specs) {
     if (const auto why = layout_unavailable(spec))
       log << fmt::format("skipping layout {}: {}\n", spec.text(), *why);
     else
-      out.ours.push_back(spec);
+      out.push_back(spec);
   }
+  return out;
+}
+
+RunLayouts runnable_layouts(const ExperimentConfig& cfg, std::ostream& log) {
+  RunLayouts out;
+  out.ours = runnable_specs(cfg.layouts, log);
   out.embree = supported_embree_layouts(log);
   for (const BuilderRun& b : cfg.builders)
     if (!b.is_embree() && layouts_for(b, out).empty())

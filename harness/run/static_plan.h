@@ -20,6 +20,10 @@ struct RunLayouts {
   std::vector<EmbreeLayout> embree;
 };
 
+/// Those of `specs` that this CPU and build can run (layout_unavailable); each one skipped gets a line on
+/// `log` naming it and why. What `run` and `stress` trace.
+std::vector<LayoutSpec> runnable_specs(const std::vector<LayoutSpec>& specs, std::ostream& log);
+
 /// The layouts of `cfg` this machine runs: ours that its CPU and build can run (layout_unavailable) and
 /// Embree's that its CPU supports (supported_embree_layouts). Each one skipped gets a line on `log`
 /// naming it and why, so one config runs on CPUs with and without AVX-512.

@@ -130,13 +130,7 @@ class StressRunner {
     log_ << fmt::format(
         "stress run {}: {} cases, builders {}, {} layout variants, Embree modes {}; writing {}\n", run_id_,
         cfg_.cases.size(), builder_labels(), cfg_.layouts.size(), cfg_.embree_robust.size(), output.string());
-    // As `sahbench run`: a layout the CPU cannot run is skipped with its reason.
-    for (const LayoutSpec& spec : cfg_.layouts) {
-      if (const auto why = layout_unavailable(spec))
-        log_ << fmt::format("skipping layout {}: {}\n", spec.text(), *why);
-      else
-        layouts_.push_back(spec);
-    }
+    layouts_ = runnable_specs(cfg_.layouts, log_);  // as `sahbench run` skips them
     const auto start = std::chrono::steady_clock::now();
     for (const StressCaseSpec& spec : cfg_.cases) {
       if (!options_.only.empty() && spec.name.find(options_.only) == std::string::npos) continue;

@@ -134,10 +134,7 @@ KernelIsa best_kernel_isa(KernelIsa widest) {
 }
 
 KernelIsa preferred_kernel_isa() {
-#if defined(__x86_64__) || defined(__i386__)
-  if (__builtin_cpu_is("intel")) return best_kernel_isa(KernelIsa::kAvx512);
-#endif
-  return best_kernel_isa(KernelIsa::kAvx2);
+  return best_kernel_isa();
 }
 
 }  // namespace sahbench

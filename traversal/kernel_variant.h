@@ -66,13 +66,12 @@ bool cpu_supports_kernel_isa(KernelIsa isa);
 bool kernel_isa_available(KernelIsa isa);
 /// The widest available of kAvx512, kAvx2, kSse, kScalar, never above `widest` (kAuto: no limit).
 KernelIsa best_kernel_isa(KernelIsa widest = KernelIsa::kAuto);
-/// What isa=auto runs: on Intel CPUs the best available, AVX-512 included; on others the best up to AVX2.
-/// The wide kernels use 128- and 256-bit vectors only, so their AVX-512 build is the same code in EVEX
-/// encodings, with 32 vector registers and mask registers for the compares. On an Intel Xeon (family 6,
-/// model 207) it traced 0-8% faster than the AVX2 build in every scene, ray set and thread count of
-/// configs/wide.toml's four scenes (medians of 4 interleaved runs, 24 cells, none below 0.997). On an AMD
-/// EPYC (Zen 4) an earlier version of the kernels traced 0-5% slower with it. isa=avx2 and isa=avx512 select
-/// either. The README's table lists the choice by CPU family.
+/// What isa=auto runs: the best available, AVX-512 included, on Intel and AMD CPUs alike. The wide
+/// kernels use 128- and 256-bit vectors only, so their AVX-512 build is the same code in EVEX encodings,
+/// with 32 vector registers and mask registers for the compares; it traced at least as fast as the AVX2
+/// build on an Intel Xeon (family 6, model 207) and on an AMD EPYC Zen 4 (family 25, model 17), whose
+/// 512-bit units are split in two but which runs 256-bit EVEX code at full rate. isa=avx2 and isa=avx512
+/// select either. The README's table lists the choice by CPU family, with the measurements.
 KernelIsa preferred_kernel_isa();
 
 }  // namespace sahbench

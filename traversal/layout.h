@@ -55,7 +55,7 @@ class CompiledLayout {
 ///                                        Möller–Trumbore with a stored normal, as Embree's Triangle4)
 ///   box = robust | fast | fma           (ray/box test)
 ///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto: kernel_variant.h's
-///                                                preferred_kernel_isa, AVX-512 on Intel, else up to AVX2)
+///                                                preferred_kernel_isa: the widest available)
 ///   packet = 1 | 8 | 16                 (SIMD layouts only: rays traced one at a time, or 8 or 16 at a
 ///                                        time by the packet kernels of wide_packets.inl: 8 with avx2
 ///                                        and avx512, 16 with avx512)

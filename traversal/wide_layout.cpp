@@ -132,10 +132,6 @@ bool available_up_to(KernelIsa isa, KernelIsa widest) {
 }  // namespace
 
 KernelIsa wide_layout_isa(const LayoutSpec& spec, KernelIsa widest) {
-  // Sixteen-ray packets have AVX-512 kernels only: auto takes them wherever the CPU has AVX-512, also
-  // where it prefers AVX2 for the other kernels.
-  if (spec.isa == KernelIsa::kAuto && spec.packet == 16 && available_up_to(KernelIsa::kAvx512, widest))
-    return KernelIsa::kAvx512;
   if (spec.isa != KernelIsa::kAuto) return spec.isa;
   const KernelIsa preferred = preferred_kernel_isa();
   return available_up_to(preferred, widest) ? preferred : best_kernel_isa(widest);

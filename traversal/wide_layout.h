@@ -11,8 +11,8 @@
 namespace sahbench {
 
 /// The instruction set a wide layout's kernels run with: `spec.isa`, or for kAuto the preferred one
-/// (preferred_kernel_isa), AVX-512 for 16-ray packets wherever the CPU has it. `widest` caps what the
-/// CPU is taken to have (kAuto: no cap), so that a test can ask what a CPU without AVX-512 would do.
+/// (preferred_kernel_isa), capped at `widest`: what the CPU is taken to have (kAuto: no cap), so that a
+/// test can ask what a CPU without AVX-512 would do.
 KernelIsa wide_layout_isa(const LayoutSpec& spec, KernelIsa widest = KernelIsa::kAuto);
 
 /// Why this CPU and build (capped at `widest`) cannot run the wide layout `spec`: its instruction set,

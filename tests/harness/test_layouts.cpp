@@ -593,7 +593,11 @@ TEST(Layouts, UnavailableLayoutsSayWhy) {
             std::string::npos);
   if (kernel_isa_available(KernelIsa::kAvx2)) {
     EXPECT_EQ(capped("bvh8:packet=8", KernelIsa::kAvx2), "");
+    // The reason names what isa=auto takes under the cap: the widest the capped CPU has, on any vendor.
+    EXPECT_NE(capped("bvh8:packet=16", KernelIsa::kAvx2).find("(auto would pick avx2)"), std::string::npos);
   }
+  // isa=auto is the widest instruction set available, whoever made the CPU.
+  EXPECT_EQ(preferred_kernel_isa(), best_kernel_isa());
   // Only packets and instruction sets above scalar depend on the CPU.
   EXPECT_FALSE(layout_depends_on_cpu(parse_layout_spec("bvh2")));
   EXPECT_FALSE(layout_depends_on_cpu(parse_layout_spec("bvh8")));

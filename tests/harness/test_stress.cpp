@@ -211,15 +211,20 @@ TEST(HarnessStressConfig, DefaultsCoverEveryBuilderLayoutAndVariant) {
   }
 }
 
-// The reduced suite: every kind at a small size, every builder, every layout variant, both Embree modes.
-// A layout the CPU cannot run (16-ray packets without AVX-512) is skipped with its reason, as in `run`.
-TEST(HarnessStress, SkipsLayoutsTheCpuCannotRun) {
+// A stress config named `name` that traces once, without warm-up, and gives a build a minute.
+StressConfig quick_stress_config(const std::string& name) {
   StressConfig cfg;
-  cfg.path = "skip";
-  cfg.name = "skip";
+  cfg.path = name;
+  cfg.name = name;
   cfg.trace_reps = 1;
   cfg.trace_warmup = 0;
   cfg.build_time_limit_s = 60;
+  return cfg;
+}
+
+// A layout the CPU cannot run (16-ray packets without AVX-512) is skipped with its reason, as in `run`.
+TEST(HarnessStress, SkipsLayoutsTheCpuCannotRun) {
+  StressConfig cfg = quick_stress_config("skip");
   for (const auto& b : all_builder_specs())
     if (b.name == "wide_collapse") cfg.builders.push_back(b);
   ASSERT_FALSE(cfg.builders.empty());
@@ -241,14 +246,10 @@ TEST(HarnessStress, SkipsLayoutsTheCpuCannotRun) {
   EXPECT_EQ(traced, expected);
 }
 
+// The reduced suite: every kind at a small size, every builder, every layout variant, both Embree modes.
 TEST(HarnessStress, ReducedSuiteKeepsItsGuarantees) {
   register_embree_builders();
-  StressConfig cfg;
-  cfg.path = "reduced";
-  cfg.name = "reduced";
-  cfg.trace_reps = 1;
-  cfg.trace_warmup = 0;
-  cfg.build_time_limit_s = 60;
+  StressConfig cfg = quick_stress_config("reduced");
   cfg.builders = all_builder_specs();
   cfg.layouts = all_layout_variants();
   auto add = [&](std::string name, std::string kind, uint64_t size, uint32_t rays, double scale = 1,

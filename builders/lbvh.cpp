@@ -156,7 +156,8 @@ Bvh build(const BuildInput& input, const LbvhParams& params) {
   const LeafCollapse rule(params.top_down);
   HugePageArray<ClusterNode> nodes(n - 1);
   HugePageArray<SubtreeCost> costs(n - 1);
-  ClusterTree tree{nodes.span(), costs.span(), sorted.ids.span(), input.bounds.span(), leaf_tag(0)};
+  const HugePageArray<Aabb> leaf_bounds = bounds_in_order(input.bounds.span(), sorted.ids.span());
+  ClusterTree tree{nodes.span(), costs.span(), sorted.ids.span(), leaf_bounds.span(), leaf_tag(0)};
   if (n > 1) {
     const RadixTree<Code> radix(sorted.codes);
     tree.root = params.hierarchy == LbvhHierarchy::kApetrei ? apetrei_pass(tree, radix, rule)

@@ -1,5 +1,7 @@
 #include "builders/leaf_collapse.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
 #if defined(__linux__)
@@ -10,6 +12,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -102,7 +105,7 @@ class DepthBound {
     return slot;
   }
 
-  const Aabb& prim_box(uint32_t position) const { return tree_.prim_bounds[tree_.order[position]]; }
+  const Aabb& prim_box(uint32_t position) const { return tree_.leaf_bounds[position]; }
 
   // Recomputes every node's costs, children first; the tree is now shallow enough to recurse.
   SubtreeCost refresh(uint32_t tag) {
@@ -203,6 +206,16 @@ void resize_on_huge_pages(std::vector<T>& v, std::size_t n) {
 }
 
 }  // namespace
+
+HugePageArray<Aabb> bounds_in_order(std::span<const Aabb> prim_bounds, std::span<const uint32_t> order) {
+  HugePageArray<Aabb> out(order.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), std::size_t{1} << 14),
+                    [&](const auto& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        std::construct_at(&out[i], prim_bounds[order[i]]);
+                    });
+  return out;
+}
 
 Bvh finish_cluster_tree(const ClusterTree& tree, const LeafCollapse& rule) {
   Bvh bvh;

@@ -18,6 +18,7 @@
 #include "builders/top_down.h"
 #include "core/aabb.h"
 #include "core/bvh.h"
+#include "core/huge_pages.h"
 
 namespace sahbench {
 
@@ -58,9 +59,16 @@ struct ClusterTree {
   std::span<ClusterNode> nodes;       ///< inner nodes
   std::span<SubtreeCost> costs;       ///< of each inner node's subtree
   std::span<const uint32_t> order;    ///< primitive at each leaf position
-  std::span<const Aabb> prim_bounds;  ///< by primitive
+  std::span<const Aabb> leaf_bounds;  ///< box of the primitive at each leaf position (bounds_in_order)
   uint32_t root = 0;                  ///< a tag; leaf_tag(0) for a single primitive
 };
+
+/// The primitives' boxes in leaf order: out[i] = prim_bounds[order[i]], gathered in parallel. The
+/// passes over a cluster tree read the boxes of neighbouring leaf positions together; read through
+/// `order` they are reads all over the scene's array, each a cache miss that the passes' atomics (a
+/// locked exchange is a full fence on x86) keep from overlapping with the next. One gather with no
+/// atomics lets the misses overlap, and leaves the passes sequential reads.
+HugePageArray<Aabb> bounds_in_order(std::span<const Aabb> prim_bounds, std::span<const uint32_t> order);
 
 /// The collapse rule: min_leaf, max_leaf and the SAH constants of a TopDownConfig (arity is ignored).
 class LeafCollapse {
@@ -88,7 +96,7 @@ class LeafCollapse {
 
   /// The subtree under `tag` (a leaf tag or a node whose cost is set).
   SubtreeCost of(const ClusterTree& tree, uint32_t tag) const {
-    if (is_leaf_tag(tag)) return leaf(tree.prim_bounds[tree.order[tag_index(tag)]]);
+    if (is_leaf_tag(tag)) return leaf(tree.leaf_bounds[tag_index(tag)]);
     return tree.costs[tag];
   }
 
@@ -106,7 +114,7 @@ class LeafCollapse {
 
 /// The box of the subtree under `tag`.
 inline const Aabb& tag_bounds(const ClusterTree& tree, uint32_t tag) {
-  if (is_leaf_tag(tag)) return tree.prim_bounds[tree.order[tag_index(tag)]];
+  if (is_leaf_tag(tag)) return tree.leaf_bounds[tag_index(tag)];
   return tree.nodes[tag].bounds;
 }
 

@@ -190,7 +190,8 @@ Bvh build_ploc(const BuildInput& input, const PlocParams& params) {
                                                           : sort_by_morton<uint64_t>(input.bounds.span()).ids;
   HugePageArray<ClusterNode> nodes(n - 1);
   HugePageArray<SubtreeCost> costs(n - 1);
-  ClusterTree tree{nodes.span(), costs.span(), order.span(), input.bounds.span(), leaf_tag(0)};
+  const HugePageArray<Aabb> leaf_bounds = bounds_in_order(input.bounds.span(), order.span());
+  ClusterTree tree{nodes.span(), costs.span(), order.span(), leaf_bounds.span(), leaf_tag(0)};
   const LeafCollapse rule(params.top_down);
   if (n > 1) tree.root = Clustering(tree, rule, params.radius).run();
   return finish_cluster_tree(tree, rule);

@@ -14,6 +14,8 @@
 // Builders use it for their large per-primitive arrays too (bounds and references), as
 // Embree's builders get theirs from os_malloc: each 2 MiB page costs the kernel one page fault instead
 // of 512; in a profile of builds of the 1M-triangle terrain, page faults had been a tenth of the samples.
+// Freed mappings are kept for the next array (core/mapping_cache.h), so that a build after the first
+// reuses pages that are already mapped, as heap memory is reused.
 
 #include <cstddef>
 #include <cstdint>
@@ -22,6 +24,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "core/mapping_cache.h"
 #include "core/memory_tracker.h"
 
 #if defined(__linux__)
@@ -45,11 +48,16 @@ class HugePageAllocator {
     const std::size_t bytes = n * sizeof(T);
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     if (bytes >= kHugePageBytes) {
-      // Map one huge page more than needed, then unmap the parts before and after the aligned range.
       const std::size_t size = rounded(bytes);
+      note_mapped(static_cast<int64_t>(size));
+      if (void* kept = mapping_cache().take(size)) return static_cast<T*>(kept);
+      // Map one huge page more than needed, then unmap the parts before and after the aligned range.
       void* mapped =
           mmap(nullptr, size + kHugePageBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-      if (mapped == MAP_FAILED) throw std::bad_alloc();
+      if (mapped == MAP_FAILED) {
+        note_unmapped(static_cast<int64_t>(size));
+        throw std::bad_alloc();
+      }
       char* const start = static_cast<char*>(mapped);
       const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(start);
       char* const aligned = start + ((kHugePageBytes - address % kHugePageBytes) % kHugePageBytes);
@@ -57,7 +65,6 @@ class HugePageAllocator {
       if (aligned + size != start + size + kHugePageBytes)
         munmap(aligned + size, static_cast<std::size_t>(start + size + kHugePageBytes - (aligned + size)));
       madvise(aligned, size, MADV_HUGEPAGE);  // a hint: where THP is off it fails, and nothing changes
-      note_mapped(static_cast<int64_t>(size));
       return reinterpret_cast<T*>(aligned);
     }
 #endif
@@ -67,7 +74,7 @@ class HugePageAllocator {
   void deallocate(T* p, std::size_t n) noexcept {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     if (n * sizeof(T) >= kHugePageBytes) {
-      munmap(p, rounded(n * sizeof(T)));
+      mapping_cache().give(p, rounded(n * sizeof(T)));
       note_unmapped(static_cast<int64_t>(rounded(n * sizeof(T))));
       return;
     }

@@ -1,0 +1,97 @@
+#include "core/mapping_cache.h"
+
+#include <algorithm>
+#include <new>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
+
+// Kept ranges are poisoned under AddressSanitizer, so that a use after free of a large array is still
+// reported although the memory stays mapped.
+#if defined(__SANITIZE_ADDRESS__)
+#include <sanitizer/asan_interface.h>
+#define SAHBENCH_POISON(p, n) ASAN_POISON_MEMORY_REGION(p, n)
+#define SAHBENCH_UNPOISON(p, n) ASAN_UNPOISON_MEMORY_REGION(p, n)
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#include <sanitizer/asan_interface.h>
+#define SAHBENCH_POISON(p, n) ASAN_POISON_MEMORY_REGION(p, n)
+#define SAHBENCH_UNPOISON(p, n) ASAN_UNPOISON_MEMORY_REGION(p, n)
+#endif
+#endif
+#if !defined(SAHBENCH_POISON)
+#define SAHBENCH_POISON(p, n) ((void)(p), (void)(n))
+#define SAHBENCH_UNPOISON(p, n) ((void)(p), (void)(n))
+#endif
+
+namespace sahbench {
+
+MappingCache::~MappingCache() {
+  for (const Range& range : kept_) unmap(range);
+}
+
+void MappingCache::unmap([[maybe_unused]] const Range& range) {
+  SAHBENCH_UNPOISON(range.begin, range.bytes);
+#if defined(__linux__)
+  munmap(range.begin, range.bytes);
+#endif
+}
+
+void* MappingCache::take(std::size_t bytes) {
+  const std::lock_guard lock(mutex_);
+  auto best = kept_.end();
+  for (auto it = kept_.begin(); it != kept_.end(); ++it)
+    if (it->bytes >= bytes && (best == kept_.end() || it->bytes < best->bytes)) best = it;
+  if (best == kept_.end()) return nullptr;
+  char* const p = best->begin;
+  if (best->bytes == bytes) {
+    kept_.erase(best);
+  } else {
+    best->begin += bytes;
+    best->bytes -= bytes;
+  }
+  kept_bytes_ -= bytes;
+  SAHBENCH_UNPOISON(p, bytes);
+  return p;
+}
+
+void MappingCache::give(void* p, std::size_t bytes) noexcept {
+  const std::lock_guard lock(mutex_);
+  try {
+    kept_.push_back({static_cast<char*>(p), bytes, clock_++});
+  } catch (const std::bad_alloc&) {  // deallocations may not throw: not kept, then
+    unmap({static_cast<char*>(p), bytes, 0});
+    return;
+  }
+  SAHBENCH_POISON(p, bytes);
+  kept_bytes_ += bytes;
+  while (kept_bytes_ > limit_) {
+    const auto oldest = std::min_element(kept_.begin(), kept_.end(),
+                                         [](const Range& a, const Range& b) { return a.age < b.age; });
+    unmap(*oldest);
+    kept_bytes_ -= oldest->bytes;
+    kept_.erase(oldest);
+  }
+}
+
+std::size_t MappingCache::kept_bytes() const {
+  const std::lock_guard lock(mutex_);
+  return kept_bytes_;
+}
+
+MappingCache& mapping_cache() {
+  // Never destroyed: arrays in static objects may be freed after any static destructor has run.
+  static MappingCache* const cache = new MappingCache([] {
+    std::size_t limit = std::size_t{1} << 30;
+#if defined(__linux__)
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    if (pages > 0 && page > 0) limit = std::min(limit, static_cast<std::size_t>(pages) * page / 8);
+#endif
+    return limit;
+  }());
+  return *cache;
+}
+
+}  // namespace sahbench

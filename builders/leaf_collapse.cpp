@@ -149,18 +149,30 @@ class Emitter {
     constexpr uint32_t kTaskNodes = 4096;
     std::optional<tbb::task_group> group;
     if (size.out_nodes >= 2 * kTaskNodes) group.emplace();
+    // Both children's sizes and boxes first, then the grandchildren asked for: the walk goes down a tree
+    // that a bottom-up pass wrote in its own order, and each node's read is otherwise a cache miss
+    // that the next step waits on.
+    const uint32_t child[2] = {inner.child[0], inner.child[1]};
+    const Size child_size[2] = {size_of(child[0]), size_of(child[1])};
+    for (uint32_t c = 0; c < 2; ++c) {
+      bvh_.nodes[children + c].bounds = tag_bounds(tree_, child[c]);
+      if (is_leaf_tag(child[c])) continue;
+      for (const uint32_t grandchild : tree_.nodes[child[c]].child) {
+        if (is_leaf_tag(grandchild)) continue;
+        __builtin_prefetch(&tree_.nodes[grandchild]);
+        __builtin_prefetch(&tree_.costs[grandchild]);
+      }
+    }
     uint32_t below = children + 2;
     for (uint32_t c = 0; c < 2; ++c) {
-      const uint32_t child = inner.child[c], at = children + c, grandchildren = below, child_refs = refs;
-      const Size child_size = size_of(child);
-      bvh_.nodes[at].bounds = tag_bounds(tree_, child);
-      if (group && child_size.out_nodes >= kTaskNodes)
+      const uint32_t tag_c = child[c], at = children + c, grandchildren = below, child_refs = refs;
+      if (group && child_size[c].out_nodes >= kTaskNodes)
         group->run(
-            [this, child, at, grandchildren, child_refs] { place(child, at, grandchildren, child_refs); });
+            [this, tag_c, at, grandchildren, child_refs] { place(tag_c, at, grandchildren, child_refs); });
       else
-        place(child, at, grandchildren, child_refs);
-      below += child_size.out_nodes - 1;
-      refs += child_size.prims;
+        place(tag_c, at, grandchildren, child_refs);
+      below += child_size[c].out_nodes - 1;
+      refs += child_size[c].prims;
     }
     if (group) group->wait();
   }

@@ -1,11 +1,11 @@
 #pragma once
 // An allocator for large arrays that a traversal reads all over, such as a BVH layout's nodes: arrays
-// of 2 MiB or more get fresh pages of their own (mmap), aligned to 2 MiB and advised to the kernel as
+// of 2 MiB or more get pages of their own (mmap), aligned to 2 MiB and advised to the kernel as
 // candidates for transparent huge pages (madvise MADV_HUGEPAGE), so that random accesses into them miss
 // the TLB less. This is what Embree does with its BVH memory (os_malloc and os_advise in its
 // common/sys/alloc.cpp): on a system whose THP setting is "madvise" (Debian's default), Embree's trees
-// get huge pages and a plain std::vector does not. The pages must be fresh: heap memory that was
-// touched before keeps its small pages.
+// get huge pages and a plain std::vector does not. The pages must be mapped apart from the heap: heap
+// memory that was touched before keeps its small pages.
 //
 // Smaller arrays come from the aligned global operator new. Elements are default-initialised: a resize
 // leaves them as uninitialised as `new T[n]` would, which saves zeroing arrays that are written in full
@@ -14,8 +14,8 @@
 // Builders use it for their large per-primitive arrays too (bounds and references), as
 // Embree's builders get theirs from os_malloc: each 2 MiB page costs the kernel one page fault instead
 // of 512; in a profile of builds of the 1M-triangle terrain, page faults had been a tenth of the samples.
-// Freed mappings are kept for the next array (core/mapping_cache.h), so that a build after the first
-// reuses pages that are already mapped, as heap memory is reused.
+// Freed mappings under 28 MiB are kept for the next array (core/mapping_cache.h), so that a build after
+// the first reuses pages that are already mapped, as heap memory is reused.
 
 #include <cstddef>
 #include <cstdint>
@@ -49,15 +49,18 @@ class HugePageAllocator {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     if (bytes >= kHugePageBytes) {
       const std::size_t size = rounded(bytes);
-      note_mapped(static_cast<int64_t>(size));
-      if (void* kept = mapping_cache().take(size)) return static_cast<T*>(kept);
-      // Map one huge page more than needed, then unmap the parts before and after the aligned range.
-      void* mapped =
-          mmap(nullptr, size + kHugePageBytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
-      if (mapped == MAP_FAILED) {
-        note_unmapped(static_cast<int64_t>(size));
-        throw std::bad_alloc();
+      if (void* kept = mapping_cache().take(size)) {
+        note_mapped(static_cast<int64_t>(size));
+        return static_cast<T*>(kept);
       }
+      // Map one huge page more than needed, then unmap the parts before and after the aligned range. Where
+      // memory runs short, the kept ranges go back to the kernel first.
+      void* mapped = map(size + kHugePageBytes);
+      if (mapped == MAP_FAILED) {
+        mapping_cache().release_all();
+        mapped = map(size + kHugePageBytes);
+      }
+      if (mapped == MAP_FAILED) throw std::bad_alloc();
       char* const start = static_cast<char*>(mapped);
       const std::uintptr_t address = reinterpret_cast<std::uintptr_t>(start);
       char* const aligned = start + ((kHugePageBytes - address % kHugePageBytes) % kHugePageBytes);
@@ -65,6 +68,7 @@ class HugePageAllocator {
       if (aligned + size != start + size + kHugePageBytes)
         munmap(aligned + size, static_cast<std::size_t>(start + size + kHugePageBytes - (aligned + size)));
       madvise(aligned, size, MADV_HUGEPAGE);  // a hint: where THP is off it fails, and nothing changes
+      note_mapped(static_cast<int64_t>(size));
       return reinterpret_cast<T*>(aligned);
     }
 #endif
@@ -96,6 +100,11 @@ class HugePageAllocator {
 
  private:
   static constexpr std::size_t kAlignment = alignof(T) > 64 ? alignof(T) : 64;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+  static void* map(std::size_t bytes) {
+    return mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  }
+#endif
   static constexpr std::size_t rounded(std::size_t bytes) {
     return (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
   }

@@ -29,10 +29,10 @@
 namespace sahbench {
 
 MappingCache::~MappingCache() {
-  for (const Range& range : kept_) unmap(range);
+  release_all();
 }
 
-void MappingCache::unmap([[maybe_unused]] const Range& range) {
+void MappingCache::unmap([[maybe_unused]] const Range& range) noexcept {
   SAHBENCH_UNPOISON(range.begin, range.bytes);
 #if defined(__linux__)
   munmap(range.begin, range.bytes);
@@ -43,7 +43,9 @@ void* MappingCache::take(std::size_t bytes) {
   const std::lock_guard lock(mutex_);
   auto best = kept_.end();
   for (auto it = kept_.begin(); it != kept_.end(); ++it)
-    if (it->bytes >= bytes && (best == kept_.end() || it->bytes < best->bytes)) best = it;
+    if (it->bytes >= bytes &&
+        (best == kept_.end() || it->bytes < best->bytes || (it->bytes == best->bytes && it->age > best->age)))
+      best = it;
   if (best == kept_.end()) return nullptr;
   char* const p = best->begin;
   if (best->bytes == bytes) {
@@ -58,22 +60,40 @@ void* MappingCache::take(std::size_t bytes) {
 }
 
 void MappingCache::give(void* p, std::size_t bytes) noexcept {
-  const std::lock_guard lock(mutex_);
-  try {
-    kept_.push_back({static_cast<char*>(p), bytes, clock_++});
-  } catch (const std::bad_alloc&) {  // deallocations may not throw: not kept, then
-    unmap({static_cast<char*>(p), bytes, 0});
-    return;
+  const Range range{static_cast<char*>(p), bytes, 0};
+  if (bytes > kMaxKeptBytes || bytes > limit_) return unmap(range);
+  std::vector<Range> released;
+  {
+    const std::lock_guard lock(mutex_);
+    try {
+      kept_.push_back({range.begin, bytes, clock_++});
+      released.reserve(kept_.size());
+    } catch (const std::bad_alloc&) {  // deallocations may not throw: not kept, then
+      if (!kept_.empty() && kept_.back().begin == range.begin) kept_.pop_back();
+      unmap(range);
+      return;
+    }
+    SAHBENCH_POISON(p, bytes);
+    kept_bytes_ += bytes;
+    while (kept_bytes_ > limit_) {
+      const auto oldest = std::min_element(kept_.begin(), kept_.end(),
+                                           [](const Range& a, const Range& b) { return a.age < b.age; });
+      released.push_back(*oldest);
+      kept_bytes_ -= oldest->bytes;
+      kept_.erase(oldest);
+    }
   }
-  SAHBENCH_POISON(p, bytes);
-  kept_bytes_ += bytes;
-  while (kept_bytes_ > limit_) {
-    const auto oldest = std::min_element(kept_.begin(), kept_.end(),
-                                         [](const Range& a, const Range& b) { return a.age < b.age; });
-    unmap(*oldest);
-    kept_bytes_ -= oldest->bytes;
-    kept_.erase(oldest);
+  for (const Range& r : released) unmap(r);
+}
+
+void MappingCache::release_all() noexcept {
+  std::vector<Range> released;
+  {
+    const std::lock_guard lock(mutex_);
+    released.swap(kept_);
+    kept_bytes_ = 0;
   }
+  for (const Range& r : released) unmap(r);
 }
 
 std::size_t MappingCache::kept_bytes() const {

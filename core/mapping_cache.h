@@ -1,15 +1,17 @@
 #pragma once
 // Freed huge-page mappings (core/huge_pages.h), kept for the next large array instead of being returned
 // to the kernel. A fresh mapping costs a page fault per page touched and the kernel's zeroing of each
-// page (2 MiB at a time on huge pages); a builder that maps its scratch arrays anew on every build spent
-// a sixth of its time in the kernel's clear_page at 2 threads. Allocators that keep freed memory hand it
-// out again unzeroed: glibc's malloc does so below its mmap threshold, which is where Embree's build
-// arrays come from, and a renderer rebuilding every frame keeps its buffers. The cache does the same for
-// the arrays that bypass malloc to get huge pages.
+// page, on every build; memory an allocator keeps is handed out again unzeroed.
 //
-// The harness's mem_peak_bytes counts memory in use, as it does for the heap: a kept mapping is counted
+// The policy is the one Embree 3's build arrays get, so that build times compare like for like: its
+// aligned_monitored_allocator (the allocator of its mvector: primitive references, Morton codes) takes
+// arrays under 14 huge pages (28 MiB) from the heap, which glibc's malloc reuses, and maps larger ones
+// afresh each time (os_malloc). Ranges under kMaxKeptBytes are kept here; larger ones go back to the
+// kernel as before.
+//
+// The harness's mem_peak_bytes counts memory in use, as it does for the heap: a kept range is counted
 // when it is handed out, not while it waits. What the cache holds is bounded (MappingCache::limit), the
-// oldest mappings returned to the kernel first.
+// oldest ranges returned to the kernel first.
 
 #include <cstddef>
 #include <cstdint>
@@ -20,18 +22,25 @@ namespace sahbench {
 
 class MappingCache {
  public:
-  /// Keeps at most `limit_bytes` of freed mappings.
+  /// The largest range kept: 14 huge pages less one byte, Embree's threshold for mapping afresh.
+  static constexpr std::size_t kMaxKeptBytes = (std::size_t{14} << 21) - 1;
+
+  /// Keeps at most `limit_bytes` of freed ranges.
   explicit MappingCache(std::size_t limit_bytes) : limit_(limit_bytes) {}
   ~MappingCache();
   MappingCache(const MappingCache&) = delete;
   MappingCache& operator=(const MappingCache&) = delete;
 
-  /// `bytes` (a multiple of the page size) of a kept mapping: the front of the smallest one that large,
-  /// whose rest stays kept; nullptr when none is. The memory holds what it last held.
+  /// `bytes` (a multiple of the page size) of a kept range: the front of the smallest one that large
+  /// (the most recently kept among equals), whose rest stays kept; nullptr when none is. The memory
+  /// holds what it last held.
   void* take(std::size_t bytes);
-  /// Keeps `bytes` at `p` (a range that take() or mmap returned); returns the oldest kept ranges to the
-  /// kernel while more than the limit is kept.
+  /// Keeps `bytes` at `p` (a range that take() or mmap returned), or unmaps it where it is larger than
+  /// kMaxKeptBytes or the limit; then returns the oldest kept ranges to the kernel while more than the
+  /// limit is kept.
   void give(void* p, std::size_t bytes) noexcept;
+  /// Returns every kept range to the kernel (when a mapping fails for want of memory).
+  void release_all() noexcept;
 
   std::size_t kept_bytes() const;
   std::size_t limit() const { return limit_; }
@@ -40,9 +49,9 @@ class MappingCache {
   struct Range {
     char* begin;
     std::size_t bytes;
-    uint64_t age;  ///< when it was given; the smallest is the oldest
+    uint64_t age;  ///< when it was kept; the smallest is the oldest
   };
-  static void unmap(const Range& range);
+  static void unmap(const Range& range) noexcept;
 
   mutable std::mutex mutex_;
   std::vector<Range> kept_;
@@ -51,8 +60,8 @@ class MappingCache {
   uint64_t clock_ = 0;
 };
 
-/// The process's cache, behind HugePageAllocator: 1 GiB or an eighth of the machine's memory, whichever
-/// is less.
+/// The process's cache, behind HugePageAllocator: it keeps 1 GiB or an eighth of the machine's memory,
+/// whichever is less.
 MappingCache& mapping_cache();
 
 }  // namespace sahbench

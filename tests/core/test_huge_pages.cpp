@@ -80,6 +80,30 @@ TEST(MappingCache, ReturnsTheOldestRangesBeyondItsLimit) {
   EXPECT_EQ(cache.kept_bytes(), 0u);
 }
 
+TEST(MappingCache, KeepsOnlyWhatEmbreesBuildArraysTakeFromTheHeap) {
+  MappingCache cache(64 * kHugePageBytes);
+  cache.give(map_pages(14), 14 * kHugePageBytes);  // 28 MiB: Embree maps such an array afresh
+  EXPECT_EQ(cache.kept_bytes(), 0u);
+  char* const below = map_pages(13);
+  cache.give(below, 13 * kHugePageBytes);
+  EXPECT_EQ(cache.kept_bytes(), 13 * kHugePageBytes);
+  cache.release_all();
+  EXPECT_EQ(cache.kept_bytes(), 0u);
+  EXPECT_EQ(cache.take(kHugePageBytes), nullptr);
+}
+
+TEST(MappingCache, HandsOutTheMostRecentOfEqualRanges) {
+  MappingCache cache(16 * kHugePageBytes);
+  char* const older = map_pages(1);
+  char* const newer = map_pages(1);
+  cache.give(older, kHugePageBytes);
+  cache.give(newer, kHugePageBytes);
+  EXPECT_EQ(cache.take(kHugePageBytes), newer);
+  EXPECT_EQ(cache.take(kHugePageBytes), older);
+  munmap(older, kHugePageBytes);
+  munmap(newer, kHugePageBytes);
+}
+
 TEST(HugePageArray, ReusesTheMappingOfAFreedArray) {
   // A size no other test allocates, so the process's cache holds no other range of it.
   const std::size_t size = (7 * kHugePageBytes + 5) / sizeof(uint32_t);

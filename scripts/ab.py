@@ -19,12 +19,19 @@ the script prints, per build, the median over rounds of:
 - trace cells: our rays/second over Embree medium's `embree_1` (rtcIntersect1 / rtcOccluded1) on the
   same rays in the same run: above 1 is faster than Embree;
 - build cells: Embree medium's build time over ours, the same way round: above 1 is faster.
-and, for each build after the first, the change of that median against the first build's.
+and, for each build after the first, its change against the first build, with a 95% interval: the
+ratio of the two builds' figures is taken round by round (both ran back to back in that round), and the
+change is the geometric mean of those per-round ratios with Student's t interval on their logarithms
+(as harness/report/ratio_stats.h does for ratios to Embree). `▲` or `▼` marks a change whose interval
+excludes zero; with one round there is no interval. Within a run, the ratio to Embree is the geometric
+mean of the per-round sample ratios (`trace_mrays_samples`, `build_ms_samples`) where the CSV has them,
+else the ratio of medians.
 
 Needs pandas. Exits 1 with a message when a run fails or a CSV lacks the columns it needs.
 """
 
 import argparse
+import math
 import os
 import statistics
 import subprocess
@@ -33,6 +40,34 @@ import tempfile
 from pathlib import Path
 
 KEY = ["scene", "builder", "builder_params", "layout", "threads", "ray_set"]
+
+
+# t(0.975, df) for df 1..30 (Student's t, two-sided 95%); beyond 30 the value at 30, the wider side.
+T_975 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145,
+         2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048,
+         2.045, 2.042]
+
+
+def samples(text):
+    """The numbers of a `*_samples` cell ("12.5;12.7"), or [] where it is empty or not all positive."""
+    if not isinstance(text, str) or not text:
+        return []
+    try:
+        values = [float(x) for x in text.split(";")]
+    except ValueError:
+        return []
+    return values if all(v > 0 and math.isfinite(v) for v in values) else []
+
+
+def paired(num_samples, den_samples, num_median, den_median):
+    """num / den: the geometric mean of the ratios of samples taken in the same round, where both have
+    samples, else the ratio of medians; None where neither gives a positive figure."""
+    n = min(len(num_samples), len(den_samples))
+    if n:
+        return math.exp(sum(math.log(a / b) for a, b in zip(num_samples[:n], den_samples[:n])) / n)
+    if num_median > 0 and den_median > 0:
+        return num_median / den_median
+    return None
 
 
 def ratios(csv_path):
@@ -45,21 +80,57 @@ def ratios(csv_path):
         raise ValueError(f"{csv_path}: no column {', '.join(missing)}")
     df["ray_set"] = df["ray_set"].fillna("")
     df["builder_params"] = df["builder_params"].fillna("")
+    df["layout"] = df["layout"].fillna("")
+    for column in ("trace_mrays_samples", "build_ms_samples"):
+        df[column] = df[column].map(samples) if column in df.columns else [[] for _ in range(len(df))]
     embree = df[(df.builder == "embree") & (df.builder_params == "quality=medium")]
-    trace_anchor = embree[embree.layout == "embree_1"].set_index(["scene", "threads", "ray_set"]).trace_mrays_median
-    build_anchor = embree[embree.ray_set == ""].groupby(["scene", "threads"]).build_ms_median.first()
+    trace_anchor = embree[embree.layout == "embree_1"].set_index(["scene", "threads", "ray_set"])
+    build_anchor = embree[embree.ray_set == ""].groupby(["scene", "threads"]).first()
     out = {}
     for row in df[df.builder != "embree"].itertuples(index=False):
         key = tuple(getattr(row, k) for k in KEY)
         if row.ray_set:
-            anchor = trace_anchor.get((row.scene, row.threads, row.ray_set))
-            if anchor is not None and anchor > 0 and row.trace_mrays_median > 0:
-                out[key] = row.trace_mrays_median / anchor
+            at = (row.scene, row.threads, row.ray_set)
+            if at in trace_anchor.index:
+                anchor = trace_anchor.loc[at]
+                value = paired(row.trace_mrays_samples, anchor.trace_mrays_samples, row.trace_mrays_median,
+                               anchor.trace_mrays_median)
+                if value is not None:
+                    out[key] = value
         else:
-            anchor = build_anchor.get((row.scene, row.threads))
-            if anchor is not None and row.build_ms_median > 0:
-                out[key] = anchor / row.build_ms_median
+            at = (row.scene, row.threads)
+            if at in build_anchor.index:
+                anchor = build_anchor.loc[at]
+                value = paired(anchor.build_ms_samples, row.build_ms_samples, anchor.build_ms_median,
+                               row.build_ms_median)
+                if value is not None:
+                    out[key] = value
     return out
+
+
+def change(base, new):
+    """How `new` changed against `base`, both lists of one figure per round (None where a round lacks
+    it): (estimate, low, high) as fractions (+0.125 is 12.5% higher), low and high None with fewer than
+    two rounds that have both."""
+    logs = [math.log(b / a) for a, b in zip(base, new) if a is not None and b is not None]
+    if not logs:
+        return None
+    mean = sum(logs) / len(logs)
+    if len(logs) < 2:
+        return math.exp(mean) - 1, None, None
+    half = T_975[min(len(logs) - 1, len(T_975)) - 1] * statistics.stdev(logs) / math.sqrt(len(logs))
+    return math.exp(mean) - 1, math.exp(mean - half) - 1, math.exp(mean + half) - 1
+
+
+def format_change(c):
+    """change()'s result as "+12.5% [+10.1%, +14.9%] ▲"."""
+    if c is None:
+        return "-"
+    estimate, low, high = c
+    if low is None:
+        return f"{estimate:+.1%} (1 round)"
+    mark = " ▲" if low > 0 else " ▼" if high < 0 else ""
+    return f"{estimate:+.1%} [{low:+.1%}, {high:+.1%}]{mark}"
 
 
 def run_round(config, builds, order, folder, round_index, only):
@@ -95,7 +166,7 @@ def main(argv=None):
     if not os.path.isfile(args.config):
         parser.error(f"config '{args.config}' does not exist")
 
-    per_build = [dict() for _ in args.builds]  # cell -> list of ratios over rounds
+    per_build = [dict() for _ in args.builds]  # cell -> {round: ratio}
     with tempfile.TemporaryDirectory(prefix="sahbench-ab-") as folder:
         for r in range(args.rounds):
             order = list(range(len(args.builds)))
@@ -108,7 +179,7 @@ def main(argv=None):
                 return 1
             for b, cells in results.items():
                 for key, value in cells.items():
-                    per_build[b].setdefault(key, []).append(value)
+                    per_build[b].setdefault(key, {})[r] = value
 
     cells = sorted(set().union(*[set(p) for p in per_build]), key=lambda k: tuple(str(x) for x in k))
     if not cells:
@@ -116,7 +187,8 @@ def main(argv=None):
         return 1
     names = [chr(ord("A") + i) for i in range(len(args.builds))]
     print(f"# A/B, {args.rounds} interleaved rounds of {args.config}: median over rounds of ours over Embree medium")
-    print("# (trace: rays/s ratio; build: Embree's time over ours; above 1 is faster than Embree)")
+    print("# (trace: rays/s ratio; build: Embree's time over ours; above 1 is faster than Embree);")
+    print("# changes: geometric mean over rounds of the builds' ratio in that round, [95% interval]")
     for name, build in zip(names, args.builds):
         print(f"# {name}: {build}")
     header = ["scene", "builder", "params", "layout", "threads", "ray set"] + names
@@ -124,11 +196,12 @@ def main(argv=None):
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
     for key in cells:
-        medians = [statistics.median(p[key]) if key in p else None for p in per_build]
-        row = [str(key[0]), str(key[1]), str(key[2]) or "-", str(key[3]), str(key[4]), str(key[5]) or "build"]
+        medians = [statistics.median(p[key].values()) if key in p else None for p in per_build]
+        row = [str(key[0]), str(key[1]), str(key[2]) or "-", str(key[3]) or "-", str(key[4]), str(key[5]) or "build"]
         row += [f"{m:.3f}" if m is not None else "-" for m in medians]
-        for m in medians[1:]:
-            row.append(f"{m / medians[0] - 1:+.1%}" if m is not None and medians[0] else "-")
+        base = [per_build[0].get(key, {}).get(r) for r in range(args.rounds)]
+        for p in per_build[1:]:
+            row.append(format_change(change(base, [p.get(key, {}).get(r) for r in range(args.rounds)])))
         print("| " + " | ".join(row) + " |")
     return 0
 

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """scripts/ab.py against fake sahbench builds that write known CSVs: the medians of ours over Embree
-medium per cell and build, the change against the first build, the interleaved order, and clear
-errors for a failing build, a missing column and bad arguments.
+medium per cell and build, the change against the first build with its 95% interval (paired by round),
+the samples preferred to the medians, the interleaved order, and clear errors for a failing build, a
+missing column and bad arguments.
 
     test_ab.py PATH/TO/ab.py
 
@@ -41,6 +42,8 @@ if mode == "fail":
     print("error: something broke in the run", file=sys.stderr)
     sys.exit(3)
 noise = 1.0 + 0.2 * (runs % 3)
+if mode == "wobble":  # ours moves against Embree from run to run: 0.9, 1.1, 0.9, ... times `scale`
+    scale *= 0.9 if runs % 2 == 0 else 1.1
 columns = ["scene", "builder", "builder_params", "layout", "threads", "ray_set", "trace_mrays_median",
            "build_ms_median"]
 if mode == "nocolumn":
@@ -55,6 +58,16 @@ rows = [
     ["bunny", "wide_collapse", "arity=8", "bvh8", 1, "shadow", 10.0 * noise * scale, 80.0 * noise],
     ["bunny", "wide_collapse", "arity=8", "", 1, "", "", 100.0 * noise / scale],
 ]
+if mode == "samples":
+    # Samples whose per-round ratios are `scale` (0.5 * 0.8 / 0.5 ...), beside medians that say otherwise.
+    columns += ["trace_mrays_samples", "build_ms_samples"]
+    for row in rows:
+        ours = row[1] != "embree"
+        trace = "" if row[6] == "" else ("4;8;16" if ours else "5;10;20")
+        build = "50;100;200" if ours else "40;80;160"
+        row[6] = row[6] if row[6] == "" else 1.0
+        row[7] = 1.0
+        row += [trace, build]
 with out.open("w") as f:
     f.write(",".join(columns) + "\\n")
     for row in rows:
@@ -97,9 +110,9 @@ def main():
         out = done.stdout
         trace = [line for line in out.splitlines() if "| bvh8 |" in line]
         build = [line for line in out.splitlines() if "| build |" in line]
-        check(len(trace) == 1 and "| 0.800 | 0.900 | +12.5% |" in trace[0],
-              f"the shadow cell is 0.800 for A and 0.900 for B, +12.5%: {trace}")
-        check(len(build) == 1 and "| 0.800 | 0.900 | +12.5% |" in build[0],
+        check(len(trace) == 1 and "| 0.800 | 0.900 | +12.5% [+12.5%, +12.5%] ▲ |" in trace[0],
+              f"the shadow cell is 0.800 for A and 0.900 for B, +12.5% in every round: {trace}")
+        check(len(build) == 1 and "| - | 1 | build | 0.800 | 0.900 | +12.5% [+12.5%, +12.5%] ▲ |" in build[0],
               f"the build cell is Embree's time over ours, 0.800 and 0.900: {build}")
         check("embree" not in "".join(trace + build), "Embree's own rows are anchors, not cells")
         check(f"# A: {a}" in out and f"# B: {b}" in out, "the legend names each build")
@@ -107,6 +120,25 @@ def main():
         check(order == ["sahbench-a", "sahbench-b", "sahbench-b", "sahbench-a", "sahbench-a", "sahbench-b"],
               f"rounds alternate the order: {order}")
         check("round 3:" in done.stderr, "progress on stderr names the round")
+
+        # B against A moves 0.9, 1.1, 0.9 times from round to round: a change of -3.8% whose interval,
+        # exp(mean +- 4.303 * sd / sqrt(3)) of the logs, holds zero, so no mark.
+        wobbly = make_build(folder, "sahbench-w", 0.8, log, mode="wobble")
+        done = run_ab(ab, "--rounds", "3", str(config), a, wobbly)
+        trace = [line for line in done.stdout.splitlines() if "| bvh8 |" in line]
+        check(done.returncode == 0 and len(trace) == 1 and "| -3.8% [-27.8%, +28.3%] |" in trace[0],
+              f"a change within the rounds' noise gets a wide interval and no mark: {trace} {done.stderr}")
+        done = run_ab(ab, "--rounds", "1", str(config), a, b)
+        trace = [line for line in done.stdout.splitlines() if "| bvh8 |" in line]
+        check(len(trace) == 1 and "| +12.5% (1 round) |" in trace[0], f"one round has no interval: {trace}")
+
+        # Samples give 0.8 (trace: 4/5, 8/10, 16/20; build: 40/50, ...) where the medians would give 1.
+        sampled = make_build(folder, "sahbench-s", 0.8, log, mode="samples")
+        done = run_ab(ab, "--rounds", "2", str(config), sampled, b)
+        trace = [line for line in done.stdout.splitlines() if "| bvh8 |" in line]
+        build = [line for line in done.stdout.splitlines() if "| build |" in line]
+        check(len(trace) == 1 and "| 0.800 | 0.900 |" in trace[0] and len(build) == 1
+              and "| 0.800 | 0.900 |" in build[0], f"samples paired by round, not medians: {trace} {build}")
 
         failing = make_build(folder, "sahbench-broken", 1.0, log, mode="fail")
         done = run_ab(ab, "--rounds", "1", str(config), a, failing)

@@ -62,27 +62,30 @@ void* MappingCache::take(std::size_t bytes) {
 void MappingCache::give(void* p, std::size_t bytes) noexcept {
   const Range range{static_cast<char*>(p), bytes, 0};
   if (bytes > kMaxKeptBytes || bytes > limit_) return unmap(range);
+  bool kept = false;
   std::vector<Range> released;
   {
     const std::lock_guard lock(mutex_);
     try {
-      kept_.push_back({range.begin, bytes, clock_++});
-      released.reserve(kept_.size());
-    } catch (const std::bad_alloc&) {  // deallocations may not throw: not kept, then
-      if (!kept_.empty() && kept_.back().begin == range.begin) kept_.pop_back();
-      unmap(range);
-      return;
+      kept_.reserve(kept_.size() + 1);
+      released.reserve(kept_.size() + 1);
+      kept = true;
+    } catch (const std::bad_alloc&) {  // deallocations may not throw: without room, not kept
     }
-    SAHBENCH_POISON(p, bytes);
-    kept_bytes_ += bytes;
-    while (kept_bytes_ > limit_) {
-      const auto oldest = std::min_element(kept_.begin(), kept_.end(),
-                                           [](const Range& a, const Range& b) { return a.age < b.age; });
-      released.push_back(*oldest);
-      kept_bytes_ -= oldest->bytes;
-      kept_.erase(oldest);
+    if (kept) {
+      kept_.push_back({range.begin, bytes, clock_++});
+      SAHBENCH_POISON(p, bytes);
+      kept_bytes_ += bytes;
+      while (kept_bytes_ > limit_) {
+        const auto oldest = std::min_element(kept_.begin(), kept_.end(),
+                                             [](const Range& a, const Range& b) { return a.age < b.age; });
+        released.push_back(*oldest);
+        kept_bytes_ -= oldest->bytes;
+        kept_.erase(oldest);
+      }
     }
   }
+  if (!kept) unmap(range);
   for (const Range& r : released) unmap(r);
 }
 

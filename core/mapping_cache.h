@@ -10,7 +10,7 @@
 // kernel as before.
 //
 // The harness's mem_peak_bytes counts memory in use, as it does for the heap: a kept range is counted
-// when it is handed out, not while it waits. What the cache holds is bounded (MappingCache::limit), the
+// when it is handed out, not while it waits. What the cache holds is bounded (the constructor's limit), the
 // oldest ranges returned to the kernel first.
 
 #include <cstddef>
@@ -43,7 +43,6 @@ class MappingCache {
   void release_all() noexcept;
 
   std::size_t kept_bytes() const;
-  std::size_t limit() const { return limit_; }
 
  private:
   struct Range {

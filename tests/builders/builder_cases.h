@@ -78,9 +78,11 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back(
       {"sbvh",
        {{"alpha", "0"}, {"max_dup", "2"}, {"max_leaf", "1"}, {"spatial_bins", "256"}, {"c_trav", "3"}}});
-  // The bottom-up builders: 63-bit codes, single-primitive leaves, and a coarser collapse.
+  // The bottom-up builders: 63-bit codes, Karras's pass beside the default Apetrei's, single-primitive
+  // leaves, and a coarser collapse.
   out.push_back({"lbvh", {{"bits", "63"}}});
-  out.push_back({"lbvh", {{"hierarchy", "apetrei"}}});
+  out.push_back({"lbvh", {{"hierarchy", "karras"}}});
+  out.push_back({"lbvh", {{"hierarchy", "karras"}, {"bits", "63"}, {"max_leaf", "1"}}});
   out.push_back({"lbvh", {{"max_leaf", "1"}}});
   out.push_back({"lbvh", {{"min_leaf", "4"}, {"max_leaf", "16"}, {"c_trav", "3"}}});
   out.push_back({"ploc", {{"radius", "1"}}});

@@ -48,7 +48,7 @@ seed = 42
 threads = [1, 4]
 scenes = ["proc:soup:tris=100k", "scenes/a.obj"]
 optional_scenes = ["crytek_sponza"]
-layouts = ["bvh2"]
+layouts = ["bvh2", "bvh8:tri=mt"]
 reference = "auto"
 brute_force_max_triangles = 5000
 
@@ -108,7 +108,7 @@ count = 99
   expected.threads = {1, 4};
   expected.scenes = {"proc:soup:tris=100k", "scenes/a.obj"};
   expected.optional_scenes = {"crytek_sponza"};
-  expected.layouts = {parse_layout_spec("bvh2")};
+  expected.layouts = {parse_layout_spec("bvh2"), parse_layout_spec("bvh8:tri=mt")};
   expected.reference = ReferencePolicy::kAuto;
   expected.brute_force_max_triangles = 5000;
   expected.reps = {7, 0, 3, 2, false};

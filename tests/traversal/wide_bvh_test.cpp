@@ -210,7 +210,7 @@ void check_node_tests() {
       if (nodes[k].count[i] == 0 && nodes[k].child[i] != 0) nodes.push_back(wide.node(nodes[k].child[i]));
   auto rays = test::random_rays(scene, 300, 3);
   // Tiny and zero direction components, where FmaRayBox's reciprocal differs from 1 / d.
-  for (std::size_t i = 0; i < rays.size(); i += 3) rays[i].dir[i % 3] = (i % 2 ? 1e-20f : -0.0f);
+  for (std::size_t i = 0; i < rays.size(); i += 3) rays[i].dir[(i / 3) % 3] = (i % 2 ? 1e-20f : -0.0f);
   std::vector<WideRay> wide_rays;
   for (BoxTestKind box : {BoxTestKind::kRobust, BoxTestKind::kFast, BoxTestKind::kFma}) {
     SCOPED_TRACE(std::string(to_string(box)));

@@ -7,8 +7,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "builders/registry.h"
 #include "cli/build_command.h"
@@ -195,7 +197,21 @@ TEST_F(TreeFileBuilder, BuildSaveWritesTheTreeThatFileReadsBack) {
   again.builders = {parse_builder_run("file:" + path.string()), parse_builder_run("sbvh")};
   std::ostringstream out2;
   ASSERT_EQ(run_build_command(again, out2, log), 0) << out2.str();
-  contains(out2.str(), " ok");
+  // The statistics of a row: nodes, leaves, depth, references per leaf, SAH, bytes and validity.
+  auto statistics_of = [&](const std::string& builder) {
+    std::istringstream lines(out2.str());
+    for (std::string line; std::getline(lines, line);) {
+      std::istringstream fields(line);
+      std::vector<std::string> words{std::istream_iterator<std::string>(fields), {}};
+      if (words.size() > 7 && words[1] == builder)
+        return std::vector<std::string>(words.end() - 7, words.end());
+    }
+    return std::vector<std::string>{};
+  };
+  const auto from_file = statistics_of("file");
+  ASSERT_EQ(from_file.size(), 7u) << out2.str();
+  EXPECT_EQ(from_file, statistics_of("sbvh")) << out2.str();
+  EXPECT_EQ(from_file.back(), "ok") << out2.str();
   // One tree per file: two builders, or Embree's, are refused before any build.
   BuildCommandOptions two = options;
   two.builders = {parse_builder_run("sbvh"), parse_builder_run("binned_sah")};

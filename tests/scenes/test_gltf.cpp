@@ -319,12 +319,15 @@ TEST(SceneGltf, MissingBinAndMissingFileAndTruncatedGlb) {
   msg = error_message([&] { load_scene(absent.string()); });
   EXPECT_NE(msg.find(absent.string()), std::string::npos) << msg;
 
-  Bytes b = quad_buffer();
-  std::string bytes = glb(quad_gltf("", 0), b);
+  // A GLB that loads whole, cut short inside its binary chunk.
+  const Bytes b = quad_buffer();
+  std::string bytes = glb(quad_gltf("", b.size()), b);
+  EXPECT_FALSE(load_gltf(dir.write("whole.glb", bytes), true).triangles.empty());
   bytes.resize(bytes.size() - 30);
   const auto cut = dir.write("cut.glb", bytes);
   msg = error_message([&] { load_gltf(cut, true); });
   EXPECT_NE(msg.find(cut.string()), std::string::npos) << msg;
+  EXPECT_NE(msg.find("invalid GLB file"), std::string::npos) << msg;
 }
 
 TEST(SceneGltf, LoadSceneDispatchesGltfAndGlb) {

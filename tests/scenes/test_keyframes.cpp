@@ -74,7 +74,7 @@ TEST(Keyframes, SlerpTurnsAtConstantAngularSpeed) {
                      float(q1[2]), float(q1[3])},
                     4, Interpolation::kLinear, true);
   expect_quat_near(at(k, 0.5), about_z(45));
-  expect_quat_near(at(k, 1.0 / 3.0), about_z(30));  // a plain lerp would give 31.7 degrees here
+  expect_quat_near(at(k, 1.0 / 3.0), about_z(30));  // a normalised lerp would give 29.3 degrees here
   expect_quat_near(at(k, 0.9), about_z(81));
 }
 

@@ -212,8 +212,9 @@ TEST(HarnessImage, EyeAndTargetGiveTheView) {
   EXPECT_NE(away_log.str().find("depth: no hits"), std::string::npos) << away_log.str();
 
   std::ostringstream log;
-  // Each bad view is an error that names the option and its value.
+  // Each bad view is an error that names the option and its value, and writes nothing.
   auto expect_error = [&](auto view, std::string_view text) {
+    view.out = dir.path() / "bad";
     const std::string message = error_message([&] { run_image_command(view, log); });
     EXPECT_NE(message.find(text), std::string::npos) << "expected '" << text << "' in: " << message;
   };
@@ -242,7 +243,8 @@ TEST(HarnessImage, EyeAndTargetGiveTheView) {
   auto same = facing;
   same.target = "0,0,3";
   expect_error(same, "must differ from the eye");
-  EXPECT_FALSE(std::filesystem::exists(dir.path() / "x_nodes.png"));
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_NE(entry.path().filename().string().rfind("bad", 0), 0u) << "written on error: " << entry.path();
 }
 
 TEST(HarnessImage, BadInputIsAnErrorNamingIt) {

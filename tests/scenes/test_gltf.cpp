@@ -250,7 +250,8 @@ TEST(SceneGltf, MalformedFilesThrowNamingTheFile) {
       // Accessor offset past its bufferView.
       {quad_gltf(data_uri(buffer), buffer.size(), R"(, "byteOffset": 4000000000)"), "exceed bufferView 0"},
       // bufferView past the end of its buffer.
-      {edited(R"("byteOffset": 48, "byteLength": 12)", R"("byteOffset": 50, "byteLength": 12)"), "buffer"},
+      {edited(R"("byteOffset": 48, "byteLength": 12)", R"("byteOffset": 50, "byteLength": 12)"),
+       "bufferView 1 (offset 50, length 12) exceeds its buffer of 60 bytes"},
       // Stride so large that the last element is outside.
       {edited(R"("byteOffset": 0, "byteLength": 48})",
               R"("byteOffset": 0, "byteLength": 48, "byteStride": 252})"),

@@ -67,7 +67,7 @@ void MappingCache::give(void* p, std::size_t bytes) noexcept {
   {
     const std::lock_guard lock(mutex_);
     try {
-      kept_.reserve(kept_.size() + 1);
+      if (kept_.size() == kept_.capacity()) kept_.reserve(std::max<std::size_t>(16, 2 * kept_.capacity()));
       released.reserve(kept_.size() + 1);
       kept = true;
     } catch (const std::bad_alloc&) {  // deallocations may not throw: without room, not kept

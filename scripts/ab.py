@@ -13,9 +13,10 @@ Each round runs every build once on CONFIG (`BUILD run CONFIG --output ...`), in
 order every other round so that neither build always runs first on a machine that warms up or slows
 down. Every run writes its own CSV in a temporary folder, so the config's output is not touched.
 
-Timings on a shared machine vary by 10-25% between runs, but the ratio of our figure to Embree's in the
-same run holds much better. So for each cell (scene, builder and parameters, layout, threads, ray set)
-the script prints, per build, the median over rounds of:
+Timings on a shared machine vary by 10-25% between runs; the ratio of our figure to Embree's in the same
+run cancels part of that (how much, an A/A run of the config shows: README). So for each cell (scene,
+builder and parameters, layout, threads, ray set) the script prints, per build, the median over rounds
+of:
 - trace cells: our rays/second over Embree medium's `embree_1` (rtcIntersect1 / rtcOccluded1) on the
   same rays in the same run: above 1 is faster than Embree;
 - build cells: Embree medium's build time over ours, the same way round: above 1 is faster.
@@ -24,8 +25,9 @@ ratio of the two builds' figures is taken round by round (both ran back to back 
 change is the geometric mean of those per-round ratios with Student's t interval on their logarithms
 (as harness/report/ratio_stats.h does for ratios to Embree). `▲` or `▼` marks a change whose interval
 excludes zero; with one round there is no interval. Within a run, the ratio to Embree is the geometric
-mean of the per-round sample ratios (`trace_mrays_samples`, `build_ms_samples`) where the CSV has them,
-else the ratio of medians.
+mean of the ratios of samples taken in the same round (`trace_mrays_samples`, `build_ms_samples`, over
+the rounds both have) where the CSV has them, else the ratio of medians. An animated config's frames are
+cells of their own. Use an even number of rounds, so that each build runs first equally often.
 
 Needs pandas. Exits 1 with a message when a run fails or a CSV lacks the columns it needs.
 """
@@ -83,14 +85,22 @@ def ratios(csv_path):
     df["layout"] = df["layout"].fillna("")
     for column in ("trace_mrays_samples", "build_ms_samples"):
         df[column] = df[column].map(samples) if column in df.columns else [[] for _ in range(len(df))]
+    # Animated configs write a row per frame; each frame is its own cell against Embree's same frame.
+    df["frame"] = df["frame"].fillna(0).astype(int) if "frame" in df.columns else 0
     embree = df[(df.builder == "embree") & (df.builder_params == "quality=medium")]
-    trace_anchor = embree[embree.layout == "embree_1"].set_index(["scene", "threads", "ray_set"])
-    build_anchor = embree[embree.ray_set == ""].groupby(["scene", "threads"]).first()
+
+    def anchors(rows, by):
+        return rows.drop_duplicates(by).set_index(by).sort_index()
+
+    trace_anchor = anchors(embree[embree.layout == "embree_1"], ["scene", "frame", "threads", "ray_set"])
+    build_anchor = anchors(embree[embree.ray_set == ""], ["scene", "frame", "threads"])
     out = {}
     for row in df[df.builder != "embree"].itertuples(index=False):
         key = tuple(getattr(row, k) for k in KEY)
+        if row.frame:
+            key = (f"{row.scene} (frame {row.frame})",) + key[1:]
         if row.ray_set:
-            at = (row.scene, row.threads, row.ray_set)
+            at = (row.scene, row.frame, row.threads, row.ray_set)
             if at in trace_anchor.index:
                 anchor = trace_anchor.loc[at]
                 value = paired(row.trace_mrays_samples, anchor.trace_mrays_samples, row.trace_mrays_median,
@@ -98,7 +108,7 @@ def ratios(csv_path):
                 if value is not None:
                     out[key] = value
         else:
-            at = (row.scene, row.threads)
+            at = (row.scene, row.frame, row.threads)
             if at in build_anchor.index:
                 anchor = build_anchor.loc[at]
                 value = paired(anchor.build_ms_samples, row.build_ms_samples, anchor.build_ms_median,

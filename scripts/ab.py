@@ -99,22 +99,22 @@ def ratios(csv_path):
         key = tuple(getattr(row, k) for k in KEY)
         if row.frame:
             key = (f"{row.scene} (frame {row.frame})",) + key[1:]
+        # Trace: our rays/s over Embree's; build: Embree's time over ours. Either way above 1 is faster.
         if row.ray_set:
-            at = (row.scene, row.frame, row.threads, row.ray_set)
-            if at in trace_anchor.index:
-                anchor = trace_anchor.loc[at]
-                value = paired(row.trace_mrays_samples, anchor.trace_mrays_samples, row.trace_mrays_median,
-                               anchor.trace_mrays_median)
-                if value is not None:
-                    out[key] = value
+            anchors_of, at = trace_anchor, (row.scene, row.frame, row.threads, row.ray_set)
+            samples_column, median_column, ours_over_embree = "trace_mrays_samples", "trace_mrays_median", True
         else:
-            at = (row.scene, row.frame, row.threads)
-            if at in build_anchor.index:
-                anchor = build_anchor.loc[at]
-                value = paired(anchor.build_ms_samples, row.build_ms_samples, anchor.build_ms_median,
-                               row.build_ms_median)
-                if value is not None:
-                    out[key] = value
+            anchors_of, at = build_anchor, (row.scene, row.frame, row.threads)
+            samples_column, median_column, ours_over_embree = "build_ms_samples", "build_ms_median", False
+        if at not in anchors_of.index:
+            continue
+        anchor = anchors_of.loc[at]
+        ours = (getattr(row, samples_column), getattr(row, median_column))
+        embree_figures = (getattr(anchor, samples_column), getattr(anchor, median_column))
+        num, den = (ours, embree_figures) if ours_over_embree else (embree_figures, ours)
+        value = paired(num[0], den[0], num[1], den[1])
+        if value is not None:
+            out[key] = value
     return out
 
 

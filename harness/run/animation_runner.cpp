@@ -352,10 +352,7 @@ class AnimationRunner {
     progress_.batch(cells.size());
     for (auto& cell : cells) {
       finish_cell(cell, frame.references[cell.set_index], frame.diagonal);
-      append(
-          csv, cell.row,
-          fmt::format("{}: build_ms {}, {} Mrays/s, {} mismatches", cell.label, cell.row["build_ms_median"],
-                      cell.row["trace_mrays_median"], cell.row["mismatches"]));
+      append(csv, cell.row, cell_summary(cell.label, cell.row));
     }
   }
 

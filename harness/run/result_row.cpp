@@ -122,6 +122,17 @@ void put_mismatches(CsvRow& row, const Reference& ref, const RaySet& rs, float s
       ref.name == "none" ? "" : std::to_string(count_mismatches(ref, rs, scene_diagonal, hits, occluded));
 }
 
+std::string cell_summary(const std::string& label, const CsvRow& row) {
+  const auto field = [&](const char* column) {
+    const auto it = row.find(column);
+    return it == row.end() ? std::string() : it->second;
+  };
+  const std::string mismatches = field("mismatches");
+  return fmt::format("{}: build {} ms, {} Mrays/s, {}", label, field("build_ms_median"),
+                     field("trace_mrays_median"),
+                     mismatches.empty() ? "no reference" : mismatches + " mismatches");
+}
+
 void add_note(CsvRow& row, const std::string& note) {
   std::string& notes = row["notes"];
   if (!notes.empty()) notes += "; ";

@@ -71,6 +71,10 @@ void put_per_ray_counts(CsvRow& row, const TraceCounts& counts, const std::optio
 void put_mismatches(CsvRow& row, const Reference& ref, const RaySet& rs, float scene_diagonal,
                     std::span<const Hit> hits, std::span<const uint8_t> occluded);
 
+/// The progress line of a finished cell: `label`, its median build time and rays/s, and its mismatches
+/// ("no reference" where the run has none).
+std::string cell_summary(const std::string& label, const CsvRow& row);
+
 /// Appends `note` to the row's `notes`, after "; " when it has some already.
 void add_note(CsvRow& row, const std::string& note);
 

@@ -238,9 +238,7 @@ class ExperimentRunner {
     for (auto& cell : cells) {
       finish_cell(cell, references[cell.set_index], diagonal_);
       csv_ms_ += time_ms([&] { csv.append(cell.row); });
-      progress.cell_done(fmt::format("{}: build {} ms, {} Mrays/s, {} mismatches", cell.label,
-                                     cell.row["build_ms_median"], cell.row["trace_mrays_median"],
-                                     cell.row["mismatches"]));
+      progress.cell_done(cell_summary(cell.label, cell.row));
     }
   }
 

@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "harness/run/csv.h"
+#include "harness/run/result_row.h"
 
 namespace sahbench {
 namespace {
@@ -82,6 +83,13 @@ TEST(HarnessCsv, DesignColumnsComeFirstAndInOrder) {
   EXPECT_EQ(std::vector<std::string>(c.begin() + 37, c.end()),
             (std::vector<std::string>{"run_fingerprint", "build_ms_samples", "trace_mrays_samples",
                                       "build_layout_ms_median", "hit_fraction"}));
+}
+
+TEST(HarnessCsv, CellSummaryNamesMismatchesOrTheirAbsence) {
+  CsvRow row{{"build_ms_median", "1.5"}, {"trace_mrays_median", "2.25"}, {"mismatches", "0"}};
+  EXPECT_EQ(cell_summary("bunny bvh8", row), "bunny bvh8: build 1.5 ms, 2.25 Mrays/s, 0 mismatches");
+  row["mismatches"] = "";
+  EXPECT_EQ(cell_summary("bunny bvh8", row), "bunny bvh8: build 1.5 ms, 2.25 Mrays/s, no reference");
 }
 
 }  // namespace

@@ -19,14 +19,17 @@ builder and parameters, layout, threads, ray set) the script prints, per build, 
 of:
 - trace cells: our rays/second over Embree medium's `embree_1` (rtcIntersect1 / rtcOccluded1) on the
   same rays in the same run: above 1 is faster than Embree;
-- build cells: Embree medium's build time over ours, the same way round: above 1 is faster.
+- build cells (one per scene, builder and parameters, threads; printed with ray set "build"): Embree
+  medium's build time (`embree_1`, default mode) over ours, from any of the cell's rows (they carry the
+  same build), the same way round: above 1 is faster.
 and, for each build after the first, its change against the first build, with a 95% interval: the
 ratio of the two builds' figures is taken round by round (both ran back to back in that round), and the
 change is the geometric mean of those per-round ratios with Student's t interval on their logarithms
 (as harness/report/ratio_stats.h does for ratios to Embree). `▲` or `▼` marks a change whose interval
 excludes zero; with one round there is no interval. Within a run, the ratio to Embree is the geometric
-mean of the ratios of samples taken in the same round (`trace_mrays_samples`, `build_ms_samples`, over
-the rounds both have) where the CSV has them, else the ratio of medians. An animated config's frames are
+mean of the ratios of samples taken in the same round (`trace_mrays_samples`, `build_ms_samples`) where
+the CSV has them, else the ratio of medians; samples of different counts, or not all positive, are an
+error, as in `sahbench report`. An animated config's frames are
 cells of their own. Use an even number of rounds, so that each build runs first equally often.
 
 Needs pandas. Exits 1 with a message when a run fails or a CSV lacks the columns it needs.
@@ -51,22 +54,27 @@ T_975 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 
 
 
 def samples(text):
-    """The numbers of a `*_samples` cell ("12.5;12.7"), or [] where it is empty or not all positive."""
+    """The numbers of a `*_samples` cell ("12.5;12.7"), [] where it is empty; ValueError where one is
+    not a positive finite number."""
     if not isinstance(text, str) or not text:
         return []
     try:
         values = [float(x) for x in text.split(";")]
     except ValueError:
-        return []
-    return values if all(v > 0 and math.isfinite(v) for v in values) else []
+        raise ValueError(f"samples '{text}' are not numbers") from None
+    if not all(v > 0 and math.isfinite(v) for v in values):
+        raise ValueError(f"samples '{text}' are not all positive")
+    return values
 
 
 def paired(num_samples, den_samples, num_median, den_median):
     """num / den: the geometric mean of the ratios of samples taken in the same round, where both have
-    samples, else the ratio of medians; None where neither gives a positive figure."""
-    n = min(len(num_samples), len(den_samples))
-    if n:
-        return math.exp(sum(math.log(a / b) for a, b in zip(num_samples[:n], den_samples[:n])) / n)
+    samples, else the ratio of medians; None where neither gives a positive figure. ValueError where
+    both have samples of different counts: they are not paired by round."""
+    if num_samples and den_samples:
+        if len(num_samples) != len(den_samples):
+            raise ValueError(f"{len(num_samples)} samples against the anchor's {len(den_samples)}")
+        return math.exp(sum(math.log(a / b) for a, b in zip(num_samples, den_samples)) / len(num_samples))
     if num_median > 0 and den_median > 0:
         return num_median / den_median
     return None
@@ -84,37 +92,48 @@ def ratios(csv_path):
     df["builder_params"] = df["builder_params"].fillna("")
     df["layout"] = df["layout"].fillna("")
     for column in ("trace_mrays_samples", "build_ms_samples"):
-        df[column] = df[column].map(samples) if column in df.columns else [[] for _ in range(len(df))]
+        if column not in df.columns:
+            df[column] = [[] for _ in range(len(df))]
+            continue
+        try:
+            df[column] = df[column].map(samples)
+        except ValueError as error:
+            raise ValueError(f"{csv_path}: {column}: {error}") from None
     # Animated configs write a row per frame; each frame is its own cell against Embree's same frame.
     df["frame"] = df["frame"].fillna(0).astype(int) if "frame" in df.columns else 0
-    embree = df[(df.builder == "embree") & (df.builder_params == "quality=medium")]
+    embree = df[(df.builder == "embree") & (df.builder_params == "quality=medium") & (df.layout == "embree_1")]
+    trace_anchor = embree.drop_duplicates(["scene", "frame", "threads", "ray_set"])
+    trace_anchor = trace_anchor.set_index(["scene", "frame", "threads", "ray_set"]).sort_index()
+    # Every row of a build carries its build time: one row per build, ours and Embree's.
+    build_anchor = embree.drop_duplicates(["scene", "frame", "threads"]).set_index(["scene", "frame", "threads"])
+    ours_rows = df[df.builder != "embree"]
+    builds = ours_rows.drop_duplicates(["scene", "frame", "threads", "builder", "builder_params"])
 
-    def anchors(rows, by):
-        return rows.drop_duplicates(by).set_index(by).sort_index()
-
-    trace_anchor = anchors(embree[embree.layout == "embree_1"], ["scene", "frame", "threads", "ray_set"])
-    build_anchor = anchors(embree[embree.ray_set == ""], ["scene", "frame", "threads"])
-    out = {}
-    for row in df[df.builder != "embree"].itertuples(index=False):
-        key = tuple(getattr(row, k) for k in KEY)
+    def cell(row, anchors_of, at, key, samples_column, median_column, ours_over_embree):
+        if at not in anchors_of.index:
+            return
         if row.frame:
             key = (f"{row.scene} (frame {row.frame})",) + key[1:]
-        # Trace: our rays/s over Embree's; build: Embree's time over ours. Either way above 1 is faster.
-        if row.ray_set:
-            anchors_of, at = trace_anchor, (row.scene, row.frame, row.threads, row.ray_set)
-            samples_column, median_column, ours_over_embree = "trace_mrays_samples", "trace_mrays_median", True
-        else:
-            anchors_of, at = build_anchor, (row.scene, row.frame, row.threads)
-            samples_column, median_column, ours_over_embree = "build_ms_samples", "build_ms_median", False
-        if at not in anchors_of.index:
-            continue
         anchor = anchors_of.loc[at]
         ours = (getattr(row, samples_column), getattr(row, median_column))
         embree_figures = (getattr(anchor, samples_column), getattr(anchor, median_column))
         num, den = (ours, embree_figures) if ours_over_embree else (embree_figures, ours)
-        value = paired(num[0], den[0], num[1], den[1])
+        try:
+            value = paired(num[0], den[0], num[1], den[1])
+        except ValueError as error:
+            raise ValueError(f"{csv_path}: {' '.join(str(k) for k in key if k != '')}: {error}") from None
         if value is not None:
             out[key] = value
+
+    # Trace: our rays/s over Embree's; build: Embree's time over ours. Either way above 1 is faster.
+    out = {}
+    for row in ours_rows.itertuples(index=False):
+        cell(row, trace_anchor, (row.scene, row.frame, row.threads, row.ray_set), tuple(getattr(row, k) for k in KEY),
+             "trace_mrays_samples", "trace_mrays_median", True)
+    for row in builds.itertuples(index=False):
+        cell(row, build_anchor, (row.scene, row.frame, row.threads),
+             (row.scene, row.builder, row.builder_params, "", row.threads, ""), "build_ms_samples",
+             "build_ms_median", False)
     return out
 
 

@@ -48,25 +48,24 @@ columns = ["scene", "builder", "builder_params", "layout", "threads", "ray_set",
            "build_ms_median"]
 if mode == "nocolumn":
     columns.remove("build_ms_median")
+# As sahbench writes them: a row per layout and ray set, each carrying its build's time.
 rows = [
     ["bunny", "embree", "quality=medium", "embree_1", 1, "shadow", 10.0 * noise, 100.0 * noise],
     ["bunny", "embree", "quality=medium", "embree_8", 1, "shadow", 30.0 * noise, 100.0 * noise],
-    ["bunny", "embree", "quality=medium", "embree_1", 1, "", "", 100.0 * noise],
     # Embree's robust mode: not the anchor, which stays its default mode (a ratio to it would read 1.6).
     ["bunny", "embree", "quality=medium;robust=1", "embree_1", 1, "shadow", 5.0 * noise, 200.0 * noise],
-    ["bunny", "embree", "quality=medium;robust=1", "embree_1", 1, "", "", 200.0 * noise],
-    ["bunny", "wide_collapse", "arity=8", "bvh8", 1, "shadow", 10.0 * noise * scale, 80.0 * noise],
-    ["bunny", "wide_collapse", "arity=8", "", 1, "", "", 100.0 * noise / scale],
+    ["bunny", "wide_collapse", "arity=8", "bvh8", 1, "shadow", 10.0 * noise * scale, 100.0 * noise / scale],
+    ["bunny", "wide_collapse", "arity=8", "bvh4", 1, "shadow", 10.0 * noise * scale, 100.0 * noise / scale],
 ]
-if mode == "samples":
-    # Samples whose ratios in the rounds both have are 0.8, 1 and 0.8 (geometric mean 0.862), ours with
-    # a fourth round Embree lacks, beside medians that say 1.
+if mode in ("samples", "mismatch"):
+    # Samples whose ratios by round are 0.8, 1 and 0.8 (geometric mean 0.862), beside medians that say 1;
+    # "mismatch": ours with a fourth round Embree lacks.
     columns += ["trace_mrays_samples", "build_ms_samples"]
     for row in rows:
         ours = row[1] != "embree"
-        trace = "" if row[6] == "" else ("4;10;16;1000" if ours else "5;10;20")
-        build = "50;80;200;1" if ours else "40;80;160"
-        row[6] = row[6] if row[6] == "" else 1.0
+        trace = ("4;10;16" + (";1000" if mode == "mismatch" else "")) if ours else "5;10;20"
+        build = "50;80;200" if ours else "40;80;160"
+        row[6] = 1.0
         row[7] = 1.0
         row += [trace, build]
 if mode == "frames":
@@ -118,12 +117,13 @@ def main():
         done = run_ab(ab, "--rounds", "3", str(config), a, b)
         check(done.returncode == 0, f"a good A/B exits 0, got {done.returncode}: {done.stderr}")
         out = done.stdout
-        trace = [line for line in out.splitlines() if "| bvh8 |" in line]
+        trace = [line for line in out.splitlines() if "| bvh8 |" in line or "| bvh4 |" in line]
         build = [line for line in out.splitlines() if "| build |" in line]
-        check(len(trace) == 1 and "| 0.800 | 0.900 | +12.5% [+12.5%, +12.5%] ▲ |" in trace[0],
-              f"the shadow cell is 0.800 for A and 0.900 for B, +12.5% in every round: {trace}")
-        check(len(build) == 1 and "| - | 1 | build | 0.800 | 0.900 | +12.5% [+12.5%, +12.5%] ▲ |" in build[0],
-              f"the build cell is Embree's time over ours, 0.800 and 0.900: {build}")
+        check(len(trace) == 2 and all("| 0.800 | 0.900 | +12.5% [+12.5%, +12.5%] ▲ |" in t for t in trace),
+              f"each layout's shadow cell is 0.800 for A and 0.900 for B, +12.5% in every round: {trace}")
+        check(len(build) == 1
+              and "| wide_collapse | arity=8 | - | 1 | build | 0.800 | 0.900 | +12.5% [+12.5%, +12.5%] ▲ |" in build[0],
+              f"one build cell per build, Embree's time over ours, 0.800 and 0.900: {build}")
         rows = [line for line in out.splitlines() if line.startswith("| ") and "| scene |" not in line]
         check(rows and not any(line.startswith("| bunny | embree |") for line in rows),
               f"Embree's own rows are anchors, not cells: {rows}")
@@ -145,7 +145,7 @@ def main():
         check(len(trace) == 1 and "| +12.5% (1 round) |" in trace[0], f"one round has no interval: {trace}")
 
         # Samples give 0.862, the geometric mean of 4/5, 10/10 and 16/20 (build: 40/50, 80/80,
-        # 160/200), over the three rounds both have, where the medians would give 1.
+        # 160/200), where the medians would give 1.
         sampled = make_build(folder, "sahbench-s", 0.8, log, mode="samples")
         done = run_ab(ab, "--rounds", "2", str(config), sampled, b)
         trace = [line for line in done.stdout.splitlines() if "| bvh8 |" in line]
@@ -153,12 +153,18 @@ def main():
         check(len(trace) == 1 and "| 0.862 | 0.900 |" in trace[0] and len(build) == 1
               and "| 0.862 | 0.900 |" in build[0], f"samples paired by round, not medians: {trace} {build}")
 
+        # Samples of different counts are not paired by round: an error naming the cell, as in report.
+        mismatched = make_build(folder, "sahbench-m", 0.8, log, mode="mismatch")
+        done = run_ab(ab, "--rounds", "1", str(config), mismatched, b)
+        check(done.returncode == 1 and "bunny wide_collapse arity=8 bvh8 1 shadow: 4 samples against the anchor's 3"
+              in done.stderr, f"mismatched samples are an error: {done.returncode} {done.stderr}")
+
         # An animation's frames are cells of their own, each against Embree's same frame.
         framed = make_build(folder, "sahbench-f", 0.8, log, mode="frames")
         done = run_ab(ab, "--rounds", "2", str(config), framed, b)
         frame1 = [line for line in done.stdout.splitlines() if line.startswith("| bunny (frame 1) |")]
         frame0 = [line for line in done.stdout.splitlines() if line.startswith("| bunny |")]
-        check(done.returncode == 0 and len(frame1) == 2 and len(frame0) == 2
+        check(done.returncode == 0 and len(frame1) == 3 and len(frame0) == 3
               and all("| 0.400 | - | - |" in line for line in frame1)
               and all("| 0.800 | 0.900 |" in line for line in frame0),
               f"frames are cells of their own: {done.stdout} {done.stderr}")

@@ -273,8 +273,8 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   for (const auto& f : findings) (f.regression ? result.regressions : result.improvements) += 1;
   result.regressions += result.missing_cells + result.missing_anchors;
   fmt::print(out,
-             "# sahbench compare\n\nbaseline {} vs {}: {} cells compared, {} missing, {} regressions, {} "
-             "improvements{}\n\n",
+             "# sahbench compare\n\nbaseline {} vs {}: {} cells compared, {} missing (each a regression), {} "
+             "other regressions, {} improvements{}\n\n",
              options.baseline.string(), options.current.string(), result.compared_cells, result.missing_cells,
              result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
              options.deterministic_only ? " (deterministic metrics only)" : "");

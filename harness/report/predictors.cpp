@@ -35,6 +35,17 @@ std::string field(const CsvRow& row, const std::string& column) {
   return it == row.end() ? "" : it->second;
 }
 
+// "c_trav=3, c_isect=1, block=4": the constants a row's SAH cost is under.
+std::string cost_model(const CsvRow& row) {
+  return fmt::format("c_trav={}, c_isect={}, block={}", field(row, "sah_c_trav"), field(row, "sah_c_isect"),
+                     field(row, "sah_block"));
+}
+
+// "shadow", or "shadow [c_trav=1, c_isect=1, block=4]" where the table has rows under other constants.
+std::string rays_label(const PredictorRow& r) {
+  return r.model.empty() ? r.ray_set : fmt::format("{} [{}]", r.ray_set, r.model);
+}
+
 // "0.83", or "-" where there is no correlation.
 std::string rho_text(const std::optional<double>& rho) {
   return rho ? fmt::format("{:.2f}", *rho) : "-";
@@ -95,14 +106,31 @@ std::optional<EpoWeightFit> fit_epo_weight(std::span<const double> sah, std::spa
 std::vector<PredictorRow> predictor_rows(const std::vector<const CsvRow*>& group) {
   std::vector<PredictorRow> out;
   std::vector<std::vector<const CsvRow*>> members;
+  // Our traced rows: Embree's have no SAH cost, an invalid tree's no rays/s.
+  auto ranked = [](const CsvRow& r) {
+    return csv_number(r, "sah_cost") && csv_number(r, "trace_mrays_median");
+  };
+  std::optional<std::string> first_model;
+  bool one_model = true;
   for (const CsvRow* r : group) {
-    // Our traced rows: Embree's have no SAH cost, an invalid tree's no rays/s.
-    if (!csv_number(*r, "sah_cost") || !csv_number(*r, "trace_mrays_median")) continue;
+    if (!ranked(*r)) continue;
+    const std::string model = cost_model(*r);
+    if (!first_model) first_model = model;
+    one_model &= model == *first_model;
+  }
+  for (const CsvRow* r : group) {
+    if (!ranked(*r)) continue;
     const std::string layout = field(*r, "layout"), ray_set = field(*r, "ray_set");
-    auto it = std::find_if(out.begin(), out.end(),
-                           [&](const PredictorRow& p) { return p.layout == layout && p.ray_set == ray_set; });
+    const std::string model = one_model ? "" : cost_model(*r);
+    auto it = std::find_if(out.begin(), out.end(), [&](const PredictorRow& p) {
+      return p.layout == layout && p.ray_set == ray_set && p.model == model;
+    });
     if (it == out.end()) {
-      it = out.insert(out.end(), PredictorRow{layout, ray_set});
+      PredictorRow row;
+      row.layout = layout;
+      row.ray_set = ray_set;
+      row.model = model;
+      it = out.insert(out.end(), std::move(row));
       members.emplace_back();
     }
     members[static_cast<std::size_t>(it - out.begin())].push_back(r);
@@ -139,7 +167,8 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
     if (r.builders >= kMinRankedBuilders)
       ranked.push_back(&r);
     else
-      too_few += fmt::format("{}{} {} ({})", too_few.empty() ? "" : "; ", r.layout, r.ray_set, r.builders);
+      too_few +=
+          fmt::format("{}{} {} ({})", too_few.empty() ? "" : "; ", r.layout, rays_label(r), r.builders);
   }
   const std::string explanation = fmt::format(
       "Spearman rank correlation across builders between rays/s and each cost, negated: 1 where the cost "
@@ -172,21 +201,26 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
         "\\begin{{tabular}}[b]{{@{{}}r@{{}}}}Cost\\\\per ray\\end{{tabular}} & "
         "\\begin{{tabular}}[b]{{@{{}}r@{{}}}}Fitted\\\\$w$ ($r$)\\end{{tabular}} \\\\\n    \\midrule\n",
         latex_escape(title));
-    // Each layout's ray sets together, layouts in order of first appearance.
-    std::vector<std::string> layouts;
+    // Each layout's ray sets together (and, where the rows have several, under each set of SAH
+    // constants), in order of first appearance.
+    auto heading_of = [](const PredictorRow* r) {
+      return r->model.empty() ? r->layout : fmt::format("{} [{}]", r->layout, r->model);
+    };
+    std::vector<std::string> headings;
     for (const PredictorRow* r : ranked)
-      if (std::find(layouts.begin(), layouts.end(), r->layout) == layouts.end()) layouts.push_back(r->layout);
-    auto layout_index = [&](const PredictorRow* r) {
-      return std::find(layouts.begin(), layouts.end(), r->layout) - layouts.begin();
+      if (std::find(headings.begin(), headings.end(), heading_of(r)) == headings.end())
+        headings.push_back(heading_of(r));
+    auto heading_index = [&](const PredictorRow* r) {
+      return std::find(headings.begin(), headings.end(), heading_of(r)) - headings.begin();
     };
     std::stable_sort(ranked.begin(), ranked.end(), [&](const PredictorRow* a, const PredictorRow* b) {
-      return layout_index(a) < layout_index(b);
+      return heading_index(a) < heading_index(b);
     });
-    std::string layout;
+    std::string heading;
     for (const PredictorRow* r : ranked) {
-      if (r->layout != layout) {
-        layout = r->layout;
-        fmt::print(out, "    \\multicolumn{{6}}{{l}}{{{}}} \\\\\n", latex_escape(layout));
+      if (heading_of(r) != heading) {
+        heading = heading_of(r);
+        fmt::print(out, "    \\multicolumn{{6}}{{l}}{{{}}} \\\\\n", latex_escape(heading));
       }
       fmt::print(out, "    \\quad {} ({}) & {} & {} & {} & {} & {} \\\\\n", latex_escape(r->ray_set),
                  r->builders, rho_text(r->rho[0]), rho_text(r->rho[1]), rho_text(r->rho[2]),
@@ -204,7 +238,7 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
              "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n",
              title);
   for (const PredictorRow* r : ranked)
-    fmt::print(out, "| {} | {} | {} | {} | {} | {} | {} | {} |\n", r->layout, r->ray_set, r->builders,
+    fmt::print(out, "| {} | {} | {} | {} | {} | {} | {} | {} |\n", r->layout, rays_label(*r), r->builders,
                rho_text(r->rho[0]), rho_text(r->rho[1]), rho_text(r->rho[2]), rho_text(r->rho[3]),
                fit_text(r->epo_weight));
   fmt::print(out, "\n{}\n\n", explanation);

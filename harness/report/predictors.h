@@ -53,12 +53,16 @@ inline constexpr std::array<const char*, 4> kPredictorColumns = {"sah_cost", "ep
 /// that have that cost; empty where fewer than kMinRankedBuilders have it (or it orders nothing).
 struct PredictorRow {
   std::string layout, ray_set;
+  /// The SAH constants of these rows ("c_trav=3, c_isect=1, block=4") where the table's rows have more
+  /// than one set: costs under different constants are on different scales, so each set is ranked apart.
+  std::string model = {};
   std::size_t builders = 0;
   std::array<std::optional<double>, kPredictorColumns.size()> rho{};
   std::optional<EpoWeightFit> epo_weight;  ///< over the rows with an SAH and an EPO cost
 };
 
-/// The rows of `group` (one report table's) by layout and ray set, in order of first appearance.
+/// The rows of `group` (one report table's) by layout, ray set and SAH constants, in order of first
+/// appearance.
 /// Embree's rows, with no cost of ours, take no part.
 std::vector<PredictorRow> predictor_rows(const std::vector<const CsvRow*>& group);
 

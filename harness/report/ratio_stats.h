@@ -49,8 +49,8 @@ double median_of(std::span<const double> samples);
 /// conservative side. df below 1 or NaN is an Error.
 double t_quantile_975(double df);
 
-/// The ratio ours / anchor from samples paired by index, over the first min(sizes) rounds (see the top
-/// of this file). No paired round, or a sample that is not positive, is an Error naming the round.
+/// The ratio ours / anchor from samples paired by index (see the top of this file). Samples of different
+/// counts (rounds that cannot be paired), none, or a sample that is not positive is an Error naming it.
 RatioInterval paired_ratio(std::span<const double> ours, std::span<const double> anchor);
 
 /// ours / anchor from medians alone (CSVs without samples): an estimate without an interval, n = 0. A

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "harness/report/compare.h"
 #include "harness/report/html_report.h"
 #include "harness/report/predictors.h"
 #include "harness/report/ratio_stats.h"
@@ -121,7 +122,8 @@ struct GroupKey {
   bool operator==(const GroupKey&) const = default;
   /// "proc:sphere at 2 threads", ", frame 3" after it where not 0.
   std::string text() const {
-    return scene + " at " + threads + " threads" + (frame == "0" ? "" : ", frame " + frame);
+    return scene + " at " + threads + (threads == "1" ? " thread" : " threads") +
+           (frame == "0" ? "" : ", frame " + frame);
   }
 };
 
@@ -401,6 +403,31 @@ struct Located {
   std::string where() const { return file->where(index); }
 };
 
+// The rows of the run, checked as `sahbench compare` checks them before a table prints them as results:
+// our rows' deterministic metrics are finite numbers where given, no cell is there twice (a merged sweep
+// keeps Embree's rows once per shard), and timings are positive. A column a CSV from another writer lacks
+// prints as "-".
+void check_run_rows(const std::vector<Located>& located) {
+  std::map<std::string, std::string> seen;  // cell -> where
+  for (const Located& l : located) {
+    const ResultFile& f = *l.file;
+    std::string key;
+    for (const char* column : {"scene", "builder", "builder_params", "layout", "threads", "ray_set", "frame"})
+      key += (key.empty() ? "" : ", ") + f.field(l.index, column);
+    if (!f.field(l.index, "shard").empty()) key += " @shard " + f.field(l.index, "shard");
+    const auto [it, added] = seen.emplace(key, l.where());
+    if (!added)
+      throw Error(fmt::format("{} and {} are the same cell ({}): a run has each cell once", it->second,
+                              l.where(), key));
+    if (f.field(l.index, "builder") != "embree")
+      for (const MetricRule& rule : deterministic_metrics())
+        if (f.has_column(rule.column)) checked_number(f, l.index, rule.column);
+    for (const char* column : {"build_ms_median", "trace_mrays_median", "build_layout_ms_median"})
+      if (const auto v = checked_number(f, l.index, column); v && !(*v > 0))
+        throw row_error(f, l.index, column, fmt::format("{} is not a positive time or rate", *v));
+  }
+}
+
 GroupKey group_of(const CsvRow& r) {
   return GroupKey{field(r, "scene"), field(r, "threads"), field(r, "frame", "0")};
 }
@@ -497,6 +524,7 @@ void print_report(const ReportOptions& options, std::ostream& out) {
     for (const Located& l : located) copies.push_back(l.row());
     if (is_stress_result(copies)) return print_stress_report(copies, options.format, out, options.width);
   }
+  check_run_rows(located);
   std::vector<const CsvRow*> rows;
   Timings timings;
   for (const Located& l : located) {
@@ -607,10 +635,13 @@ void print_report(const ReportOptions& options, std::ostream& out) {
 }
 
 void run_report_command(const ReportOptions& options, std::ostream& out) {
-  if (options.output.empty()) return print_report(options, out);
-  // Write the whole report first, so that a bad CSV leaves no half-written file behind.
+  // The whole report first, so that a bad CSV or --columns leaves no half-written file or output behind.
   std::ostringstream text;
   print_report(options, text);
+  if (options.output.empty()) {
+    out << text.str();
+    return;
+  }
   std::error_code ec;
   if (options.output.has_parent_path()) std::filesystem::create_directories(options.output.parent_path(), ec);
   std::ofstream file(options.output);

@@ -77,7 +77,8 @@ std::string offset_text(char sign, double offset) {
 
 // The ratio line of a LaTeX cell, empty where there is no ratio: "0.85$\times$" for an exact ratio,
 // "0.85$^{+.05}_{-.04}$\textdownarrow" for a timing ratio with its interval (the offsets to the interval's
-// ends), "0.85" for one without (one round, or medians; the legend says so).
+// ends), "0.85$^{n=1}$" or "0.85$^{\mathrm{med}}$" for one without (one round, or a ratio of medians;
+// the legend says so).
 std::string latex_ratio(const ReportCell& cell, const ReportColumn& column) {
   if (!cell.value) return "";
   if (cell.interval) {
@@ -85,6 +86,8 @@ std::string latex_ratio(const ReportCell& cell, const ReportColumn& column) {
     std::string s = fmt::format("{:.2f}", r.estimate);
     if (r.has_interval())
       s += "$^{" + offset_text('+', *r.hi - r.estimate) + "}_{" + offset_text('-', r.estimate - *r.lo) + "}$";
+    else
+      s += r.n == 0 ? "$^{\\mathrm{med}}$" : fmt::format("$^{{n={}}}$", r.n);
     const Verdict v = verdict(r, column.larger_is_better);
     if (v == Verdict::kAhead) s += "\\textuparrow";
     if (v == Verdict::kBehind) s += "\\textdownarrow";
@@ -247,7 +250,15 @@ void render_latex(const ReportTable& table, std::ostream& out, PageWidth width) 
     if (second_line && i + 1 < table.rows.size()) fmt::print(out, "    \\addlinespace[2pt]\n");
   }
   fmt::print(out, "    \\bottomrule\n  \\end{{tabular}}\n");
-  const auto legend = legend_with_layout(table);
+  auto legend = legend_with_layout(table);
+  const bool unpaired = std::any_of(table.rows.begin(), table.rows.end(), [](const ReportRow& row) {
+    return std::any_of(row.cells.begin(), row.cells.end(),
+                       [](const ReportCell& c) { return c.interval && !c.interval->has_interval(); });
+  });
+  if (unpaired)
+    legend.push_back(
+        "A ratio marked n=1 is from one round, one marked med the ratio of the medians (the results have no "
+        "samples to pair); neither has an interval.");
   if (!legend.empty()) {
     fmt::print(out, "  \\par\\smallskip{{\\scriptsize");
     for (const auto& sentence : legend) fmt::print(out, " {}", latex_breakable(sentence));

@@ -23,6 +23,11 @@ std::vector<std::size_t> record_lines(std::string text) {
   text.resize(text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1);
   std::vector<std::size_t> lines;
   std::size_t pos = 0, line = 1;
+  // Comment lines before the header are not records, as read_csv skips them.
+  while (pos < text.size() && text[pos] == '#') {
+    pos = text.find('\n', pos) + 1;
+    ++line;
+  }
   while (pos < text.size()) {
     const std::size_t start_line = line;
     bool quoted = false, several_fields = false, field_text = false;

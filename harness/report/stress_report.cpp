@@ -48,13 +48,18 @@ std::string ulps(double value) {
 // One variant's totals over the cases. Speed is the geometric mean of the per-case rays/second: the
 // cases differ by 100x in cost (100,000 coincident triangles), and a plain total would be one case's.
 struct Totals {
-  double log_mrays = 0, traced = 0, weighted_mean_ulps = 0, hits = 0, max_ulps = 0;
+  std::map<std::string, double> log_mrays;  ///< per case traced
+  double traced = 0, weighted_mean_ulps = 0, hits = 0, max_ulps = 0;
   double false_misses = 0, false_hits = 0, wrong_prim = 0, wrong_prim_far = 0, leaks = 0, build_failed = 0,
          nan_bounds = 0;
   int cases = 0;
 
-  std::optional<double> mrays() const {
-    return traced > 0 ? std::optional<double>(std::exp(log_mrays / traced)) : std::nullopt;
+  /// The geometric mean over `cases`, which this variant has all traced; none for no cases.
+  std::optional<double> mrays(const std::vector<std::string>& over) const {
+    if (traced == 0 || over.empty()) return std::nullopt;
+    double sum = 0;
+    for (const std::string& c : over) sum += log_mrays.at(c);
+    return std::exp(sum / static_cast<double>(over.size()));
   }
 
   void add(const CsvRow& r) {
@@ -63,7 +68,7 @@ struct Totals {
     nan_bounds += number(r, "nan_bounds");
     const auto mrays = csv_number(r, "trace_mrays_median");
     if (!mrays || *mrays <= 0) return;
-    log_mrays += std::log(*mrays);
+    log_mrays[r.at("scene")] = std::log(*mrays);
     ++traced;
     false_misses += number(r, "false_misses");
     false_hits += number(r, "false_hits");
@@ -86,17 +91,32 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
     if (!totals.count(key)) keys.push_back(key);
     totals[key].add(r);
   }
+  // Speeds are compared over the cases every traced variant traced: a variant whose build failed on a
+  // slow case would otherwise gain that case's weight against the others.
+  std::vector<std::string> common;
+  bool first = true;
+  for (const auto& key : keys) {
+    const Totals& t = totals[key];
+    if (t.traced == 0) continue;
+    if (first) {
+      for (const auto& [name, log] : t.log_mrays) common.push_back(name);
+      first = false;
+    } else {
+      std::erase_if(common, [&](const std::string& name) { return !t.log_mrays.count(name); });
+    }
+  }
   std::optional<double> anchor;
   std::string anchor_name;
   for (const auto& key : keys)
-    if (!anchor && totals[key].mrays())
-      anchor = totals[key].mrays(), anchor_name = key.first + " " + key.second;
+    if (!anchor && totals[key].mrays(common))
+      anchor = totals[key].mrays(common), anchor_name = key.first + " " + key.second;
 
   ReportTable table;
   table.title = "Error against run time, all cases";
   table.label = "tab:stress";
   // Smaller is better everywhere but speed; counts print without decimals.
   table.columns = {{"cases", "Cases", 0},
+                   {"traced", "Traced", 0},
                    {"Mrays/s", "Mrays/s", 2, true},
                    {"false misses", "False misses", 0},
                    {"false hits", "False hits", 0},
@@ -109,7 +129,7 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
                    {"NaN bounds", "NaN bounds", 0}};
   for (const auto& key : keys) {
     const Totals& t = totals[key];
-    const auto mrays = t.mrays();
+    const auto mrays = t.mrays(common);
     ReportRow row;
     row.builder = row.builder_short = key.first;
     row.layout = key.second;
@@ -117,7 +137,7 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
     const bool traced = t.traced > 0;
     auto traced_cell = [&](double v) { return cell(traced ? std::optional<double>(v) : std::nullopt); };
     row.cells = {
-        cell(t.cases),
+        cell(t.cases), cell(t.traced),
         ReportCell{mrays, mrays && anchor ? std::optional<double>(*mrays / *anchor) : std::nullopt, false},
         traced_cell(t.false_misses), traced_cell(t.false_hits), traced_cell(t.wrong_prim),
         traced_cell(t.wrong_prim_far), traced_cell(t.leaks),
@@ -129,7 +149,8 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
   }
   mark_best(table);
   // A column where every variant has the same value (no build failed anywhere), or whose best is an
-  // infinite t error, names no winner: no bold there.
+  // infinite t error, names no winner: no bold there; nor do the counts of cases.
+  for (ReportRow& row : table.rows) row.cells[0].best = row.cells[1].best = false;
   for (std::size_t c = 0; c < table.columns.size(); ++c) {
     std::size_t marked = 0;
     bool infinite = false;
@@ -140,14 +161,16 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
   }
   table.caption = "Stress suite: errors against rays/s of each variant over every case.";
   table.legend.push_back(fmt::format(
-      "Mrays/s: geometric mean over the cases of each case's median rays/second (one traversal pass over its "
-      "rays), with its ratio to {}'s. Errors are against the exact reference: a tie on a shared edge or "
+      "Traced: the cases a variant built and traced; errors are summed over those. Mrays/s: geometric mean "
+      "of each case's median rays/second (one traversal pass over its rays) over the {} cases that every "
+      "traced variant traced, with its ratio to {}'s. Errors are against the exact reference: a tie on a "
+      "shared edge or "
       "vertex "
       "accepts any of its triangles; (far): wrong primitives more than 1e-5 (relative) away in t. t errors "
       "are "
       "over hits on an accepted primitive; inf: an infinite t where the exact one is finite, which the mean "
       "(weighted by exact hits) leaves out. The best value of each column is in bold.",
-      anchor_name));
+      common.size(), anchor_name));
   return table;
 }
 

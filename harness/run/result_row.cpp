@@ -128,9 +128,9 @@ std::string cell_summary(const std::string& label, const CsvRow& row) {
     return it == row.end() ? std::string() : it->second;
   };
   const std::string mismatches = field("mismatches");
-  return fmt::format("{}: build {} ms, {} Mrays/s, {}", label, field("build_ms_median"),
-                     field("trace_mrays_median"),
-                     mismatches.empty() ? "no reference" : mismatches + " mismatches");
+  return fmt::format(
+      "{}: build {} ms, {} Mrays/s, {}", label, field("build_ms_median"), field("trace_mrays_median"),
+      mismatches.empty() ? "no reference" : mismatches + (mismatches == "1" ? " mismatch" : " mismatches"));
 }
 
 void add_note(CsvRow& row, const std::string& note) {

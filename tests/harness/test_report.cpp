@@ -609,6 +609,11 @@ TEST(Report, RowsWithoutSamplesFallBackToTheRatioOfMediansWithoutAnInterval) {
   EXPECT_NE(md.find("| binned_sah | bvh2 | **5.0** |"), std::string::npos) << md;
   EXPECT_NE(md.find("2.00 (0.25 [medians]) |"), std::string::npos) << md;
   EXPECT_EQ(md.find("\u25BC)"), std::string::npos) << "no interval, no mark\n" << md;
+  // A paper table says so too: the ratio is marked, and the legend tells what the mark means.
+  std::ostringstream tex;
+  print_report({{path}, "", ReportFormat::kLatex}, tex);
+  EXPECT_NE(tex.str().find("0.25$^{\\mathrm{med}}$"), std::string::npos) << tex.str();
+  EXPECT_NE(tex.str().find("one marked med the ratio of the medians"), std::string::npos) << tex.str();
 }
 
 TEST(Report, BadSamplesAreAnErrorNamingFileLineAndColumn) {
@@ -624,6 +629,53 @@ TEST(Report, BadSamplesAreAnErrorNamingFileLineAndColumn) {
   EXPECT_NE(e.find(path.string() + ":3: column 'trace_mrays_samples': sample 'abc' is not a number"),
             std::string::npos)
       << e;
+}
+
+// What compare refuses, report refuses too, rather than printing it as a result: a metric that is not a
+// number, the same cell twice, a time of zero. A CSV with comment lines before its header is read.
+TEST(Report, BadDataIsAnErrorAsInCompare) {
+  auto report_of = [](CsvRow changed, const std::string& name, bool twice = false) {
+    const auto path = temp_csv(name);
+    {
+      CsvWriter w(path, columns_with_samples());
+      w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0));
+      w.append(changed);
+      if (twice) w.append(changed);
+    }
+    return error_of([&] {
+      std::ostringstream out;
+      print_report({{path}, ""}, out);
+    });
+  };
+  const CsvRow good = make_row("binned_sah", "bins=8", "bvh2", "primary", 5.0, 1 << 20, "40.5", 9.0);
+  CsvRow bad = good;
+  bad["sah_cost"] = "abc";
+  EXPECT_NE(report_of(bad, "abc_sah.csv").find("abc_sah.csv:3: column 'sah_cost': 'abc' is not a number"),
+            std::string::npos);
+  bad["sah_cost"] = "nan";
+  EXPECT_NE(report_of(bad, "nan_sah.csv").find("column 'sah_cost': 'nan' is not finite"), std::string::npos);
+  EXPECT_NE(report_of(good, "dup.csv", true)
+                .find("dup.csv:3 and " + temp_csv("dup.csv").string() + ":4 are the same cell"),
+            std::string::npos);
+  bad = good;
+  bad["build_ms_median"] = "0";
+  bad["build_ms_samples"] = "0;0;0";
+  EXPECT_NE(
+      report_of(bad, "zero_build.csv").find("column 'build_ms_median': 0 is not a positive time or rate"),
+      std::string::npos);
+
+  const auto commented = temp_csv("commented.csv");
+  {
+    CsvWriter w(commented, columns_with_samples());
+    w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0));
+    w.append(good);
+  }
+  std::stringstream text;
+  text << std::ifstream(commented).rdbuf();
+  std::ofstream(commented) << "# a note before the header\n" << text.str();
+  std::ostringstream out;
+  print_report({{commented}, ""}, out);
+  EXPECT_NE(out.str().find("| binned_sah |"), std::string::npos) << out.str();
 }
 
 TEST(Report, FewerCellsThanAnotherRunOfTheSameFingerprintAreNoted) {
@@ -790,6 +842,38 @@ TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
                 "\\multicolumn{6}{l}{bvh2} \\\\\n    \\quad primary (4) & 1.00 & - & - & -1.00 & - \\\\"),
             std::string::npos)
       << tex.str();
+}
+
+// SAH costs under other constants are on another scale (c_trav = 3 about doubles them): each set of
+// constants is ranked apart, never against the others.
+TEST(ReportPredictors, CostsUnderOtherConstantsAreRankedApart) {
+  const auto path = temp_csv("predictors_models.csv");
+  std::vector<std::string> columns = columns_with_samples();
+  for (const char* c : {"sah_c_trav", "sah_c_isect", "sah_block"})
+    if (std::find(columns.begin(), columns.end(), c) == columns.end()) columns.push_back(c);
+  {
+    CsvWriter w(path, columns);
+    auto with_model = [](CsvRow row, const std::string& c_trav) {
+      row.insert_or_assign("sah_c_trav", c_trav);
+      row.insert_or_assign("sah_c_isect", std::string("1"));
+      row.insert_or_assign("sah_block", std::string("1"));
+      return row;
+    };
+    w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 9.0));
+    const std::vector<std::pair<double, double>> plain = {{15.0, 10.0}, {16.0, 9.0}, {17.0, 8.0}};
+    for (std::size_t i = 0; i < plain.size(); ++i)
+      w.append(with_model(make_row("binned_sah", "bins=" + std::to_string(8 << i), "bvh2", "primary", 5.0,
+                                   1 << 20, std::to_string(plain[i].first), plain[i].second),
+                          "1"));
+    // The fastest tree, whose cost is the largest number only because it is under c_trav = 3.
+    w.append(
+        with_model(make_row("binned_sah", "c_trav=3", "bvh2", "primary", 5.0, 1 << 20, "36.3", 11.0), "3"));
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("| bvh2 | primary [c_trav=1, c_isect=1, block=1] | 3 | 1.00 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("bvh2 primary [c_trav=3, c_isect=1, block=1] (1)"), std::string::npos) << md;
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include "harness/config/stress_config.h"
 #include "harness/embree/embree_bvh_builder.h"
 #include "harness/report/report.h"
+#include "harness/report/stress_report.h"
 #include "harness/run/bounded_run.h"
 #include "harness/run/csv.h"
 #include "harness/run/stress_metrics.h"
@@ -326,6 +327,39 @@ TEST(HarnessStress, ReducedSuiteKeepsItsGuarantees) {
   print_report({{csv}, "", ReportFormat::kLatex}, latex);
   EXPECT_NE(latex.str().find("\\label{tab:stress}"), std::string::npos) << latex.str();
   EXPECT_NE(latex.str().find("embree (robust) & embree\\_1"), std::string::npos) << latex.str();
+}
+
+// A variant whose build failed on a slow case would gain that case's weight: speeds are compared over
+// the cases every traced variant traced, and the counts of cases are not marked as a best.
+TEST(HarnessStressReport, ComparesSpeedsOverTheCasesEveryVariantTraced) {
+  auto row = [](const std::string& scene, const std::string& builder, const std::string& mrays) {
+    CsvRow r = {
+        {"run_id", "x"},         {"git_commit", "x"},      {"cpu", "x"},        {"compiler", "x"},
+        {"embree_version", "x"}, {"config", "x"},          {"notes", ""},       {"false_misses", "0"},
+        {"leaks", "0"},          {"false_hits", "0"},      {"wrong_prim", "0"}, {"wrong_prim_far", "0"},
+        {"t_err_ulps_max", "0"}, {"t_err_ulps_mean", "0"}, {"exact_hits", "0"}, {"nan_bounds", "0"}};
+    r["scene"] = scene;
+    r["builder"] = builder;
+    r["builder_params"] = "";
+    r["layout"] = "bvh8";
+    r["trace_mrays_median"] = mrays;
+    r["build_failed"] = mrays.empty() ? "1" : "0";
+    return r;
+  };
+  // On the two cases both traced, b is as fast as a; b's build failed on the slow third case.
+  const std::vector<CsvRow> rows = {row("fast", "a", "100"), row("slow", "a", "1"), row("mid", "a", "10"),
+                                    row("fast", "b", "100"), row("slow", "b", ""),  row("mid", "b", "10")};
+  std::ostringstream out;
+  print_stress_report(rows, ReportFormat::kLatex, out);
+  const std::string text = out.str();
+  // Cases, traced, Mrays/s (ratio to a's): 31.62 is the geometric mean of 100 and 10, for both.
+  EXPECT_NE(text.find("a & 3 & 3 & 31.62 &"), std::string::npos) << text;
+  EXPECT_NE(text.find("b & 3 & 2 & 31.62 &"), std::string::npos) << text;
+  EXPECT_EQ(text.find("2.15$\\times$"), std::string::npos) << "b's ratio is over the cases both traced\n"
+                                                           << text;
+  EXPECT_NE(text.find("{\\scriptsize 1.00$\\times$}"), std::string::npos) << text;
+  EXPECT_NE(text.find("over the 2 cases that every traced variant traced"), std::string::npos) << text;
+  EXPECT_EQ(text.find("\\textbf{3}"), std::string::npos) << text;
 }
 
 }  // namespace

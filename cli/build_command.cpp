@@ -47,6 +47,8 @@ std::string short_label(const BuilderRun& run) {
 
 int run_build_command(const BuildCommandOptions& options, std::ostream& out, std::ostream& log) {
   if (options.reps < 1) throw Error("--reps must be at least 1 (got " + std::to_string(options.reps) + ")");
+  if (options.warmup < 0)
+    throw Error("--warmup must be at least 0 (got " + std::to_string(options.warmup) + ")");
   if (options.builders.empty()) throw Error("no builder given (--builder NAME)");
   for (int t : options.threads)
     if (t < 1) throw Error("--threads: " + std::to_string(t) + " is not a thread count");

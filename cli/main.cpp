@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
   plan_cmd->add_option("config", plan.config, "experiment config (TOML)")->required();
   plan_cmd->add_option("--shards", plan.shards, "number of shards")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 100000));
   plan_cmd->add_flag("--cells", plan.list_cells, "also list every cell with the shards that run it");
   plan_cmd->add_flag("!--no-calibration", plan.calibrate,
                      "skip the timed build that turns the estimate into seconds");

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <fstream>
 #include <ostream>
@@ -61,7 +62,14 @@ TraceAnswers trace_ours(const BuilderRun& run, std::string_view layout_text, con
 }
 
 TraceAnswers trace_embree(const BuilderRun& run, std::string_view layout_text, const Scene& scene,
-                          const std::vector<Ray>& rays, TraceQuery query) {
+                          const std::vector<Ray>& rays, TraceQuery query, const std::string& ray_file) {
+  const auto refused = std::find_if_not(rays.begin(), rays.end(), embree_accepts);
+  if (refused != rays.end())
+    throw Error(
+        fmt::format("{}: ray {} (counting from 0, as the output does) has an origin or direction component "
+                    "beyond {:g}, outside the range "
+                    "Embree traces (it would stop the process); trace it with one of our builders",
+                    ray_file, refused - rays.begin(), kEmbreeLargeFloat));
   const EmbreeLayout* layout = find_embree_layout(layout_text);
   if (!layout) {
     std::string known;
@@ -95,8 +103,9 @@ void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
   const std::string layout_text = !options.layout.empty() ? options.layout
                                   : run.is_embree()       ? kEmbreeLayouts[0].name
                                                           : "bvh2";
-  const TraceAnswers answers = run.is_embree() ? trace_embree(run, layout_text, scene, rays, options.query)
-                                               : trace_ours(run, layout_text, scene, rays, options.query);
+  const TraceAnswers answers =
+      run.is_embree() ? trace_embree(run, layout_text, scene, rays, options.query, options.rays.string())
+                      : trace_ours(run, layout_text, scene, rays, options.query);
   const std::string what = fmt::format("builder={} layout={} isa={} query={}", answers.builder,
                                        answers.layout, answers.isa, to_string(options.query));
 

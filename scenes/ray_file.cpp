@@ -42,7 +42,36 @@ float parse_float(std::string_view token, const std::string& where) {
   if (result.ec == std::errc::result_out_of_range)
     throw Error(where + ": '" + printable(token) +
                 "' is outside the range of a float (magnitudes 1.4e-45 to 3.4e38, or 0, inf)");
+  if (value != value) throw Error(where + ": '" + printable(token) + "' is not a number (NaN)");
   return value;
+}
+
+// The fields of a line: separated by spaces and tabs, or by one comma with any spaces around it. Two
+// commas with nothing between them, or a comma at either end, leave a field empty: an Error, since the
+// numbers after it would silently shift to other columns.
+std::vector<std::string_view> fields(std::string_view rest, const std::string& where) {
+  constexpr std::string_view kBlank = " \t\r";
+  std::vector<std::string_view> out;
+  bool after_comma = false;
+  auto empty_field = [&] { return Error(where + ": field " + std::to_string(out.size() + 1) + " is empty"); };
+  for (;;) {
+    const auto start = rest.find_first_not_of(kBlank);
+    if (start == std::string_view::npos) {
+      if (after_comma) throw empty_field();
+      return out;
+    }
+    rest = rest.substr(start);
+    if (rest.front() == ',') {
+      if (after_comma || out.empty()) throw empty_field();
+      after_comma = true;
+      rest = rest.substr(1);
+      continue;
+    }
+    const auto end = rest.find_first_of(" \t,\r");
+    out.push_back(rest.substr(0, end));
+    after_comma = false;
+    rest = end == std::string_view::npos ? std::string_view{} : rest.substr(end);
+  }
 }
 
 // Whether `token` reads as a word rather than a number: a header line's column name.
@@ -62,16 +91,9 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
   bool first = true;  // the first non-empty line, which may be a header
   for (std::size_t number = 1; std::getline(in, line); ++number) {
     const std::string where = path.string() + ":" + std::to_string(number);
-    std::vector<std::string_view> tokens;
-    std::string_view rest = std::string_view(line).substr(0, line.find('#'));  // a comment runs to the end
-    while (!rest.empty()) {
-      const auto start = rest.find_first_not_of(" \t,\r");
-      if (start == std::string_view::npos) break;
-      rest = rest.substr(start);
-      const auto end = rest.find_first_of(" \t,\r");
-      tokens.push_back(rest.substr(0, end));
-      rest = end == std::string_view::npos ? std::string_view{} : rest.substr(end);
-    }
+    // A comment runs to the end of the line.
+    const std::vector<std::string_view> tokens =
+        fields(std::string_view(line).substr(0, line.find('#')), where);
     if (tokens.empty()) continue;
     // A first line of column names ("ox oy oz dx dy dz") is a header, not data.
     const bool header = first && std::all_of(tokens.begin(), tokens.end(), is_word);
@@ -87,6 +109,12 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
     ray.dir = {v[3], v[4], v[5]};
     ray.tmin = v[6];
     ray.tmax = v[7];
+    if (!traceable(ray))  // NaN is refused above: an infinite component
+      throw Error(where + ": the origin and the direction must be finite");
+    if (!(ray.tmin >= 0.0f && ray.tmin < std::numeric_limits<float>::infinity()))
+      throw Error(where + fmt::format(": tmin = {} must be finite and at least 0 (the kernels answer for "
+                                      "[tmin, tmax] with tmin >= 0)",
+                                      ray.tmin));
     if (ray.dir == Vec3{0, 0, 0}) throw Error(where + ": the direction is zero");
     rays.push_back(ray);
   }

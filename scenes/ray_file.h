@@ -11,9 +11,9 @@
 namespace sahbench {
 
 /// Reads a ray file: one ray per line, `ox oy oz dx dy dz [tmin tmax]`, separated by spaces, tabs or commas;
-/// `#` starts a comment, and a first line of column names is a header. A malformed line, a number outside
-/// float range, a zero direction, a directory or a file without rays is an Error naming the file, line and
-/// token.
+/// `#` starts a comment, and a first line of column names is a header. A malformed line, an empty field,
+/// a number outside float range, NaN, an infinite origin or direction, a negative or infinite tmin, a zero
+/// direction, a directory or a file without rays is an Error naming the file, line and token.
 std::vector<Ray> read_rays(const std::filesystem::path& path);
 
 }  // namespace sahbench

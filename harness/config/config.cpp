@@ -418,12 +418,12 @@ RaySetConfig read_ray_set(const Source& src, const toml::table& table) {
   if (const auto* n = table.get("height")) set.height = read_int(src, *n, "ray_set.height", 1, kMaxImageSide);
   if (set.kind == RayKind::kRandom) set.count = kDefaultRandomRays;
   if (const auto* n = table.get("count"))
-    set.count = read_int(src, *n, "ray_set.count", set.kind == RayKind::kRandom ? 1 : 0, kMaxUint32);
+    set.count = read_int(src, *n, "ray_set.count", set.kind == RayKind::kRandom ? 1 : 0, kMaxRaysPerSet);
   if (const auto* n = table.get("light_source"))
     set.light_source = read_choice(src, *n, "ray_set.light_source", {"auto", "scene"});
   if (const auto* n = table.get("lights")) {
     if (set.light_source != "auto") src.fail(*n, "ray_set.lights applies only with light_source = \"auto\"");
-    set.lights = read_int(src, *n, "ray_set.lights", 1, kMaxUint32);
+    set.lights = read_int(src, *n, "ray_set.lights", 1, kMaxLights);
   }
   if (const auto* n = table.get("ao_radius")) {
     if (!n->is_number()) src.fail(*n, "ray_set.ao_radius must be a number, not " + type_name(*n));

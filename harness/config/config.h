@@ -190,6 +190,11 @@ std::string to_string(RayKind kind);
 inline constexpr uint32_t kDefaultRandomRays = 262144;
 /// Largest primary image side: a 16384^2 image is 268M rays (over 8 GiB of rays); larger is a typo.
 inline constexpr uint32_t kMaxImageSide = 16384;
+/// Most rays of one set (`count`): as many as the largest image.
+inline constexpr uint32_t kMaxRaysPerSet = kMaxImageSide * kMaxImageSide;
+/// Most generated lights of a shadow set: each shadow ray goes to one of them, so more lights than rays
+/// leave lights unused, and their set-up is paid for every ray set.
+inline constexpr uint32_t kMaxLights = 65536;
 
 struct RaySetConfig {
   std::string name;  ///< unique; defaults to the kind as the config spells it ("primary", ..., "ao")

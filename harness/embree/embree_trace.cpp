@@ -8,11 +8,22 @@
 #include <xmmintrin.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "core/error.h"
 
 namespace sahbench {
+
+bool embree_accepts(const Ray& ray) {
+  for (int a = 0; a < 3; ++a) {
+    const auto axis = static_cast<std::size_t>(a);
+    if (!(std::abs(ray.org[axis]) <= kEmbreeLargeFloat) || !(std::abs(ray.dir[axis]) <= kEmbreeLargeFloat))
+      return false;
+  }
+  return !std::isnan(ray.tmin) && !std::isnan(ray.tmax);
+}
+
 namespace {
 
 // Every ray is in every mask group (rtcore_ray.h: a ray hits a geometry when ray.mask & geometry.mask

@@ -18,6 +18,12 @@ namespace sahbench {
 /// (MXCSR, error check), and still thousands of tasks for a million rays.
 inline constexpr std::size_t kEmbreeTraceChunk = 1024;
 
+/// Embree 3's RayK::valid() (kernels/common/ray.h), asserted in Debian's build before every traversal:
+/// origin and direction components within FLT_LARGE = 1.844e18 (common/math/constants.h), tnear and tfar
+/// not NaN. A ray outside that range aborts the process, so it must never be handed to Embree.
+inline constexpr float kEmbreeLargeFloat = 1.844e18f;
+bool embree_accepts(const Ray& ray);
+
 /// Closest hit of every ray, rtcIntersect1 (rtcore_scene.h). hits[i].prim is Embree's primID (the scene
 /// triangle index, see EmbreeScene) or kInvalidPrim for a miss; t is the returned tfar; (u, v) are
 /// Embree's barycentrics, which use our convention p = (1-u-v) v0 + u v1 + v v2 (rtcore_ray.h's RTCHit;

@@ -129,6 +129,7 @@ class AnimationRunner {
     const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
     std::vector<std::string> builder_runs;
     for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text());
+    warn_oversubscribed(cfg_, log_);
     OpenRun open = open_run(cfg_, options_, output_, animation_columns(), scenes, builder_runs, env_, log_);
     id_ = open.id;
     finished_ = std::move(open.finished);

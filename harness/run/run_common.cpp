@@ -101,10 +101,7 @@ CsvRow common_row(const RunIdentity& id, const Environment& env, const Experimen
   return row;
 }
 
-OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const std::filesystem::path& output,
-                 const std::vector<std::string>& columns, const std::vector<std::string>& scenes,
-                 const std::vector<std::string>& builder_runs, const Environment& env, std::ostream& log) {
-  // More threads than the machine has measure oversubscription, not the builder: allowed, but said.
+void warn_oversubscribed(const ExperimentConfig& cfg, std::ostream& log) {
   const unsigned hardware = std::thread::hardware_concurrency();
   for (const int threads : cfg.threads)
     if (hardware > 0 && static_cast<unsigned>(threads) > hardware)
@@ -112,6 +109,11 @@ OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const s
           "{}: warning: threads = {} is more than the {} hardware threads here; those cells measure "
           "oversubscription\n",
           cfg.path.string(), threads, hardware);
+}
+
+OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const std::filesystem::path& output,
+                 const std::vector<std::string>& columns, const std::vector<std::string>& scenes,
+                 const std::vector<std::string>& builder_runs, const Environment& env, std::ostream& log) {
   OpenRun run;
   run.lock = std::make_unique<OutputLock>(output);
   run.csv = std::make_unique<CsvWriter>(output, columns);

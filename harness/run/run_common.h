@@ -73,6 +73,10 @@ struct OpenRun {
   std::set<std::string> finished;  ///< cell keys (cell_key) a resume skips
 };
 
+/// More threads than the machine has measure oversubscription, not the builder: allowed, but said, on
+/// `log`, before anything runs.
+void warn_oversubscribed(const ExperimentConfig& cfg, std::ostream& log);
+
 /// `builder_runs`: one "name params" line per builder run, for the fingerprint.
 OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const std::filesystem::path& output,
                  const std::vector<std::string>& columns, const std::vector<std::string>& scenes,

@@ -5,6 +5,7 @@
 #include <fmt/ranges.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -56,13 +57,10 @@ class ExperimentRunner {
   int run() {
     // Every required scene is checked, and the lock taken, before the CSV is touched: the writer then
     // checks the header and removes a row cut off by a crash before anything reads the file.
+    warn_oversubscribed(cfg_, log_);
     const std::vector<std::string> scenes = scenes_to_run(cfg_, log_);
     std::vector<std::string> builder_runs;
     for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text());
-    OpenRun open = open_run(cfg_, options_, output_, result_columns(), scenes, builder_runs, env_, log_);
-    id_ = open.id;
-    const std::set<std::string>& finished = open.finished;
-    CsvWriter& csv = *open.csv;
     layouts_ = runnable_layouts(cfg_, log_);
     // Plan: the static plan's cells, or one shard's of them; then which of each scene are still to do.
     if (options_.shard) {
@@ -74,13 +72,20 @@ class ExperimentRunner {
     } else {
       cells_ = static_cells(cfg_, scenes, layouts_);
     }
-    std::size_t total = 0;
-    for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
-    if (total == 0 && !options_.only.empty() && finished.empty())
+    // A filter that matches nothing is a typo: said before the output is created.
+    if (!options_.only.empty() && std::all_of(scenes.begin(), scenes.end(), [&](const std::string& s) {
+          return pending_cells(s, {}).empty();
+        }))
       throw Error(
           fmt::format("--only '{}' matches no cell of {} (cells are named "
                       "scene|builder|builder_params|layout|threads|ray_set|frame)",
                       options_.only, cfg_.path.string()));
+    OpenRun open = open_run(cfg_, options_, output_, result_columns(), scenes, builder_runs, env_, log_);
+    id_ = open.id;
+    const std::set<std::string>& finished = open.finished;
+    CsvWriter& csv = *open.csv;
+    std::size_t total = 0;
+    for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
     log_ << fmt::format("run {} (fingerprint {}): {} cells to run over {} scenes; writing {}\n", id_.run_id,
                         id_.fingerprint.hash, total, scenes.size(), output_.string());
     const InterruptGuard interrupts;

@@ -61,20 +61,6 @@ uint64_t count_nan_bounds(const Bvh& bvh) {
   return n;
 }
 
-// Embree 3's RayK::valid() (kernels/common/ray.h), asserted in Debian's build before every traversal:
-// origin and direction components within FLT_LARGE = 1.844e18 (common/math/constants.h), tnear and
-// tfar not NaN. A ray outside that range aborts the process, so it is never handed to Embree.
-constexpr float kEmbreeLargeFloat = 1.844e18f;
-
-bool embree_accepts(const Ray& ray) {
-  for (int a = 0; a < 3; ++a) {
-    const auto axis = static_cast<std::size_t>(a);
-    if (!(std::abs(ray.org[axis]) <= kEmbreeLargeFloat) || !(std::abs(ray.dir[axis]) <= kEmbreeLargeFloat))
-      return false;
-  }
-  return !std::isnan(ray.tmin) && !std::isnan(ray.tmax);
-}
-
 // Where the default kernels' no-leak guarantee holds. The watertight test (traversal/triangle_tests.h)
 // finishes in double where its float products overflow or underflow, but it still subtracts the ray
 // origin and shears in float, which holds while coordinates stay below about FLT_MAX / 4 = 8.5e37; the
@@ -122,6 +108,16 @@ class StressRunner {
         run_id_(make_run_id(cfg.name)) {}
 
   StressSummary run() {
+    auto selected = [&](const StressCaseSpec& spec) {
+      return options_.only.empty() || spec.name.find(options_.only) != std::string::npos;
+    };
+    // A filter that matches nothing is a typo, not a run that passed: said before the output is created.
+    if (!options_.only.empty() && std::none_of(cfg_.cases.begin(), cfg_.cases.end(), selected)) {
+      std::string names;
+      for (const StressCaseSpec& spec : cfg_.cases) names += (names.empty() ? "" : ", ") + spec.name;
+      throw Error(fmt::format("--only '{}' matches no case of {} (its cases: {})", options_.only,
+                              cfg_.path.string(), names));
+    }
     const std::filesystem::path output = options_.output ? *options_.output : cfg_.output;
     if (output.has_parent_path()) std::filesystem::create_directories(output.parent_path());
     const OutputLock lock(output);
@@ -133,8 +129,7 @@ class StressRunner {
     layouts_ = runnable_specs(cfg_.layouts, log_);  // as `sahbench run` skips them
     const auto start = std::chrono::steady_clock::now();
     for (const StressCaseSpec& spec : cfg_.cases) {
-      if (!options_.only.empty() && spec.name.find(options_.only) == std::string::npos) continue;
-      run_case(spec);
+      if (selected(spec)) run_case(spec);
     }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     log_ << fmt::format("done in {:.1f} s: {} rows, {} guarantee failures\n", s, summary_.rows,

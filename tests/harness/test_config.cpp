@@ -602,6 +602,11 @@ TEST(HarnessConfigErrors, WrongTypes) {
   expect_error(kBase + "[[ray_set]]\nkind = \"random\"\ncount = 0\n", 12, {"ray_set.count = 0"});
   expect_error(kBase + "[[ray_set]]\nkind = \"diffuse\"\nwidth = 100000\n", 12,
                {"ray_set.width = 100000", "16384"});
+  // Counts that would ask for gigabytes of rays, or minutes of light set-up, are refused where read.
+  expect_error(kBase + "[[ray_set]]\nkind = \"random\"\ncount = 4000000000\n", 12,
+               {"ray_set.count = 4000000000", "268435456"});
+  expect_error(kBase + "[[ray_set]]\nkind = \"shadow\"\nlights = 100000000\n", 12,
+               {"ray_set.lights = 100000000", "65536"});
 }
 
 TEST(HarnessConfigErrors, EmptyListsAndDuplicates) {

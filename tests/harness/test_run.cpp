@@ -315,7 +315,7 @@ TEST(HarnessRun, MoreThreadsThanTheMachineHasAreSaid) {
   text.replace(text.find("threads = [1, 2]"), 16, "threads = [1, 100000]");
   std::ofstream(config) << text;
   std::ostringstream log;
-  // --only matching nothing stops the run before any cell, after the run is opened.
+  // --only matching nothing stops the run before any cell, after the warning.
   EXPECT_THROW(run_experiment({config, false, "no such cell", std::nullopt}, log), Error);
   EXPECT_NE(log.str().find("warning: threads = 100000 is more than the"), std::string::npos) << log.str();
 }
@@ -400,6 +400,14 @@ TEST(HarnessRun, OnlyFiltersCells) {
     EXPECT_EQ(r.at("layout"), "bvh2_packed");
     EXPECT_EQ(r.at("ray_set"), "shadow");
   }
+  // A filter that matches nothing is refused before the output (or its lock) is created.
+  const auto typo = write_config("run_only_typo", "");
+  const std::string e = test::error_of([&] {
+    run_experiment({typo, false, "no_such_cell", std::nullopt}, log);
+  });
+  EXPECT_NE(e.find("--only 'no_such_cell' matches no cell"), std::string::npos) << e;
+  EXPECT_FALSE(std::filesystem::exists(temp_dir() / "run_only_typo.csv"));
+  EXPECT_FALSE(std::filesystem::exists(temp_dir() / "run_only_typo.csv.lock"));
 }
 
 TEST(HarnessRun, ReportPrintsATablePerSceneAndThreadCount) {
@@ -646,6 +654,16 @@ TEST(HarnessTrace, EmbreeLayoutsMatchBruteForceOrAreRefusedByName) {
     }
   }
   EXPECT_GE(traced, 4u) << "embree_1 runs on every CPU, in both modes";
+  // A ray beyond Embree's range would stop the process in its assertion: refused by name, not traced.
+  std::ofstream(rays_path) << "0 0 5 0 0 -1\n0 0 1e20 0 0 -1\n";
+  const TraceCommandOptions far{scene_spec, "embree", "embree_1", rays_path, out_path, TraceQuery::kClosest};
+  std::ostringstream log;
+  const std::string what = test::error_of([&] { run_trace_command(far, log); });
+  EXPECT_NE(
+      what.find("embree_rays.txt: ray 1 (counting from 0, as the output does) has an origin or direction "
+                "component beyond 1.844e+18"),
+      std::string::npos)
+      << what;
 }
 
 TEST(HarnessTrace, OutputNamesBuilderLayoutAndIsaAndKeepsItsColumns) {
@@ -719,6 +737,29 @@ TEST(HarnessTrace, MalformedRayFilesNameTheLine) {
   std::ofstream(path) << "0 0 0 0 0 0\n";
   EXPECT_THROW(read_rays(path), Error);
   EXPECT_THROW(read_rays(temp_dir() / "missing.txt"), Error);
+  // Rays the kernels do not answer for: NaN anywhere, an infinite origin or direction, a tmin below 0
+  // (a hit behind the origin) or an infinite one. tmax may be infinite.
+  auto error_for = [&](const char* line) {
+    std::ofstream(path) << "0 0 5 0 0 -1\n" << line << "\n";
+    return test::error_of([&] { read_rays(path); });
+  };
+  EXPECT_NE(error_for("0 0 5 nan 0 -1").find("bad_rays.txt:2: 'nan' is not a number (NaN)"),
+            std::string::npos);
+  EXPECT_NE(error_for("0 0 5 0 0 -1 0 nan").find("'nan' is not a number (NaN)"), std::string::npos);
+  EXPECT_NE(error_for("0 0 inf 0 0 -1").find("bad_rays.txt:2: the origin and the direction must be finite"),
+            std::string::npos);
+  EXPECT_NE(
+      error_for("0 0 -3 0 0 -1 -10 10").find("bad_rays.txt:2: tmin = -10 must be finite and at least 0"),
+      std::string::npos);
+  EXPECT_NE(error_for("0 0 -3 0 0 -1 inf inf").find("tmin = inf must be finite"), std::string::npos);
+  std::ofstream(path) << "0 0 5 0 0 -1 0 inf\n";
+  EXPECT_EQ(read_rays(path).size(), 1u);
+  // An empty comma-separated field would shift the numbers after it into other columns.
+  EXPECT_NE(error_for("0,0,5,,0,-1,0").find("bad_rays.txt:2: field 4 is empty"), std::string::npos);
+  EXPECT_NE(error_for(",0,0,5,0,-1,0").find("field 1 is empty"), std::string::npos);
+  EXPECT_NE(error_for("0,0,5,0,-1,0,").find("field 7 is empty"), std::string::npos);
+  std::ofstream(path) << "0 ,0, 5,\t0 , -1,0\n";
+  EXPECT_EQ(read_rays(path).front().dir.y, -1.0f);
 }
 
 TEST(HarnessRun, BadConfigIsAnErrorNamingTheFile) {

@@ -26,6 +26,7 @@
 #include "harness/run/stress_metrics.h"
 #include "harness/run/stress_runner.h"
 #include "scenes/stress_cases.h"
+#include "tests/support/error_of.h"
 #include "traversal/exact_reference.h"
 #include "traversal/layout.h"
 
@@ -245,6 +246,12 @@ TEST(HarnessStress, SkipsLayoutsTheCpuCannotRun) {
   const std::set<std::string> expected =
       skipped ? std::set<std::string>{"bvh8"} : std::set<std::string>{"bvh8", "bvh8:packet=16"};
   EXPECT_EQ(traced, expected);
+  // A case filter that matches nothing is refused, naming the cases, before the output is touched.
+  std::filesystem::remove(csv);
+  const std::string e = test::error_of([&] { run_stress(cfg, {"", csv, "no_such_case"}, log); });
+  EXPECT_NE(e.find("--only 'no_such_case' matches no case of"), std::string::npos) << e;
+  EXPECT_NE(e.find("(its cases: sphere)"), std::string::npos) << e;
+  EXPECT_FALSE(std::filesystem::exists(csv));
 }
 
 // The reduced suite: every kind at a small size, every builder, every layout variant, both Embree modes.

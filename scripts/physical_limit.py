@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """How close each kernel comes to the cost its own counts imply: the physical limit of a cell.
 
-    scripts/physical_limit.py RESULTS.csv BENCH.json [--threads N]
+    scripts/physical_limit.py RESULTS.csv BENCH.json [--threads N] [--run RUN_ID]
 
 BENCH.json is the micro-benchmarks of the same build on the same machine, as Google Benchmark writes them:
 
@@ -19,6 +19,10 @@ t_triangle one triangle of its triangle test (one lane of a 4-triangle block for
 time per ray is threads / rays per second, per core. bound / measured is the share of the limit reached:
 1 would be a kernel that waits on nothing but its arithmetic; what is missing is memory latency, branch
 mispredictions and the loop around the tests.
+
+A CSV that holds several runs (a resumed or repeated `sahbench run`) gives the rows of its latest run,
+as `sahbench report` does, or of `--run`. A builder whose rows differ in parameters is labelled with those
+that differ (binned_sah bins=8, binned_sah bins=32).
 
 Exits 2 with a message when a file lacks what is needed.
 """
@@ -48,6 +52,36 @@ def builder_label(row):
     return f"{row['builder']}[source={source.group(1)}]" if source else row["builder"]
 
 
+def split_params(text):
+    """{key: value} of a builder_params text, split at the semicolons outside parentheses (a pass's
+    source=reinsert(source=binned_sah(bins=32)) is one value)."""
+    items, depth, start = [], 0, 0
+    for i, ch in enumerate(text):
+        depth += ch == "("
+        depth -= ch == ")"
+        if ch == ";" and depth == 0:
+            items.append(text[start:i])
+            start = i + 1
+    items.append(text[start:])
+    return dict(item.split("=", 1) for item in items if "=" in item)
+
+
+def labels(rows):
+    """Each row's builder label, with the parameters that differ between the rows of its builder."""
+    params = [split_params(row.get("builder_params", "")) for row in rows]
+    varying = {}
+    for row, p in zip(rows, params):
+        for other_row, q in zip(rows, params):
+            if row["builder"] == other_row["builder"]:
+                varying.setdefault(row["builder"], set()).update(k for k in p.keys() | q.keys() if p.get(k) != q.get(k))
+    out = []
+    for row, p in zip(rows, params):
+        keys = [k for k in p if k in varying.get(row["builder"], ()) and k != "source"]  # source: builder_label
+        extra = " ".join(f"{k}={p[k]}" for k in keys)
+        out.append(builder_label(row) + (" " + extra if extra else ""))
+    return out
+
+
 def benchmark_names(row):
     """The node and triangle benchmarks of a row, or None for a row without a bound."""
     name, options = parse_layout(row["layout"])
@@ -72,6 +106,7 @@ def main():
     parser.add_argument("results")
     parser.add_argument("bench")
     parser.add_argument("--threads", type=int, help="only rows of this thread count")
+    parser.add_argument("--run", help="the rows of this run_id (default: the CSV's latest run)")
     args = parser.parse_args()
 
     try:
@@ -96,11 +131,22 @@ def main():
         missing = [c for c in needed if c not in rows[0]]
         fail(f"{args.results}: no column {', '.join(missing)} (a CSV of this version of sahbench run is needed)")
 
+    if rows and "run_id" in rows[0]:
+        runs = list(dict.fromkeys(row["run_id"] for row in rows))
+        run = args.run or runs[-1]
+        if run not in runs:
+            fail(f"{args.results}: no run {run} (its runs: {', '.join(runs)})")
+        rows = [row for row in rows if row["run_id"] == run]
+        others = f"; {len(runs) - 1} other run(s) in the file, --run RUN_ID for one" if len(runs) > 1 else ""
+        print(f"Run {run}{others}.\n")
+    elif args.run:
+        fail(f"{args.results}: no run_id column to choose --run {args.run} by")
+
     print("| scene | builder | layout | threads | ray set | inner + leaves | prims | bound ns | measured ns | "
           "bound / measured |")
     print("| --- | --- | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: |")
     missing_bench = set()
-    for row in rows:
+    for row, label in zip(rows, labels(rows)):
         if args.threads and int(row["threads"]) != args.threads:
             continue
         if not row["nodes_per_ray"] or not row["leaves_per_ray"] or not row["trace_mrays_median"]:
@@ -115,7 +161,7 @@ def main():
         prims = float(row["prims_per_ray"])
         bound = (nodes - leaves) * ns_per_item[names[0]] + prims * ns_per_item[names[1]]
         measured = 1000.0 * int(row["threads"]) / float(row["trace_mrays_median"])
-        print(f"| {row['scene']} | {builder_label(row)} | {row['layout']} | {row['threads']} | {row['ray_set']} | "
+        print(f"| {row['scene']} | {label} | {row['layout']} | {row['threads']} | {row['ray_set']} | "
               f"{nodes - leaves:.1f} + {leaves:.1f} | {prims:.1f} | {bound:.0f} | {measured:.0f} | "
               f"{bound / measured:.2f} |")
     if missing_bench:

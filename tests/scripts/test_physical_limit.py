@@ -23,19 +23,25 @@ def check(condition, message):
 
 
 COLUMNS = ["scene", "builder", "layout", "isa", "threads", "ray_set", "nodes_per_ray", "leaves_per_ray",
-           "prims_per_ray", "trace_mrays_median", "builder_params"]
+           "prims_per_ray", "trace_mrays_median", "builder_params", "run_id"]
 # A pass's row names the builder it starts from, the outermost source only.
 PASS = "arity=8;source=reinsert(source=binned_sah(bins=32));c_trav=1"
+PLAIN = "arity=8;source=binned_sah;c_trav=1"
 ROWS = [
+    # An earlier run in the same file (a resumed output): left out unless asked for with --run.
+    ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "2", "bins=8", "r1"],
     # 10 inner nodes at 2 ns and 8 triangle lanes at 1 ns: 28 ns against 1 / 20 Mrays/s = 50 ns.
-    ["s", "wide_collapse", "bvh8", "avx2", "1", "primary", "14", "4", "8", "20", ""],
+    ["s", "wide_collapse", "bvh8", "avx2", "1", "primary", "14", "4", "8", "20", PLAIN, "r2"],
     # Two threads: 2 / 20 Mrays/s = 100 ns per ray per core.
-    ["s", "wide_collapse", "bvh8", "avx2", "2", "primary", "14", "4", "8", "20", PASS],
+    ["s", "wide_collapse", "bvh8", "avx2", "2", "primary", "14", "4", "8", "20", PASS, "r2"],
     # bvh2_packed with the fast box test and Möller-Trumbore: 30 * 4 + 5 * 3 = 135 ns against 250 ns.
-    ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "4", ""],
-    ["s", "embree", "embree_1", "avx2", "1", "primary", "", "", "", "30", ""],
-    ["s", "wide_collapse", "bvh8:packet=8", "avx2", "1", "primary", "14", "4", "8", "25", ""],
-    ["s", "wide_collapse", "bvh8:tri=mtn", "avx512", "1", "primary", "14", "4", "8", "25", ""],
+    ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "4", "bins=32",
+     "r2"],
+    # The same builder with other parameters: each row names the parameter that differs.
+    ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "5", "bins=8", "r2"],
+    ["s", "embree", "embree_1", "avx2", "1", "primary", "", "", "", "30", "", "r2"],
+    ["s", "wide_collapse", "bvh8:packet=8", "avx2", "1", "primary", "14", "4", "8", "25", PLAIN, "r2"],
+    ["s", "wide_collapse", "bvh8:tri=mtn", "avx512", "1", "primary", "14", "4", "8", "25", PLAIN, "r2"],
 ]
 BENCH = {"benchmarks": [
     {"name": "node_visit/bvh8/avx2/robust", "items_per_second": 5e8},
@@ -57,10 +63,22 @@ def main():
         out = subprocess.run([sys.executable, script, str(results), str(bench)], capture_output=True, text=True)
         check(out.returncode == 0, f"exit {out.returncode}: {out.stderr}")
         text = out.stdout
-        check("| s | wide_collapse | bvh8 | 1 | primary | 10.0 + 4.0 | 8.0 | 28 | 50 | 0.56 |" in text, text)
-        check("| s | wide_collapse[source=reinsert] | bvh8 | 2 | primary | 10.0 + 4.0 | 8.0 | 28 | 100 | 0.28 |" in text, text)
-        check("| s | binned_sah | bvh2_packed:tri=mt,box=fast | 1 | shadow | 30.0 + 10.0 | 5.0 | 135 | 250 | 0.54 |"
+        check("| s | wide_collapse[source=binned_sah] | bvh8 | 1 | primary | 10.0 + 4.0 | 8.0 | 28 | 50 | 0.56 |"
               in text, text)
+        check("| s | wide_collapse[source=reinsert] | bvh8 | 2 | primary | 10.0 + 4.0 | 8.0 | 28 | 100 | 0.28 |" in text, text)
+        check("| s | binned_sah bins=32 | bvh2_packed:tri=mt,box=fast | 1 | shadow | 30.0 + 10.0 | 5.0 | 135 | 250 | "
+              "0.54 |" in text, text)
+        check("| s | binned_sah bins=8 | bvh2_packed:tri=mt,box=fast | 1 | shadow | 30.0 + 10.0 | 5.0 | 135 | 200 | "
+              "0.68 |" in text, text)
+        check(text.startswith("Run r2; 1 other run(s) in the file") and "| 500 |" not in text,
+              f"the latest run only, by default: {text}")
+        earlier = subprocess.run([sys.executable, script, str(results), str(bench), "--run", "r1"],
+                                 capture_output=True, text=True)
+        check("| s | binned_sah | bvh2_packed:tri=mt,box=fast | 1 | shadow | 30.0 + 10.0 | 5.0 | 135 | 500 | 0.27 |"
+              in earlier.stdout and "| 250 |" not in earlier.stdout, f"--run r1: {earlier.stdout}")
+        unknown = subprocess.run([sys.executable, script, str(results), str(bench), "--run", "r9"],
+                                 capture_output=True, text=True)
+        check(unknown.returncode == 2 and "no run r9 (its runs: r1, r2)" in unknown.stderr, unknown.stderr)
         check("embree_1" not in text and "packet=8" not in text, text)
         check("No figure in" in text and "node_visit/bvh8/avx512/robust" in text
               and "ray_triangle/block4/avx512/mtn" in text, text)

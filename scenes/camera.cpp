@@ -24,7 +24,9 @@ Camera look_at_camera(const Vec3& eye, const Vec3& target, const Vec3& up, float
   if (!finite(target)) throw Error("camera target " + text(target) + " is not finite");
   if (!finite(up)) throw Error("camera up " + text(up) + " is not finite");
   const Vec3 view = target - eye;
-  const float distance = length(view);
+  // In double: a float's square overflows for distances above about 1.8e19.
+  const auto distance = static_cast<float>(
+      std::sqrt(double(view.x) * view.x + double(view.y) * view.y + double(view.z) * view.z));
   if (!(distance > 0.0f && std::isfinite(distance)))
     throw Error("camera target " + text(target) + " must differ from the eye " + text(eye) +
                 " by a finite, non-zero distance");

@@ -84,10 +84,15 @@ class ExperimentRunner {
     id_ = open.id;
     const std::set<std::string>& finished = open.finished;
     CsvWriter& csv = *open.csv;
-    std::size_t total = 0;
-    for (const auto& scene : scenes) total += pending_cells(scene, finished).size();
-    log_ << fmt::format("run {} (fingerprint {}): {} cells to run over {} scenes; writing {}\n", id_.run_id,
-                        id_.fingerprint.hash, total, scenes.size(), output_.string());
+    std::size_t total = 0, scenes_left = 0;
+    for (const auto& scene : scenes) {
+      const std::size_t pending = pending_cells(scene, finished).size();
+      total += pending;
+      scenes_left += pending > 0;
+    }
+    log_ << fmt::format("run {} (fingerprint {}): {} cells to run over {} scene{}; writing {}\n", id_.run_id,
+                        id_.fingerprint.hash, total, scenes_left, scenes_left == 1 ? "" : "s",
+                        output_.string());
     const InterruptGuard interrupts;
     Progress progress(total, log_);
     for (const auto& scene : scenes) {

@@ -139,6 +139,13 @@ TEST(HarnessRaySets, LookAtCameraAimsThePrimaryRaysAndRejectsBadViews) {
             std::string::npos);
   EXPECT_NE(message([&] { look_at_camera(eye, target, up, std::nanf("")); }).find("fov = nan"),
             std::string::npos);
+  // A distance whose float square overflows is still a distance.
+  const Camera far = look_at_camera(Vec3{0, 0, 1e30f}, Vec3{0, 0, 0}, up, 45.0f);
+  EXPECT_EQ(far.forward.z, -1.0f);
+  EXPECT_NE(message([&] {
+              look_at_camera(Vec3{0, 0, 3e38f}, Vec3{0, 0, -3e38f}, up, 45.0f);
+            }).find("by a finite, non-zero distance"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -338,6 +338,25 @@ TEST(HarnessRun, MissingRequiredSceneFailsBeforeAnyCell) {
   EXPECT_FALSE(std::filesystem::exists(csv)) << "the CSV is not touched before the scenes are known to exist";
 }
 
+// Embree stops the process on a ray beyond its range: a camera that far out is an error naming the set.
+TEST(HarnessRun, RaysBeyondEmbreesRangeAreAnErrorNotAnAbort) {
+  const auto dir = temp_dir();
+  const auto path = dir / "far_camera.toml", csv = dir / "far_camera.csv";
+  std::filesystem::remove(csv);
+  std::ofstream(path)
+      << "[experiment]\nname = \"far\"\noutput = \"" << csv.string() << "\"\n"
+      << "scenes = [\"proc:sphere:tris=300\"]\nreference = \"none\"\n"
+      << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+      << "[[builder]]\nname = \"binned_sah\"\n[[builder]]\nname = \"embree\"\n"
+      << "[[camera]]\nscene = \"proc:sphere:tris=300\"\neye = [0, 0, 1e19]\ntarget = [0, 0, 0]\n"
+      << "[[ray_set]]\nkind = \"primary\"\nwidth = 4\nheight = 4\n";
+  std::ostringstream log;
+  const std::string e = test::error_of([&] { run_experiment({path, false, "", std::nullopt}, log); });
+  EXPECT_NE(e.find("ray set 'primary': ray 0 has an origin or direction component beyond 1.844e+18"),
+            std::string::npos)
+      << e;
+}
+
 TEST(HarnessRun, ConfigCameraGivesThePrimaryViewAndSecondarySetsFollowIt) {
   // The same scene seen from a [[camera]] that faces it, and from one that faces away: every primary ray
   // then misses, and the shadow set, which starts at the primary hits, is skipped with the reason.

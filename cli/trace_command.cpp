@@ -63,13 +63,7 @@ TraceAnswers trace_ours(const BuilderRun& run, std::string_view layout_text, con
 
 TraceAnswers trace_embree(const BuilderRun& run, std::string_view layout_text, const Scene& scene,
                           const std::vector<Ray>& rays, TraceQuery query, const std::string& ray_file) {
-  const auto refused = std::find_if_not(rays.begin(), rays.end(), embree_accepts);
-  if (refused != rays.end())
-    throw Error(
-        fmt::format("{}: ray {} (counting from 0, as the output does) has an origin or direction component "
-                    "beyond {:g}, outside the range "
-                    "Embree traces (it would stop the process); trace it with one of our builders",
-                    ray_file, refused - rays.begin(), kEmbreeLargeFloat));
+  check_embree_range(rays, ray_file);
   const EmbreeLayout* layout = find_embree_layout(layout_text);
   if (!layout) {
     std::string known;

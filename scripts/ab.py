@@ -28,8 +28,9 @@ change is the geometric mean of those per-round ratios with Student's t interval
 (as harness/report/ratio_stats.h does for ratios to Embree). `▲` or `▼` marks a change whose interval
 excludes zero; with one round there is no interval. Within a run, the ratio to Embree is the geometric
 mean of the ratios of samples taken in the same round (`trace_mrays_samples`, `build_ms_samples`) where
-the CSV has them, else the ratio of medians; samples of different counts, or not all positive, are an
-error, as in `sahbench report`. An animated config's frames are
+the CSV has them, else the ratio of medians; samples of different counts, or negative ones, are an
+error naming the cell, as in `sahbench report`, and a sample of 0 (a time printed as 0.0000 ms) leaves
+the cell without a ratio. An animated config's frames are
 cells of their own. Use an even number of rounds, so that each build runs first equally often.
 
 Needs pandas. Exits 1 with a message when a run fails or a CSV lacks the columns it needs.
@@ -55,25 +56,28 @@ T_975 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 
 
 def samples(text):
     """The numbers of a `*_samples` cell ("12.5;12.7"), [] where it is empty; ValueError where one is
-    not a positive finite number."""
+    not a number, negative or not finite."""
     if not isinstance(text, str) or not text:
         return []
     try:
         values = [float(x) for x in text.split(";")]
     except ValueError:
         raise ValueError(f"samples '{text}' are not numbers") from None
-    if not all(v > 0 and math.isfinite(v) for v in values):
-        raise ValueError(f"samples '{text}' are not all positive")
+    if not all(v >= 0 and math.isfinite(v) for v in values):
+        raise ValueError(f"samples '{text}' are not all finite and at least 0")
     return values
 
 
 def paired(num_samples, den_samples, num_median, den_median):
     """num / den: the geometric mean of the ratios of samples taken in the same round, where both have
-    samples, else the ratio of medians; None where neither gives a positive figure. ValueError where
-    both have samples of different counts: they are not paired by round."""
+    samples, else the ratio of medians; None where neither gives a positive figure, or a sample is 0 (a
+    time printed as 0.0000 ms has no ratio). ValueError where both have samples of different counts: they
+    are not paired by round."""
     if num_samples and den_samples:
         if len(num_samples) != len(den_samples):
             raise ValueError(f"{len(num_samples)} samples against the anchor's {len(den_samples)}")
+        if min(num_samples) <= 0 or min(den_samples) <= 0:
+            return None
         return math.exp(sum(math.log(a / b) for a, b in zip(num_samples, den_samples)) / len(num_samples))
     if num_median > 0 and den_median > 0:
         return num_median / den_median
@@ -93,12 +97,8 @@ def ratios(csv_path):
     df["layout"] = df["layout"].fillna("")
     for column in ("trace_mrays_samples", "build_ms_samples"):
         if column not in df.columns:
-            df[column] = [[] for _ in range(len(df))]
-            continue
-        try:
-            df[column] = df[column].map(samples)
-        except ValueError as error:
-            raise ValueError(f"{csv_path}: {column}: {error}") from None
+            df[column] = ""
+        df[column] = df[column].fillna("").astype(str)
     # Animated configs write a row per frame; each frame is its own cell against Embree's same frame.
     df["frame"] = df["frame"].fillna(0).astype(int) if "frame" in df.columns else 0
     embree = df[(df.builder == "embree") & (df.builder_params == "quality=medium") & (df.layout == "embree_1")]
@@ -115,10 +115,10 @@ def ratios(csv_path):
         if row.frame:
             key = (f"{row.scene} (frame {row.frame})",) + key[1:]
         anchor = anchors_of.loc[at]
-        ours = (getattr(row, samples_column), getattr(row, median_column))
-        embree_figures = (getattr(anchor, samples_column), getattr(anchor, median_column))
-        num, den = (ours, embree_figures) if ours_over_embree else (embree_figures, ours)
         try:
+            ours = (samples(getattr(row, samples_column)), getattr(row, median_column))
+            embree_figures = (samples(getattr(anchor, samples_column)), getattr(anchor, median_column))
+            num, den = (ours, embree_figures) if ours_over_embree else (embree_figures, ours)
             value = paired(num[0], den[0], num[1], den[1])
         except ValueError as error:
             raise ValueError(f"{csv_path}: {' '.join(str(k) for k in key if k != '')}: {error}") from None

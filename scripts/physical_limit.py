@@ -133,7 +133,7 @@ def main():
 
     if rows and "run_id" in rows[0]:
         runs = list(dict.fromkeys(row["run_id"] for row in rows))
-        run = args.run or runs[-1]
+        run = args.run or rows[-1]["run_id"]  # rows are appended as cells finish: the last is the latest run's
         if run not in runs:
             fail(f"{args.results}: no run {run} (its runs: {', '.join(runs)})")
         rows = [row for row in rows if row["run_id"] == run]

@@ -1,6 +1,7 @@
 #include "harness/embree/embree_trace.h"
 
 #include <embree3/rtcore.h>
+#include <fmt/format.h>
 #include <pmmintrin.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -22,6 +23,15 @@ bool embree_accepts(const Ray& ray) {
       return false;
   }
   return !std::isnan(ray.tmin) && !std::isnan(ray.tmax);
+}
+
+void check_embree_range(std::span<const Ray> rays, const std::string& what) {
+  const auto far = std::find_if_not(rays.begin(), rays.end(), embree_accepts);
+  if (far != rays.end())
+    throw Error(
+        fmt::format("{}: ray {} has an origin or direction component beyond {:g}, outside the range "
+                    "Embree traces (its assertion would stop the process)",
+                    what, far - rays.begin(), kEmbreeLargeFloat));
 }
 
 namespace {

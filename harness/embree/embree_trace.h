@@ -24,6 +24,10 @@ inline constexpr std::size_t kEmbreeTraceChunk = 1024;
 inline constexpr float kEmbreeLargeFloat = 1.844e18f;
 bool embree_accepts(const Ray& ray);
 
+/// Throws an Error "`what`: ray I has an origin or direction component beyond 1.844e18, ..." for the first
+/// ray of `rays` Embree does not accept (I counted from 0), before any of them is handed to Embree.
+void check_embree_range(std::span<const Ray> rays, const std::string& what);
+
 /// Closest hit of every ray, rtcIntersect1 (rtcore_scene.h). hits[i].prim is Embree's primID (the scene
 /// triangle index, see EmbreeScene) or kInvalidPrim for a miss; t is the returned tfar; (u, v) are
 /// Embree's barycentrics, which use our convention p = (1-u-v) v0 + u v1 + v v2 (rtcore_ray.h's RTCHit;

@@ -275,7 +275,8 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   fmt::print(out,
              "# sahbench compare\n\nbaseline {} vs {}: {} cells compared, {} missing (each a regression), {} "
              "other regressions, {} improvements{}\n\n",
-             options.baseline.string(), options.current.string(), result.compared_cells, result.missing_cells,
+             options.baseline.string(), options.current.string(), result.compared_cells,
+             result.missing_cells + result.missing_anchors,
              result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
              options.deterministic_only ? " (deterministic metrics only)" : "");
   if (!not_in_base.empty())

@@ -9,6 +9,7 @@
 #include <map>
 #include <optional>
 #include <ostream>
+#include <set>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -84,10 +85,17 @@ struct Totals {
 // The error-against-time table, one row per (builder, layout), speed as a ratio to the first variant
 // traced (the first builder's default layout).
 ReportTable error_against_time(const std::vector<CsvRow>& rows) {
+  // A builder run with several parameter sets gets a row per set, named by its parameters.
+  std::map<std::string, std::set<std::string>> params_of;
+  for (const CsvRow& r : rows) params_of[builder_label(r)].insert(r.at("builder_params"));
+  auto variant = [&](const CsvRow& r) {
+    const std::string label = builder_label(r);
+    return params_of[label].size() > 1 ? label + " [" + r.at("builder_params") + "]" : label;
+  };
   std::vector<std::pair<std::string, std::string>> keys;
   std::map<std::pair<std::string, std::string>, Totals> totals;
   for (const CsvRow& r : rows) {
-    const auto key = std::make_pair(builder_label(r), layout_label(r));
+    const auto key = std::make_pair(variant(r), layout_label(r));
     if (!totals.count(key)) keys.push_back(key);
     totals[key].add(r);
   }
@@ -110,6 +118,12 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
   for (const auto& key : keys)
     if (!anchor && totals[key].mrays(common))
       anchor = totals[key].mrays(common), anchor_name = key.first + " " + key.second;
+  const std::string speeds =
+      anchor ? fmt::format(
+                   "geometric mean of each case's median rays/second (one traversal pass over its "
+                   "rays) over the {} cases that every traced variant traced, with its ratio to {}'s",
+                   common.size(), anchor_name)
+             : "none: no case was traced by every traced variant";
 
   ReportTable table;
   table.title = "Error against run time, all cases";
@@ -159,18 +173,17 @@ ReportTable error_against_time(const std::vector<CsvRow>& rows) {
     if (marked == table.rows.size() || infinite)
       for (ReportRow& row : table.rows) row.cells[c].best = false;
   }
-  table.caption = "Stress suite: errors against rays/s of each variant over every case.";
+  table.caption = "Stress suite: errors of each variant over every case it traced, against its rays/s.";
   table.legend.push_back(fmt::format(
-      "Traced: the cases a variant built and traced; errors are summed over those. Mrays/s: geometric mean "
-      "of each case's median rays/second (one traversal pass over its rays) over the {} cases that every "
-      "traced variant traced, with its ratio to {}'s. Errors are against the exact reference: a tie on a "
+      "Traced: the cases a variant built and traced; errors are summed over those. Mrays/s: {}. Errors are "
+      "against the exact reference: a tie on a "
       "shared edge or "
       "vertex "
       "accepts any of its triangles; (far): wrong primitives more than 1e-5 (relative) away in t. t errors "
       "are "
       "over hits on an accepted primitive; inf: an infinite t where the exact one is finite, which the mean "
       "(weighted by exact hits) leaves out. The best value of each column is in bold.",
-      common.size(), anchor_name));
+      speeds));
   return table;
 }
 

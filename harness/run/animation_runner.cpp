@@ -130,11 +130,17 @@ class AnimationRunner {
     std::vector<std::string> builder_runs;
     for (const auto& b : builders_) builder_runs.push_back(b.name + " " + b.params_text());
     warn_oversubscribed(cfg_, log_);
+    layouts_ = runnable_layouts(cfg_, log_);
+    // A filter that matches nothing is a typo: said before the output is created.
+    if (!options_.only.empty() && !any_cell_matches(scenes))
+      throw Error(
+          fmt::format("--only '{}' matches no cell of {} (cells are named "
+                      "scene|builder|builder_params|layout|threads|ray_set|frame)",
+                      options_.only, cfg_.path.string()));
     OpenRun open = open_run(cfg_, options_, output_, animation_columns(), scenes, builder_runs, env_, log_);
     id_ = open.id;
     finished_ = std::move(open.finished);
     CsvWriter& csv = *open.csv;
-    layouts_ = runnable_layouts(cfg_, log_);
 
     // Scenes are loaded one at a time; the plan counts cells as each scene's frames become known.
     log_ << fmt::format("run {} (fingerprint {}): animation experiment, {} frames per scene; writing {}\n",
@@ -157,6 +163,23 @@ class AnimationRunner {
         cell_key(scene, b.name, b.params_text(), layout, threads, ray_set, static_cast<int>(frame));
     if (finished_.count(key)) return false;
     return options_.only.empty() || key.find(options_.only) != std::string::npos;
+  }
+
+  // Whether --only matches a cell of any of `scenes` in any of the config's frames.
+  bool any_cell_matches(const std::vector<std::string>& scenes) const {
+    const std::size_t frames =
+        cfg_.animation->times.empty() ? cfg_.animation->frames : cfg_.animation->times.size();
+    for (const auto& scene : scenes)
+      for (const auto& b : builders_)
+        for (const auto& layout : layouts_for(b))
+          for (int threads : cfg_.threads)
+            for (const auto& rs : cfg_.ray_sets)
+              for (std::size_t f = 0; f < frames; ++f)
+                if (cell_key(scene, b.name, b.params_text(), layout.name, threads, rs.name,
+                             static_cast<int>(f))
+                        .find(options_.only) != std::string::npos)
+                  return true;
+    return false;
   }
 
   // Cells of `frame` still to run, over every builder, layout, thread count and configured ray set.

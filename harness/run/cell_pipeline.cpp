@@ -196,12 +196,7 @@ TraceCell our_cell(CsvRow row, std::string label, std::shared_ptr<const Compiled
 TraceCell embree_cell(CsvRow row, std::string label, const EmbreeScene& scene, const EmbreeLayout& layout,
                       const RaySet& rs, std::size_t set_index, std::shared_ptr<const void> keep_alive) {
   // Embree's assertion would stop the process (and the run) on such a ray: an error naming it instead.
-  if (const auto far = std::find_if_not(rs.rays.begin(), rs.rays.end(), embree_accepts); far != rs.rays.end())
-    throw Error(
-        fmt::format("ray set '{}': ray {} has an origin or direction component beyond {:g}, outside "
-                    "the range Embree traces (a camera or scene that far out cannot be compared "
-                    "with Embree)",
-                    rs.name, far - rs.rays.begin(), kEmbreeLargeFloat));
+  check_embree_range(rs.rays, "ray set '" + rs.name + "'");
   TraceCell cell = new_cell(std::move(row), std::move(label), rs, set_index);
   const EmbreeScene* s = &scene;
   const RaySet* set = &rs;

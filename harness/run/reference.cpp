@@ -33,6 +33,7 @@ Reference make_reference(const Scene& scene, const RaySet& rs, ReferencePolicy p
   } else if (policy == ReferencePolicy::kEmbree) {
     // Embree in robust mode, so that its own edge cases do not count as our mismatches.
     ref.name = "embree_robust";
+    check_embree_range(rs.rays, "ray set '" + rs.name + "' (reference = embree)");
     // A device of its own, released before any timed cell: Embree turns a device's thread count into
     // a process-wide TBB limit, and a live unlimited device would lift the limit of the timed cells.
     EmbreeDevice device(0);

@@ -77,9 +77,10 @@ class ExperimentRunner {
           return pending_cells(s, {}).empty();
         }))
       throw Error(
-          fmt::format("--only '{}' matches no cell of {} (cells are named "
+          fmt::format("--only '{}' matches no cell of {}{} (cells are named "
                       "scene|builder|builder_params|layout|threads|ray_set|frame)",
-                      options_.only, cfg_.path.string()));
+                      options_.only, options_.shard ? "shard " + options_.shard->text() + " of " : "",
+                      cfg_.path.string()));
     OpenRun open = open_run(cfg_, options_, output_, result_columns(), scenes, builder_runs, env_, log_);
     id_ = open.id;
     const std::set<std::string>& finished = open.finished;

@@ -314,6 +314,16 @@ TEST(HarnessAnimationRun, OnlyFiltersByBuilderAndFrame) {
   const auto rows = read_csv(temp_dir() / "animation_only.csv");
   EXPECT_EQ(rows.size(), 24u);
   for (const auto& row : rows) EXPECT_EQ(row.at("builder"), "refit(binned_sah)");
+  // A filter that matches nothing is refused before the output is created.
+  const auto typo = write_config("animation_only_typo");
+  try {
+    run_experiment({typo, false, "no_such_cell", std::nullopt}, log);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--only 'no_such_cell' matches no cell"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(temp_dir() / "animation_only_typo.csv"));
 }
 
 }  // namespace

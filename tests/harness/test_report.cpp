@@ -632,7 +632,8 @@ TEST(Report, BadSamplesAreAnErrorNamingFileLineAndColumn) {
 }
 
 // What compare refuses, report refuses too, rather than printing it as a result: a metric that is not a
-// number, the same cell twice, a time of zero. A CSV with comment lines before its header is read.
+// number, the same cell twice, a rate of zero, a negative time (a time may round to 0.0000 ms). A CSV with
+// comment lines before its header is read.
 TEST(Report, BadDataIsAnErrorAsInCompare) {
   auto report_of = [](CsvRow changed, const std::string& name, bool twice = false) {
     const auto path = temp_csv(name);
@@ -658,11 +659,14 @@ TEST(Report, BadDataIsAnErrorAsInCompare) {
                 .find("dup.csv:3 and " + temp_csv("dup.csv").string() + ":4 are the same cell"),
             std::string::npos);
   bad = good;
-  bad["build_ms_median"] = "0";
-  bad["build_ms_samples"] = "0;0;0";
-  EXPECT_NE(
-      report_of(bad, "zero_build.csv").find("column 'build_ms_median': 0 is not a positive time or rate"),
-      std::string::npos);
+  bad["trace_mrays_median"] = "0";
+  bad["trace_mrays_samples"] = "0;0;0";
+  EXPECT_NE(report_of(bad, "zero_rate.csv").find("column 'trace_mrays_median': 0 is not a positive rate"),
+            std::string::npos);
+  bad = good;
+  bad["build_ms_median"] = "-1";
+  EXPECT_NE(report_of(bad, "negative_build.csv").find("column 'build_ms_median': -1 is a negative time"),
+            std::string::npos);
 
   const auto commented = temp_csv("commented.csv");
   {

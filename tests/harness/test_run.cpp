@@ -338,23 +338,27 @@ TEST(HarnessRun, MissingRequiredSceneFailsBeforeAnyCell) {
   EXPECT_FALSE(std::filesystem::exists(csv)) << "the CSV is not touched before the scenes are known to exist";
 }
 
-// Embree stops the process on a ray beyond its range: a camera that far out is an error naming the set.
+// Embree stops the process on a ray beyond its range: a camera that far out is an error naming the set,
+// whether Embree is a builder of the config or the reference of our rows.
 TEST(HarnessRun, RaysBeyondEmbreesRangeAreAnErrorNotAnAbort) {
   const auto dir = temp_dir();
-  const auto path = dir / "far_camera.toml", csv = dir / "far_camera.csv";
-  std::filesystem::remove(csv);
-  std::ofstream(path)
-      << "[experiment]\nname = \"far\"\noutput = \"" << csv.string() << "\"\n"
-      << "scenes = [\"proc:sphere:tris=300\"]\nreference = \"none\"\n"
-      << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
-      << "[[builder]]\nname = \"binned_sah\"\n[[builder]]\nname = \"embree\"\n"
-      << "[[camera]]\nscene = \"proc:sphere:tris=300\"\neye = [0, 0, 1e19]\ntarget = [0, 0, 0]\n"
-      << "[[ray_set]]\nkind = \"primary\"\nwidth = 4\nheight = 4\n";
-  std::ostringstream log;
-  const std::string e = test::error_of([&] { run_experiment({path, false, "", std::nullopt}, log); });
-  EXPECT_NE(e.find("ray set 'primary': ray 0 has an origin or direction component beyond 1.844e+18"),
-            std::string::npos)
-      << e;
+  for (const auto& [reference, embree_builder] : {std::pair{"none", true}, std::pair{"embree", false}}) {
+    SCOPED_TRACE(reference);
+    const auto path = dir / "far_camera.toml", csv = dir / "far_camera.csv";
+    std::filesystem::remove(csv);
+    std::ofstream(path)
+        << "[experiment]\nname = \"far\"\noutput = \"" << csv.string() << "\"\n"
+        << "scenes = [\"proc:sphere:tris=300\"]\nreference = \"" << reference << "\"\n"
+        << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+        << "[[builder]]\nname = \"binned_sah\"\n"
+        << (embree_builder ? "[[builder]]\nname = \"embree\"\n" : "")
+        << "[[camera]]\nscene = \"proc:sphere:tris=300\"\neye = [0, 0, 1e19]\ntarget = [0, 0, 0]\n"
+        << "[[ray_set]]\nkind = \"primary\"\nwidth = 4\nheight = 4\n";
+    std::ostringstream log;
+    const std::string e = test::error_of([&] { run_experiment({path, false, "", std::nullopt}, log); });
+    EXPECT_NE(e.find("ray set 'primary'"), std::string::npos) << e;
+    EXPECT_NE(e.find("ray 0 has an origin or direction component beyond 1.844e+18"), std::string::npos) << e;
+  }
 }
 
 TEST(HarnessRun, ConfigCameraGivesThePrimaryViewAndSecondarySetsFollowIt) {
@@ -678,10 +682,8 @@ TEST(HarnessTrace, EmbreeLayoutsMatchBruteForceOrAreRefusedByName) {
   const TraceCommandOptions far{scene_spec, "embree", "embree_1", rays_path, out_path, TraceQuery::kClosest};
   std::ostringstream log;
   const std::string what = test::error_of([&] { run_trace_command(far, log); });
-  EXPECT_NE(
-      what.find("embree_rays.txt: ray 1 (counting from 0, as the output does) has an origin or direction "
-                "component beyond 1.844e+18"),
-      std::string::npos)
+  EXPECT_NE(what.find("embree_rays.txt: ray 1 has an origin or direction component beyond 1.844e+18"),
+            std::string::npos)
       << what;
 }
 

@@ -74,9 +74,17 @@ def labels(rows):
         for other_row, q in zip(rows, params):
             if row["builder"] == other_row["builder"]:
                 varying.setdefault(row["builder"], set()).update(k for k in p.keys() | q.keys() if p.get(k) != q.get(k))
+    # builder_label names the source; its parameters are named too where rows of the same source differ.
+    def source_name(p):
+        return p.get("source", "").split("(")[0]
+
+    def nested(row, p):
+        return any(row["builder"] == other["builder"] and source_name(p) == source_name(q)
+                   and p.get("source") != q.get("source") for other, q in zip(rows, params))
+
     out = []
     for row, p in zip(rows, params):
-        keys = [k for k in p if k in varying.get(row["builder"], ()) and k != "source"]  # source: builder_label
+        keys = [k for k in p if k in varying.get(row["builder"], ()) and (k != "source" or nested(row, p))]
         extra = " ".join(f"{k}={p[k]}" for k in keys)
         out.append(builder_label(row) + (" " + extra if extra else ""))
     return out

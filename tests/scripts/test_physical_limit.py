@@ -42,6 +42,9 @@ ROWS = [
     ["s", "embree", "embree_1", "avx2", "1", "primary", "", "", "", "30", "", "r2"],
     ["s", "wide_collapse", "bvh8:packet=8", "avx2", "1", "primary", "14", "4", "8", "25", PLAIN, "r2"],
     ["s", "wide_collapse", "bvh8:tri=mtn", "avx512", "1", "primary", "14", "4", "8", "25", PLAIN, "r2"],
+    # The same pass over another source tree: named by the source's parameters, which differ.
+    ["s", "wide_collapse", "bvh8", "avx2", "2", "primary", "14", "4", "8", "10",
+     "arity=8;source=reinsert(source=binned_sah(bins=8));c_trav=1", "r2"],
 ]
 BENCH = {"benchmarks": [
     {"name": "node_visit/bvh8/avx2/robust", "items_per_second": 5e8},
@@ -65,7 +68,10 @@ def main():
         text = out.stdout
         check("| s | wide_collapse[source=binned_sah] | bvh8 | 1 | primary | 10.0 + 4.0 | 8.0 | 28 | 50 | 0.56 |"
               in text, text)
-        check("| s | wide_collapse[source=reinsert] | bvh8 | 2 | primary | 10.0 + 4.0 | 8.0 | 28 | 100 | 0.28 |" in text, text)
+        check("| s | wide_collapse[source=reinsert] source=reinsert(source=binned_sah(bins=32)) | bvh8 | 2 | primary | "
+              "10.0 + 4.0 | 8.0 | 28 | 100 | 0.28 |" in text, text)
+        check("| s | wide_collapse[source=reinsert] source=reinsert(source=binned_sah(bins=8)) | bvh8 | 2 | primary | "
+              "10.0 + 4.0 | 8.0 | 28 | 200 | 0.14 |" in text, text)
         check("| s | binned_sah bins=32 | bvh2_packed:tri=mt,box=fast | 1 | shadow | 30.0 + 10.0 | 5.0 | 135 | 250 | "
               "0.54 |" in text, text)
         check("| s | binned_sah bins=8 | bvh2_packed:tri=mt,box=fast | 1 | shadow | 30.0 + 10.0 | 5.0 | 135 | 200 | "

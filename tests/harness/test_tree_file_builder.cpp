@@ -5,11 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "builders/registry.h"
@@ -156,6 +158,20 @@ TEST_F(TreeFileBuilder, BadPathsAreErrorsNamingThem) {
   std::ofstream(dir / "foreign.sbt") << "solid cube\n";
   BuilderRun foreign = parse_builder_run("file:" + (dir / "foreign.sbt").string());
   contains(error_of([&] { resolve(foreign); }), "not a sahbench tree file");
+}
+
+// As `run` does, `build` says when a thread count is more than the machine has.
+TEST(BuildCommand, MoreThreadsThanTheMachineHasAreSaid) {
+  BuildCommandOptions options;
+  options.scene = kScene;
+  options.builders = {parse_builder_run("binned_sah")};
+  const int more = static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) + 1;
+  options.threads = {more};
+  options.reps = 1;
+  options.warmup = 0;
+  std::ostringstream out, log;
+  ASSERT_EQ(run_build_command(options, out, log), 0) << out.str() << log.str();
+  contains(log.str(), "warning: --threads " + std::to_string(more) + " is more than the");
 }
 
 TEST_F(TreeFileBuilder, TreeOfAnotherSceneFailsTheBuild) {

@@ -8,7 +8,6 @@
 #include <memory>
 #include <optional>
 #include <ostream>
-#include <thread>
 
 #include "builders/registry.h"
 #include "core/bvh_stats.h"
@@ -19,6 +18,7 @@
 #include "harness/run/cell_pipeline.h"
 #include "harness/run/environment.h"
 #include "harness/run/round_order.h"
+#include "harness/run/run_common.h"
 #include "harness/run/timing.h"
 #include "scenes/load.h"
 #include "scenes/tree_file.h"
@@ -51,16 +51,9 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
   if (options.warmup < 0)
     throw Error("--warmup must be at least 0 (got " + std::to_string(options.warmup) + ")");
   if (options.builders.empty()) throw Error("no builder given (--builder NAME)");
-  const unsigned hardware = std::thread::hardware_concurrency();
-  for (int t : options.threads) {
+  for (int t : options.threads)
     if (t < 1) throw Error("--threads: " + std::to_string(t) + " is not a thread count");
-    // As `run` says it: such a build measures oversubscription, not the builder.
-    if (hardware > 0 && static_cast<unsigned>(t) > hardware)
-      log << fmt::format(
-          "warning: --threads {} is more than the {} hardware threads here; those builds measure "
-          "oversubscription\n",
-          t, hardware);
-  }
+  warn_oversubscribed(options.threads, "warning: --threads ", "builds", log);
   const std::vector<BuilderRun> runs = resolved_runs(options);
   if (!options.save.empty()) {
     if (runs.size() != 1 || runs.front().is_embree())

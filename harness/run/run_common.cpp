@@ -101,14 +101,18 @@ CsvRow common_row(const RunIdentity& id, const Environment& env, const Experimen
   return row;
 }
 
-void warn_oversubscribed(const ExperimentConfig& cfg, std::ostream& log) {
+void warn_oversubscribed(std::span<const int> threads, const std::string& setting,
+                         const std::string& measured, std::ostream& log) {
   const unsigned hardware = std::thread::hardware_concurrency();
-  for (const int threads : cfg.threads)
-    if (hardware > 0 && static_cast<unsigned>(threads) > hardware)
+  for (const int t : threads)
+    if (hardware > 0 && static_cast<unsigned>(t) > hardware)
       log << fmt::format(
-          "{}: warning: threads = {} is more than the {} hardware threads here; those cells measure "
-          "oversubscription\n",
-          cfg.path.string(), threads, hardware);
+          "{}{} is more than the {} hardware threads here; those {} measure oversubscription\n", setting, t,
+          hardware, measured);
+}
+
+void warn_oversubscribed(const ExperimentConfig& cfg, std::ostream& log) {
+  warn_oversubscribed(cfg.threads, cfg.path.string() + ": warning: threads = ", "cells", log);
 }
 
 OpenRun open_run(const ExperimentConfig& cfg, const RunOptions& options, const std::filesystem::path& output,

@@ -74,7 +74,10 @@ struct OpenRun {
 };
 
 /// More threads than the machine has measure oversubscription, not the builder: allowed, but said, on
-/// `log`, before anything runs.
+/// `log`, before anything runs. Each such count prints "{setting}{count} is more than the N hardware
+/// threads here; those {measured} measure oversubscription".
+void warn_oversubscribed(std::span<const int> threads, const std::string& setting,
+                         const std::string& measured, std::ostream& log);
 void warn_oversubscribed(const ExperimentConfig& cfg, std::ostream& log);
 
 /// `builder_runs`: one "name params" line per builder run, for the fingerprint.

@@ -41,6 +41,22 @@ std::vector<std::string> columns_with_samples() {
   return columns;
 }
 
+// columns_with_samples() and the SAH constants' columns.
+std::vector<std::string> columns_with_models() {
+  std::vector<std::string> columns = columns_with_samples();
+  for (const char* c : {"sah_c_trav", "sah_c_isect", "sah_block"})
+    if (std::find(columns.begin(), columns.end(), c) == columns.end()) columns.push_back(c);
+  return columns;
+}
+
+// `row` with its SAH cost under c_trav, c_isect = 1 and sah_block.
+CsvRow with_model(CsvRow row, const std::string& c_trav, const std::string& block) {
+  row.insert_or_assign("sah_c_trav", c_trav);
+  row.insert_or_assign("sah_c_isect", std::string("1"));
+  row.insert_or_assign("sah_block", block);
+  return row;
+}
+
 std::string join(const std::vector<double>& samples) {
   std::string out;
   for (const double v : samples) {
@@ -316,16 +332,10 @@ TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {
   // Two rows costed with c_trav = 1 and one with c_trav = 2, whose larger constants make its cost
   // incomparable (here it is even the lowest): it gets its constants as a note and no bold.
   const auto path = temp_csv("sah_models.csv");
-  std::vector<std::string> columns = columns_with_samples();
-  for (const char* c : {"sah_c_trav", "sah_c_isect", "sah_block"})
-    if (std::find(columns.begin(), columns.end(), c) == columns.end()) columns.push_back(c);
   {
-    CsvWriter w(path, columns);
+    CsvWriter w(path, columns_with_models());
     auto with_model = [](CsvRow row, const std::string& c_trav) {
-      row["sah_c_trav"] = c_trav;
-      row["sah_c_isect"] = "1";
-      row["sah_block"] = "4";
-      return row;
+      return sahbench::with_model(row, c_trav, "4");
     };
     w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0));
     w.append(with_model(
@@ -852,16 +862,10 @@ TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
 // constants is ranked apart, never against the others.
 TEST(ReportPredictors, CostsUnderOtherConstantsAreRankedApart) {
   const auto path = temp_csv("predictors_models.csv");
-  std::vector<std::string> columns = columns_with_samples();
-  for (const char* c : {"sah_c_trav", "sah_c_isect", "sah_block"})
-    if (std::find(columns.begin(), columns.end(), c) == columns.end()) columns.push_back(c);
   {
-    CsvWriter w(path, columns);
+    CsvWriter w(path, columns_with_models());
     auto with_model = [](CsvRow row, const std::string& c_trav) {
-      row.insert_or_assign("sah_c_trav", c_trav);
-      row.insert_or_assign("sah_c_isect", std::string("1"));
-      row.insert_or_assign("sah_block", std::string("1"));
-      return row;
+      return sahbench::with_model(row, c_trav, "1");
     };
     w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 9.0));
     const std::vector<std::pair<double, double>> plain = {{15.0, 10.0}, {16.0, 9.0}, {17.0, 8.0}};

@@ -123,12 +123,15 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
     const BuildInput input = BuildInput::from_triangles(scene.triangles);
     // Random rays, and rays in groups of kMaxWidePacket that the packet kernels trace as packets (packets are
     // cut from the start of each chunk, a multiple of kMaxWidePacket rays): near each other, and each in a
-    // direction and interval of its own within one octant.
+    // direction and interval of its own within one octant; then four such streams interleaved ray by ray,
+    // as a shadow ray set interleaves its lights (packets of mixed octants go ray by ray).
     auto rays = test::random_rays(scene.triangles, 800, 5);
     ASSERT_EQ(rays.size() % kMaxWidePacket, 0u);
     for (const Ray& r : test::coherent_rays(scene.triangles, 400, 6, kMaxWidePacket)) rays.push_back(r);
     ASSERT_EQ(rays.size() % kMaxWidePacket, 0u);
     for (const Ray& r : test::diverging_rays(scene.triangles, 400, 8, kMaxWidePacket)) rays.push_back(r);
+    for (const Ray& r : test::interleaved_rays(scene.triangles, 6 * 4 * kMaxWidePacket, 9, kMaxWidePacket, 4))
+      rays.push_back(r);
     // An odd count: the binary layouts trace rays in pairs and the last one alone.
     rays.push_back(test::random_rays(scene.triangles, 1, 7).front());
     std::vector<Hit> reference(rays.size());

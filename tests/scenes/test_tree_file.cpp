@@ -55,7 +55,9 @@ TEST_F(TreeFileTest, RoundTripGivesAnEqualTree) {
                                                            {"sbvh", {}}}) {
     SCOPED_TRACE(builder);
     const Bvh bvh = build(builder, triangles_, params);
-    if (builder == "sbvh") ASSERT_GT(bvh.prim_refs.size(), triangles_.size()) << "no reference repeated";
+    if (builder == "sbvh") {
+      ASSERT_GT(bvh.prim_refs.size(), triangles_.size()) << "no reference repeated";
+    }
     const auto path = dir_.path() / (builder + ".sbt");
     write_tree_file(path, bvh, triangles_);
     EXPECT_EQ(std::filesystem::file_size(path), 64 + 32 * bvh.nodes.size() + 4 * bvh.prim_refs.size());

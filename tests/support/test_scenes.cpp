@@ -174,3 +174,35 @@ std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t 
 }
 
 }  // namespace sahbench::test
+
+namespace sahbench::test {
+
+std::vector<Ray> interleaved_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
+                                  std::size_t group, std::size_t streams) {
+  const std::size_t run = group * streams;
+  const std::vector<Ray> leaders = random_rays(scene, (count + run - 1) / run * streams, seed);
+  Aabb box;
+  for (const auto& t : scene) box.extend(t.bounds());
+  const float size = diagonal(box) + 1e-3f;
+  std::mt19937_64 rng(seed ^ 0x6a09e667f3bcc909ull);
+  std::uniform_real_distribution<float> jitter(-1.0f, 1.0f), share(0.05f, 1.0f);
+  std::vector<Ray> rays;
+  rays.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Ray& lead = leaders[i / run * streams + i % streams];
+    Ray ray = lead;
+    if (i % run >= streams) {  // not the first of its stream in this run
+      for (int axis = 0; axis < 3; ++axis) {
+        ray.org[axis] += jitter(rng) * 0.1f * size;
+        // Up to 10% on each component, sign kept: within some ten degrees of the leader.
+        const float d = lead.dir[axis];
+        ray.dir[axis] = d == 0.0f ? d : std::copysign(std::fabs(d * (1.0f + 0.1f * jitter(rng))), d);
+      }
+      if (i % 3 == 1) ray.tmax = std::min(lead.tmax, share(rng) * size);
+    }
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+}  // namespace sahbench::test

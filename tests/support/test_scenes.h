@@ -38,9 +38,10 @@ std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t 
 
 /// Rays as a set interleaves those of several sources (a shadow ray to each of `streams` lights from
 /// every pixel): ray i belongs to stream i % streams, and every run of group * streams rays holds
-/// `group` rays of each stream, so that a packet of consecutive rays mixes the streams. Each stream's first ray in a run is one of random_rays; the others start up to a
-/// tenth of the scene's diagonal from it on each axis and point within some ten degrees of it, with the
-/// same sign bit in each direction component, and every third ends sooner.
+/// `group` rays of each stream, so that a packet of consecutive rays mixes the streams. Each stream's first
+/// ray in a run is one of random_rays; the others start up to a tenth of the scene's diagonal from it on each
+/// axis and point within some ten degrees of it, with the same sign bit in each direction component, and
+/// every third ends sooner.
 std::vector<Ray> interleaved_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
                                   std::size_t group, std::size_t streams);
 

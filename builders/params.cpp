@@ -166,7 +166,10 @@ std::string ParamSet::to_string() const {
       continue;
     }
     out += value.source.name();
-    if (!value.source.shared()) out += "(" + value.source.params->to_string() + ")";
+    if (value.source.shared()) continue;
+    out += '(';
+    out += value.source.params->to_string();
+    out += ')';
   }
   return out;
 }

@@ -5,6 +5,7 @@
 
 #include <bit>
 #include <string>
+#include <vector>
 
 #include "bench/bench_data.h"
 #include "builders/collapse.h"
@@ -148,6 +149,31 @@ const bool registered = [] {
   }
   return true;
 }();
+
+// The wide layouts' per-ray set-up (make_wide_rays, a block of rays at a time, as the layouts call it),
+// and make_wide_ray one ray at a time for comparison: items/s = rays set up per second.
+void BM_WideRaySetUp(benchmark::State& state, bool batch, bool shear, BoxTestKind box) {
+  const auto& rs = rays(kRays);
+  std::vector<WideRay> out(rs.size());
+  for (auto _ : state) {
+    if (batch) {
+      benchmark::DoNotOptimize(make_wide_rays(rs, out.data(), shear, box));
+    } else {
+      for (std::size_t i = 0; i < rs.size(); ++i) out[i] = make_wide_ray(rs[i], shear, box);
+    }
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * rs.size()));
+}
+BENCHMARK_CAPTURE(BM_WideRaySetUp, batch_watertight_robust, true, true, BoxTestKind::kRobust)
+    ->Name("ray_setup/wide/batch/watertight,robust");
+BENCHMARK_CAPTURE(BM_WideRaySetUp, one_watertight_robust, false, true, BoxTestKind::kRobust)
+    ->Name("ray_setup/wide/one/watertight,robust");
+BENCHMARK_CAPTURE(BM_WideRaySetUp, batch_mtn_fma, true, false, BoxTestKind::kFma)
+    ->Name("ray_setup/wide/batch/mtn,fma");
+BENCHMARK_CAPTURE(BM_WideRaySetUp, one_mtn_fma, false, false, BoxTestKind::kFma)
+    ->Name("ray_setup/wide/one/mtn,fma");
 
 // One bvh2 node visit: both child boxes of a common-format node in one intersect_pair, as
 // BinaryWalk tests them.

@@ -142,7 +142,7 @@ struct WideRaysInfo {
 /// out takes 3 divisions and a branchy axis choice off every ray. `box`: the box test the ray is for.
 WideRay make_wide_ray(const Ray& ray, bool shear = true, BoxTestKind box = BoxTestKind::kRobust);
 /// make_wide_ray for each of `rays`, into out[0, rays.size()): what the layouts call, with the choices
-/// made once per batch rather than once per ray.
+/// made once per batch rather than once per ray, and the same bits computed for blocks of rays at once.
 WideRaysInfo make_wide_rays(std::span<const Ray> rays, WideRay* out, bool shear, BoxTestKind box);
 
 /// The arena's unit (wide_bvh.h): references to nodes and blocks count these from the arena's start.

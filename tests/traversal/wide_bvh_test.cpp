@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
@@ -395,6 +396,59 @@ TEST(WideBvh, RaySetUpSortsRaysForTheIntegerPathAtTheEdgesOfItsConditions) {
   EXPECT_EQ(make_wide_rays(std::span(batch).first(2), out.data(), false, BoxTestKind::kFma).int_order,
             IntOrder::kGuarded);
   EXPECT_EQ(make_wide_rays(batch, out.data(), false, BoxTestKind::kFma).int_order, IntOrder::kNone);
+}
+
+// The batch set-up (computed a block of rays at a time) gives every ray the single-ray set-up's bits,
+// field by field, in blocks cut anywhere: random rays with +0 and -0 components, and rays at the edges
+// of every condition (untraceable, out of box=fma's domain or the float triangle test's range, an
+// infinite or negative interval, a NaN with the largest direction component after it).
+TEST(WideBvh, BatchSetUpGivesEachRayTheSingleRaySetUp) {
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<Ray> rays = test::random_rays(test::random_triangles(200, 5), 300, 6);
+  const std::vector<Ray> edges{
+      Ray{{1, 2, 3}, 0.0f, {nan, 1, 2}},         Ray{{1, 2, 3}, 0.0f, {1e-30f, nan, 1}},
+      Ray{{nan, 2, 3}, 0.0f, {1, 1, 1}},         Ray{{1, 2, 3}, nan, {1, 1, 1}},
+      Ray{{1, 2, 3}, 0.0f, {1, 1, 1}, nan},      Ray{{inf, 2, 3}, 0.0f, {1, 1, 1}},
+      Ray{{1, 2, 3}, 0.0f, {0, -inf, 1}},        Ray{{1, 2, 3}, -1.0f, {1, 1, 1}, -2.0f},
+      Ray{{1, 2, 3}, -0.0f, {-0.0f, -0.0f, -1}}, Ray{{1e30f, -1e30f, 1}, 0.0f, {1e-45f, -1e-38f, 1e-30f}},
+      Ray{{0x1p41f, 0, 0}, 0.0f, {1, 1, 1}},     Ray{{1, 1, 1}, 0.0f, {0x1p-41f, -0x1p-41f, 0}},
+      Ray{{1, 1, 1}, 0.0f, {0x1p41f, 1, 1}},     Ray{{0x1p-100f, 1, 1}, 0.0f, {1, -1, 1}, inf},
+      Ray{{1, 1, 1}, 0.0f, {0, 0, 0}},           Ray{{-1, -1, -1}, 0.0f, {2, 2, -2}}};
+  for (int copy = 0; copy < 3; ++copy) rays.insert(rays.end(), edges.begin(), edges.end());
+  auto same = [](const WideRay& a, const WideRay& b) {
+    auto bits = [](float x) { return std::bit_cast<uint32_t>(x); };
+    for (int axis = 0; axis < 3; ++axis)
+      if (bits(a.org[axis]) != bits(b.org[axis]) || bits(a.dir[axis]) != bits(b.dir[axis]) ||
+          bits(a.inv_dir[axis]) != bits(b.inv_dir[axis]) || bits(a.org_inv[axis]) != bits(b.org_inv[axis]) ||
+          a.near_plane[axis] != b.near_plane[axis] || a.far_plane[axis] != b.far_plane[axis])
+        return false;
+    return bits(a.tmin) == bits(b.tmin) && bits(a.tmax) == bits(b.tmax) && a.kx == b.kx && a.ky == b.ky &&
+           a.kz == b.kz && bits(a.sx) == bits(b.sx) && bits(a.sy) == bits(b.sy) && bits(a.sz) == bits(b.sz) &&
+           a.int_order == b.int_order && a.robust_box == b.robust_box && a.mtn_in_double == b.mtn_in_double;
+  };
+  for (const bool shear : {false, true}) {
+    for (const BoxTestKind box : {BoxTestKind::kRobust, BoxTestKind::kFast, BoxTestKind::kFma}) {
+      // Batches of 1, 15, 16, 17 and the rest: whole and partial blocks.
+      for (std::size_t first = 0, size = 1; first < rays.size();
+           first += size, size = size == 1 ? 15 : size + 1) {
+        const std::size_t n = std::min(size, rays.size() - first);
+        std::vector<WideRay> batch(n);
+        const WideRaysInfo info = make_wide_rays(std::span(rays).subspan(first, n), batch.data(), shear, box);
+        WideRaysInfo expected{IntOrder::kFree, false};
+        for (std::size_t i = 0; i < n; ++i) {
+          const WideRay one = make_wide_ray(rays[first + i], shear, box);
+          ASSERT_TRUE(same(batch[i], one))
+              << "ray " << first + i << " shear " << shear << " box " << static_cast<int>(box);
+          if (one.robust_box)
+            expected.robust_box = true;
+          else
+            expected.int_order = std::min(expected.int_order, one.int_order);
+        }
+        EXPECT_EQ(info.int_order, expected.int_order);
+        EXPECT_EQ(info.robust_box, expected.robust_box);
+      }
+    }
+  }
 }
 
 // box=fma's domain (ray_box.h: FmaRayBox::takes) at both edges: direction components from the smallest

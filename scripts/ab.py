@@ -33,7 +33,8 @@ error naming the cell, as in `sahbench report`, and a sample of 0 (a time printe
 the cell without a ratio. An animated config's frames are
 cells of their own. Use an even number of rounds, so that each build runs first equally often.
 
-Needs pandas. Exits 1 with a message when a run fails or a CSV lacks the columns it needs.
+Needs pandas. Exits 1 with a message when a run fails, a CSV lacks the columns it needs, or the first
+round has no cell with its anchor (a config without Embree medium in its default mode), after that round.
 """
 
 import argparse
@@ -209,11 +210,14 @@ def main(argv=None):
             for b, cells in results.items():
                 for key, value in cells.items():
                     per_build[b].setdefault(key, {})[r] = value
+            # Every round would be as empty as the first: say so now, not after the last.
+            if not any(per_build):
+                print(f"ab.py: no cell of round 1 has the anchor, Embree medium's embree_1 in its default mode "
+                      f"(robust = false) on the same scene, threads and ray set: add it to {args.config}",
+                      file=sys.stderr)
+                return 1
 
     cells = sorted(set().union(*[set(p) for p in per_build]), key=lambda k: tuple(str(x) for x in k))
-    if not cells:
-        print("ab.py: no cell with an Embree medium anchor in the runs", file=sys.stderr)
-        return 1
     names = [chr(ord("A") + i) for i in range(len(args.builds))]
     print(f"# A/B, {args.rounds} interleaved rounds of {args.config}: median over rounds of ours over Embree medium")
     print("# (trace: rays/s ratio; build: Embree's time over ours; above 1 is faster than Embree);")

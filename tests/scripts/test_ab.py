@@ -57,6 +57,8 @@ rows = [
     ["bunny", "wide_collapse", "arity=8", "bvh8", 1, "shadow", 10.0 * noise * scale, 100.0 * noise / scale],
     ["bunny", "wide_collapse", "arity=8", "bvh4", 1, "shadow", 10.0 * noise * scale, 100.0 * noise / scale],
 ]
+if mode == "robustonly":
+    rows = [row for row in rows if row[2] != "quality=medium"]
 if mode in ("samples", "mismatch"):
     # Samples whose ratios by round are 0.8, 1 and 0.8 (geometric mean 0.862), beside medians that say 1;
     # "mismatch": ours with a fourth round Embree lacks.
@@ -179,6 +181,15 @@ def main():
         done = run_ab(ab, "--rounds", "1", str(config), a, no_column)
         check(done.returncode == 1 and "no column build_ms_median" in done.stderr,
               f"a CSV without a column is an error naming it: {done.returncode} {done.stderr}")
+
+        # Without the anchor, ab.py stops after the first round and says what the config lacks.
+        robust_only = make_build(folder, "sahbench-r", 1.0, log, mode="robustonly")
+        robust_too = make_build(folder, "sahbench-r2", 1.0, log, mode="robustonly")
+        before = len(log.read_text().split())
+        done = run_ab(ab, "--rounds", "4", str(config), robust_only, robust_too)
+        check(done.returncode == 1 and "embree_1 in its default mode (robust = false)" in done.stderr
+              and len(log.read_text().split()) - before == 2,
+              f"no anchor: an error after one round of two runs: {done.returncode} {done.stderr}")
 
         done = run_ab(ab, str(config), a)
         check(done.returncode == 2 and "at least two builds" in done.stderr, f"one build: {done.stderr}")

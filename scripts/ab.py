@@ -33,8 +33,9 @@ error naming the cell, as in `sahbench report`, and a sample of 0 (a time printe
 the cell without a ratio. An animated config's frames are
 cells of their own. Use an even number of rounds, so that each build runs first equally often.
 
-Needs pandas. Exits 1 with a message when a run fails, a CSV lacks the columns it needs, or the first
-round has no cell with its anchor (a config without Embree medium in its default mode), after that round.
+Needs pandas. Exits 1 with a message when a run fails, a CSV lacks the columns it needs or the anchor's
+rows (a config without Embree medium in its default mode: after the first run), or the first round
+gives no cell a ratio (after that round).
 """
 
 import argparse
@@ -103,6 +104,9 @@ def ratios(csv_path):
     # Animated configs write a row per frame; each frame is its own cell against Embree's same frame.
     df["frame"] = df["frame"].fillna(0).astype(int) if "frame" in df.columns else 0
     embree = df[(df.builder == "embree") & (df.builder_params == "quality=medium") & (df.layout == "embree_1")]
+    if embree.empty:
+        raise ValueError(f"{csv_path}: no row of the anchor, Embree medium's embree_1 in its default mode "
+                         "(robust = false): add it to the config")
     trace_anchor = embree.drop_duplicates(["scene", "frame", "threads", "ray_set"])
     trace_anchor = trace_anchor.set_index(["scene", "frame", "threads", "ray_set"]).sort_index()
     # Every row of a build carries its build time: one row per build, ours and Embree's.
@@ -212,9 +216,8 @@ def main(argv=None):
                     per_build[b].setdefault(key, {})[r] = value
             # Every round would be as empty as the first: say so now, not after the last.
             if not any(per_build):
-                print(f"ab.py: no cell of round 1 has the anchor, Embree medium's embree_1 in its default mode "
-                      f"(robust = false) on the same scene, threads and ray set: add it to {args.config}",
-                      file=sys.stderr)
+                print("ab.py: no cell of round 1 has a ratio: none of ours shares a scene, threads and ray set "
+                      "with the anchor, or every sample is 0", file=sys.stderr)
                 return 1
 
     cells = sorted(set().union(*[set(p) for p in per_build]), key=lambda k: tuple(str(x) for x in k))

@@ -99,9 +99,9 @@ uint32_t blocks_for(uint32_t prims) {
 
 namespace {
 
-// One ray's set-up, with the choices fixed at compile time so that the batch loop below has no branch
-// per ray: set-up is a tenth of a closest-hit ray's time at 10 Mrays/s, and a run-time choice of the
-// reciprocal per axis (box=fma's or IEEE's) cost the closest-hit rays 1-7%.
+// One ray's set-up (make_wide_ray), with the choices fixed at compile time, as set_up_block below
+// makes them for a batch: set-up is a tenth of a closest-hit ray's time at 10 Mrays/s, and a run-time
+// choice of the reciprocal per axis (box=fma's or IEEE's) cost the closest-hit rays 1-7%.
 // The bits of 2^-100 and of +inf. A slab distance fma(plane, inv, -org_inv) that is not zero is at
 // least 2^-149 in magnitude when |org_inv| >= 2^-100: the exact product has at most 48 significant
 // bits, so where it nearly cancels org_inv, of magnitude 2^k, the exact difference is a multiple of
@@ -112,7 +112,7 @@ constexpr uint32_t kInfBits = 0x7f800000u;
 static_assert(std::bit_cast<uint32_t>(0x1p-100f) == kLowestFreeOrgInv);
 
 template <bool kShear, bool kFma>
-inline IntOrder set_up(const Ray& ray, WideRay& r) {
+inline void set_up(const Ray& ray, WideRay& r) {
   for (uint32_t axis = 0; axis < 3; ++axis) {
     r.org[axis] = ray.org[axis];
     r.dir[axis] = ray.dir[axis];
@@ -166,15 +166,15 @@ inline IntOrder set_up(const Ray& ray, WideRay& r) {
     r.sy = ray.dir[r.ky] / ray.dir[kz];
     r.sz = 1.0f / ray.dir[kz];
   }
-  return int_order;
 }
 
 // The same set-up for a block of kSetupBlock rays at a time, field by field in loops over the block
-// that the compiler turns into SIMD instructions: a ray's six divisions and its selects cost about
-// as much as a few node visits one ray at a time, which showed in profiles of rays that cross few
-// nodes (a primary ray that misses the scene's box costs its set-up and one box test). Every lane
-// computes set_up's operations, so each ray gets the same bits (tests/traversal/wide_bvh_test.cpp
-// holds the two to it).
+// that the compiler turns into SIMD instructions: a ray's six divisions and its selects, one ray at a
+// time, cost about as much as a few node visits, most of the time of a ray that crosses few nodes (a
+// primary ray that misses the scene's box costs its set-up and one box test). Each lane computes
+// set_up's results by the same IEEE operations (the integer-path order by float compares that give
+// the same answers), so each ray gets the same bits; tests/traversal/wide_bvh_test.cpp holds the two
+// to it. Sixteen rays: one AVX-512 register of floats.
 constexpr std::size_t kSetupBlock = 16;
 
 template <bool kShear, bool kFma>

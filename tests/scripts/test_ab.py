@@ -59,6 +59,8 @@ rows = [
 ]
 if mode == "robustonly":
     rows = [row for row in rows if row[2] != "quality=medium"]
+if mode == "embreeonly":  # the anchor, but nothing of ours to compare with it
+    rows = [row for row in rows if row[1] == "embree"]
 if mode in ("samples", "mismatch"):
     # Samples whose ratios by round are 0.8, 1 and 0.8 (geometric mean 0.862), beside medians that say 1;
     # "mismatch": ours with a fourth round Embree lacks.
@@ -182,14 +184,20 @@ def main():
         check(done.returncode == 1 and "no column build_ms_median" in done.stderr,
               f"a CSV without a column is an error naming it: {done.returncode} {done.stderr}")
 
-        # Without the anchor, ab.py stops after the first round and says what the config lacks.
-        robust_only = make_build(folder, "sahbench-r", 1.0, log, mode="robustonly")
-        robust_too = make_build(folder, "sahbench-r2", 1.0, log, mode="robustonly")
+        # Without the anchor, ab.py stops after the first run and says what the config lacks.
+        robust_only = make_build(folder, "sahbench-robust", 1.0, log, mode="robustonly")
         before = len(log.read_text().split())
-        done = run_ab(ab, "--rounds", "4", str(config), robust_only, robust_too)
-        check(done.returncode == 1 and "embree_1 in its default mode (robust = false)" in done.stderr
+        done = run_ab(ab, "--rounds", "4", str(config), robust_only, b)
+        check(done.returncode == 1 and "embree_1 in its default mode (robust = false): add it" in done.stderr
+              and len(log.read_text().split()) - before == 1,
+              f"no anchor: an error after the first run: {done.returncode} {done.stderr}")
+        embree_only = make_build(folder, "sahbench-embree", 1.0, log, mode="embreeonly")
+        embree_too = make_build(folder, "sahbench-embree2", 1.0, log, mode="embreeonly")
+        before = len(log.read_text().split())
+        done = run_ab(ab, "--rounds", "4", str(config), embree_only, embree_too)
+        check(done.returncode == 1 and "no cell of round 1 has a ratio" in done.stderr
               and len(log.read_text().split()) - before == 2,
-              f"no anchor: an error after one round of two runs: {done.returncode} {done.stderr}")
+              f"no cell: an error after one round of two runs: {done.returncode} {done.stderr}")
 
         done = run_ab(ab, str(config), a)
         check(done.returncode == 2 and "at least two builds" in done.stderr, f"one build: {done.stderr}")

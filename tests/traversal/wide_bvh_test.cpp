@@ -10,6 +10,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <iomanip>
 #include <limits>
 #include <random>
@@ -405,15 +406,34 @@ TEST(WideBvh, RaySetUpSortsRaysForTheIntegerPathAtTheEdgesOfItsConditions) {
 TEST(WideBvh, BatchSetUpGivesEachRayTheSingleRaySetUp) {
   const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
   std::vector<Ray> rays = test::random_rays(test::random_triangles(200, 5), 300, 6);
-  const std::vector<Ray> edges{
-      Ray{{1, 2, 3}, 0.0f, {nan, 1, 2}},         Ray{{1, 2, 3}, 0.0f, {1e-30f, nan, 1}},
-      Ray{{nan, 2, 3}, 0.0f, {1, 1, 1}},         Ray{{1, 2, 3}, nan, {1, 1, 1}},
-      Ray{{1, 2, 3}, 0.0f, {1, 1, 1}, nan},      Ray{{inf, 2, 3}, 0.0f, {1, 1, 1}},
-      Ray{{1, 2, 3}, 0.0f, {0, -inf, 1}},        Ray{{1, 2, 3}, -1.0f, {1, 1, 1}, -2.0f},
-      Ray{{1, 2, 3}, -0.0f, {-0.0f, -0.0f, -1}}, Ray{{1e30f, -1e30f, 1}, 0.0f, {1e-45f, -1e-38f, 1e-30f}},
-      Ray{{0x1p41f, 0, 0}, 0.0f, {1, 1, 1}},     Ray{{1, 1, 1}, 0.0f, {0x1p-41f, -0x1p-41f, 0}},
-      Ray{{1, 1, 1}, 0.0f, {0x1p41f, 1, 1}},     Ray{{0x1p-100f, 1, 1}, 0.0f, {1, -1, 1}, inf},
-      Ray{{1, 1, 1}, 0.0f, {0, 0, 0}},           Ray{{-1, -1, -1}, 0.0f, {2, 2, -2}}};
+  const std::vector<Ray> edges{Ray{{1, 2, 3}, 0.0f, {nan, 1, 2}},
+                               Ray{{1, 2, 3}, 0.0f, {1e-30f, nan, 1}},
+                               Ray{{nan, 2, 3}, 0.0f, {1, 1, 1}},
+                               Ray{{1, 2, 3}, nan, {1, 1, 1}},
+                               Ray{{1, 2, 3}, 0.0f, {1, 1, 1}, nan},
+                               Ray{{inf, 2, 3}, 0.0f, {1, 1, 1}},
+                               Ray{{1, 2, 3}, 0.0f, {0, -inf, 1}},
+                               Ray{{1, 2, 3}, -1.0f, {1, 1, 1}, -2.0f},
+                               Ray{{1, 2, 3}, -0.0f, {-0.0f, -0.0f, -1}},
+                               Ray{{1e30f, -1e30f, 1}, 0.0f, {1e-45f, -1e-38f, 1e-30f}},
+                               Ray{{0x1p41f, 0, 0}, 0.0f, {1, 1, 1}},
+                               Ray{{1, 1, 1}, 0.0f, {0x1p-41f, -0x1p-41f, 0}},
+                               Ray{{1, 1, 1}, 0.0f, {0x1p41f, 1, 1}},
+                               Ray{{0x1p-100f, 1, 1}, 0.0f, {1, -1, 1}, inf},
+                               Ray{{1, 1, 1}, 0.0f, {0, 0, 0}},
+                               Ray{{-1, -1, -1}, 0.0f, {2, 2, -2}},
+                               Ray{{1, 2, 3}, -0.0f, {1, 1, 1}},
+                               Ray{{1, 2, 3}, 0.0f, {1, 1, 1}, -1.0f},
+                               Ray{{1, 2, 3}, 0.0f, {1, 1, 1}, -0.0f},
+                               Ray{{1, std::nextafter(0x1p-100f, 0.0f), 1}, 0.0f, {1, 1, 1}},
+                               Ray{{0, 0, 0}, 0.0f, {0, 1, 1}},
+                               Ray{{1, 2, 3}, 0.0f, {1, 1, -1}, nan}};
+  // Directions whose components tie in magnitude, with either sign and either zero: the shear's choice
+  // of axes at its edges.
+  for (const float x : {-1.0f, -0.0f, 0.0f, 1.0f})
+    for (const float y : {-1.0f, -0.0f, 0.0f, 1.0f, 2.0f})
+      for (const float z : {-2.0f, -1.0f, -0.0f, 0.0f, 1.0f})
+        rays.push_back(Ray{{0.5f, 0.25f, 0.125f}, 0.0f, {x, y, z}});
   for (int copy = 0; copy < 3; ++copy) rays.insert(rays.end(), edges.begin(), edges.end());
   auto same = [](const WideRay& a, const WideRay& b) {
     auto bits = [](float x) { return std::bit_cast<uint32_t>(x); };
@@ -428,11 +448,13 @@ TEST(WideBvh, BatchSetUpGivesEachRayTheSingleRaySetUp) {
   };
   for (const bool shear : {false, true}) {
     for (const BoxTestKind box : {BoxTestKind::kRobust, BoxTestKind::kFast, BoxTestKind::kFma}) {
-      // Batches of 1, 15, 16, 17 and the rest: whole and partial blocks.
+      // Batches of 1, then 15, 16, 17, ... rays, growing by one: whole and partial blocks cut anywhere.
       for (std::size_t first = 0, size = 1; first < rays.size();
            first += size, size = size == 1 ? 15 : size + 1) {
         const std::size_t n = std::min(size, rays.size() - first);
+        // Every byte set, so that a field the batch set-up leaves unwritten shows.
         std::vector<WideRay> batch(n);
+        std::memset(static_cast<void*>(batch.data()), 0xFF, n * sizeof(WideRay));
         const WideRaysInfo info = make_wide_rays(std::span(rays).subspan(first, n), batch.data(), shear, box);
         WideRaysInfo expected{IntOrder::kFree, false};
         for (std::size_t i = 0; i < n; ++i) {

@@ -17,11 +17,12 @@ constexpr std::array<std::pair<BoxTestKind, std::string_view>, 3> kBoxNames{{
     {BoxTestKind::kFast, "fast"},
     {BoxTestKind::kFma, "fma"},
 }};
-constexpr std::array<std::pair<AnyHitOrder, std::string_view>, 4> kAnyHitOrderNames{{
+constexpr std::array<std::pair<AnyHitOrder, std::string_view>, 5> kAnyHitOrderNames{{
     {AnyHitOrder::kAuto, "auto"},
     {AnyHitOrder::kNearest, "nearest"},
     {AnyHitOrder::kStored, "stored"},
     {AnyHitOrder::kNearestStored, "nearest_stored"},
+    {AnyHitOrder::kFarthestStored, "farthest_stored"},
 }};
 constexpr std::array<std::pair<KernelIsa, std::string_view>, 5> kIsaNames{{
     {KernelIsa::kAuto, "auto"},

@@ -34,6 +34,10 @@ enum class AnyHitOrder : uint8_t {
   /// the tree's order: the first step of nearest first without its sort, and the occlusion order for the
   /// rest.
   kNearestStored,
+  /// The farthest child entered first (ties to the earlier slot), then the others in the tree's order:
+  /// for shadow rays whose occluders lie near the light rather than near the surface they leave, such
+  /// as a light inside a fixture or under a dome.
+  kFarthestStored,
 };
 
 /// The instruction set a SIMD kernel is compiled for. kAuto picks the widest one that is both compiled

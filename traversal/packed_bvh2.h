@@ -209,6 +209,7 @@ class PackedWalk {
         if constexpr (kAnyHit) {
           if (any_order_ == AnyHitOrder::kStored) second_first = false;
           if (any_order_ == AnyHitOrder::kNearestStored) second_first = t1 < t0;
+          if (any_order_ == AnyHitOrder::kFarthestStored) second_first = t1 > t0;
         }
         if (size_ == kStackCapacity) [[unlikely]]
           throw_stack_overflow(current_, 2);

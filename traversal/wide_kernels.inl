@@ -965,7 +965,8 @@ SAHBENCH_KERNEL_INLINE void prefetch_slot(const WideUnit* arena, uint32_t child,
 // integer above and the slot below (ties go to the higher slot, as in bvh2_traversal.h, so both kernels
 // visit the same nodes); the rest are pushed farthest first and fetched ahead. Any hit visits them in
 // kOrder (bvh2_traversal.h: resolve_any_hit_order): kStored in slot order, which the wide builders make
-// an occlusion order (builders/child_order.h), kNearestStored the nearest first and then slot order.
+// an occlusion order (builders/child_order.h), kNearestStored (kFarthestStored) the nearest (farthest)
+// first and then slot order.
 // Any hit does not fetch the children it pushes: a shadow ray often ends before it pops them, and
 // fetching them traced the shadow rays of Sponza 1%, of the bunny and the dragon 3% slower (two same-run
 // A/Bs, 6 and 8 rounds, t1 and t2; the terrain within noise).
@@ -974,21 +975,22 @@ SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t 
                                               const WideUnit* arena, WideStackEntry* stack, uint32_t& size) {
   const uint32_t first = static_cast<uint32_t>(__builtin_ctz(mask));
   if ((mask & (mask - 1)) == 0) return {node.child[first], node.count[first], t_entry[first]};
-  if constexpr (kOrder == AnyHitOrder::kStored || kOrder == AnyHitOrder::kNearestStored) {
+  if constexpr (kOrder == AnyHitOrder::kStored || kOrder == AnyHitOrder::kNearestStored ||
+                kOrder == AnyHitOrder::kFarthestStored) {
     uint32_t next = first;
-    if constexpr (kOrder == AnyHitOrder::kNearestStored) {
-      // The nearest, ties to the earlier slot: a shadow ray starts inside several boxes (entry distance
-      // tmin), and the stored order puts the likelier occluder first. Ties to the later slot traced
-      // wide_binned_sah's Sponza shadow rays 31% slower. The distance is kept in a register: comparing
-      // against t_entry[next] chained a load into every step, and traced 2-5% slower on the bunny, the
-      // dragon and the terrain (7% faster on Sponza; measured with ties to the later slot).
+    if constexpr (kOrder != AnyHitOrder::kStored) {
+      // The nearest (kFarthestStored: the farthest), ties to the earlier slot: a shadow ray starts inside
+      // several boxes (entry distance tmin), and the stored order puts the likelier occluder first. Ties to
+      // the later slot traced wide_binned_sah's Sponza shadow rays 31% slower. The distance is kept in a
+      // register: comparing against t_entry[next] chained a load into every step, and traced 2-5% slower on
+      // the bunny, the dragon and the terrain (7% faster on Sponza; measured with ties to the later slot).
       float next_t = t_entry[first];
       for (uint32_t m = mask & (mask - 1); m; m &= m - 1) {
         const uint32_t i = static_cast<uint32_t>(__builtin_ctz(m));
         const float t = t_entry[i];
-        const bool nearer = t < next_t;
-        next = nearer ? i : next;
-        next_t = nearer ? t : next_t;
+        const bool better = kOrder == AnyHitOrder::kFarthestStored ? t > next_t : t < next_t;
+        next = better ? i : next;
+        next_t = better ? t : next_t;
       }
     }
     for (uint32_t rest = mask & ~(1u << next); rest;) {
@@ -1261,6 +1263,8 @@ void trace_batch(const WideBatch& batch) {
         return run.template operator()<kRayBox, AnyHitOrder::kStored, kInt>(rays);
       if (batch.any_hit_order == AnyHitOrder::kNearestStored)
         return run.template operator()<kRayBox, AnyHitOrder::kNearestStored, kInt>(rays);
+      if (batch.any_hit_order == AnyHitOrder::kFarthestStored)
+        return run.template operator()<kRayBox, AnyHitOrder::kFarthestStored, kInt>(rays);
     }
     run.template operator()<kRayBox, AnyHitOrder::kNearest, kInt>(rays);
   };

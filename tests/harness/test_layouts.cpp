@@ -15,6 +15,7 @@
 #include "builders/registry.h"
 #include "core/error.h"
 #include "core/refit.h"
+#include "core/validate.h"
 #include "tests/builders/builder_cases.h"
 #include "tests/support/hit_check.h"
 #include "tests/support/prerequisites.h"
@@ -51,7 +52,7 @@ std::vector<std::string> specs_for(const LayoutInfo& layout, test::Skips& skips)
   };
   if (!layout.has_isa) {
     add_variants("");
-    for (const char* order : {"nearest", "stored", "nearest_stored"})
+    for (const char* order : {"nearest", "stored", "nearest_stored", "farthest_stored"})
       out.push_back(layout.name + ":anyhit=" + order);
     return out;
   }
@@ -59,7 +60,7 @@ std::vector<std::string> specs_for(const LayoutInfo& layout, test::Skips& skips)
   add_variants(",isa=scalar");
   if (best != KernelIsa::kScalar) add_variants(",isa=" + std::string(to_string(best)));
   // Every any-hit order, whichever the tree's arity picks by default.
-  for (const char* order : {"nearest", "stored", "nearest_stored"}) {
+  for (const char* order : {"nearest", "stored", "nearest_stored", "farthest_stored"}) {
     out.push_back(layout.name + ":anyhit=" + order + ",isa=scalar");
     out.push_back(layout.name + ":tri=mt0,box=fast,anyhit=" + order + ",isa=" + std::string(to_string(best)));
     out.push_back(layout.name + ":tri=mtn,box=fma,anyhit=" + order + ",isa=" + std::string(to_string(best)));
@@ -68,13 +69,13 @@ std::vector<std::string> specs_for(const LayoutInfo& layout, test::Skips& skips)
   // variant on the other; 16-ray packets on AVX-512.
   if (best == KernelIsa::kAvx2 || best == KernelIsa::kAvx512) {
     add_variants(",isa=" + std::string(to_string(best)) + ",packet=8");
-    for (const char* order : {"nearest", "stored", "nearest_stored"})
+    for (const char* order : {"nearest", "stored", "nearest_stored", "farthest_stored"})
       out.push_back(layout.name + ":anyhit=" + order + ",packet=8,isa=" + std::string(to_string(best)));
     if (best == KernelIsa::kAvx512) {
       out.push_back(layout.name + ":isa=avx2,packet=8");
       // Sixteen-ray packets (AVX-512 only), every variant and any-hit order.
       add_variants(",isa=avx512,packet=16");
-      for (const char* order : {"nearest", "stored", "nearest_stored"})
+      for (const char* order : {"nearest", "stored", "nearest_stored", "farthest_stored"})
         out.push_back(layout.name + ":anyhit=" + order + ",packet=16,isa=avx512");
     }
   } else {
@@ -537,9 +538,10 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
     return std::string("no error");
   };
   EXPECT_NE(error_of("bvh9").find("unknown layout 'bvh9'"), std::string::npos);
-  EXPECT_NE(error_of("bvh8:anyhit=first")
-                .find("anyhit = 'first' is not one of auto, nearest, stored, nearest_stored"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of("bvh8:anyhit=first")
+          .find("anyhit = 'first' is not one of auto, nearest, stored, nearest_stored, farthest_stored"),
+      std::string::npos);
   EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0, mtn"),
             std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
@@ -666,8 +668,8 @@ TEST(Layouts, WideAnyHitVisitsTheReferenceTraversalsNodesInEveryOrder) {
   for (uint32_t arity : {4u, 8u}) {
     const Bvh wide = info.build(BuildInput::from_triangles(tris),
                                 resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
-    for (AnyHitOrder order :
-         {AnyHitOrder::kAuto, AnyHitOrder::kNearest, AnyHitOrder::kStored, AnyHitOrder::kNearestStored}) {
+    for (AnyHitOrder order : {AnyHitOrder::kAuto, AnyHitOrder::kNearest, AnyHitOrder::kStored,
+                              AnyHitOrder::kNearestStored, AnyHitOrder::kFarthestStored}) {
       const std::string spec =
           "bvh" + std::to_string(arity) + ":anyhit=" + std::string(to_string(order)) + ",isa=scalar";
       SCOPED_TRACE(spec);
@@ -679,6 +681,52 @@ TEST(Layouts, WideAnyHitVisitsTheReferenceTraversalsNodesInEveryOrder) {
       // Nodes only: the reference counts a leaf's primitives whole, the kernels the blocks they tested
       // before the first hit.
       EXPECT_EQ(counts.nodes_visited, reference.inner_visits + reference.leaf_visits);
+    }
+  }
+}
+
+// The orders differ where they should: a ray enters a near leaf whose triangle it misses and a far one
+// whose triangle it hits. Nearest first visits both leaves, farthest first the far one alone; storage
+// order follows the slots (the far leaf stored first here, the near one second), and nearest_stored
+// the near leaf. Every layout, on both slot orders of the same two leaves.
+TEST(Layouts, AnyHitOrdersVisitTheLeavesTheyName) {
+  // Near (z = 1): its box covers the ray along the z axis, the triangle does not (the axis passes
+  // beyond its long edge). Far (z = 5): covers it.
+  const std::vector<Triangle> tris{{{-1.0f, 1.0f, 1.0f}, {1.0f, 1.0f, 1.0f}, {1.0f, -0.5f, 1.0f}},
+                                   {{-1.0f, -1.0f, 5.0f}, {3.0f, -1.0f, 5.0f}, {-1.0f, 3.0f, 5.0f}}};
+  std::vector<Ray> rays(1);
+  rays[0].org = {0.0f, 0.0f, 0.0f};
+  rays[0].dir = {0.0f, 0.0f, 1.0f};
+  for (const bool far_first_in_slots : {true, false}) {
+    Bvh bvh;
+    const uint32_t slot_of_near = far_first_in_slots ? 2 : 1;
+    bvh.nodes.resize(3);
+    bvh.nodes[0] = {merge(tris[0].bounds(), tris[1].bounds()), 1, 2, 0};
+    bvh.nodes[slot_of_near] = {tris[0].bounds(), 0, 0, 1};
+    bvh.nodes[3 - slot_of_near] = {tris[1].bounds(), 1, 0, 1};
+    bvh.prim_refs = {0, 1};
+    ASSERT_TRUE(validate(bvh, std::span<const Triangle>(tris)).ok());
+    for (const auto& [order, leaves] :
+         std::vector<std::pair<std::string, uint64_t>>{{"nearest", 2},
+                                                       {"nearest_stored", 2},
+                                                       {"farthest_stored", 1},
+                                                       {"stored", far_first_in_slots ? 1u : 2u}}) {
+      const AnyHitOrder parsed = *parse_any_hit_order(order);
+      TraversalCounters reference;
+      ASSERT_TRUE(any_hit_counted(bvh, tris, rays[0], reference, parsed));
+      EXPECT_EQ(reference.leaf_visits, leaves) << order;
+      for (const char* layout : {"bvh2", "bvh2_packed", "bvh4:isa=scalar", "bvh8:isa=scalar", "bvh8"}) {
+        const std::string spec = std::string(layout) +
+                                 (std::string(layout).find(':') == std::string::npos ? ":" : ",") +
+                                 "anyhit=" + order;
+        SCOPED_TRACE(spec);
+        const auto compiled = compile_layout(spec, bvh, tris);
+        const TraceCounts counts = compiled->count_any(rays);
+        EXPECT_EQ(counts.leaves_visited, leaves);
+        std::vector<uint8_t> occluded(1);
+        compiled->trace_any(rays, occluded);
+        EXPECT_EQ(occluded[0], 1);
+      }
     }
   }
 }

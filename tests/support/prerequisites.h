@@ -36,7 +36,10 @@ inline bool in_ci() {
 /// missing scene is also a failure of the running test.
 inline std::optional<std::string> missing_shared_scene(std::string_view name) {
   if (find_scene_file(name)) return std::nullopt;
-  std::string why = "shared scene '" + std::string(name) + "' not found; looked in:";
+  // Appended piece by piece: "literal" + std::string(...) trips GCC 12's -Wrestrict false positive.
+  std::string why = "shared scene '";
+  why += name;
+  why += "' not found; looked in:";
   for (const auto& dir : scene_search_path_candidates()) why += " " + dir.string();
   if (in_ci()) ADD_FAILURE() << why << " (CI=true: the shared scenes must be present)";
   return why;

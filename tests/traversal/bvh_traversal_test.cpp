@@ -72,7 +72,8 @@ class TravBvhKernels : public ::testing::Test {
                                                                               AnyHitOrder::kAuto);
     EXPECT_TRUE(a.prim == b.prim && a.t == b.t && a.u == b.u && a.v == b.v) << "closest, ray " << i;
     EXPECT_EQ(binary, general) << "closest counters, ray " << i;
-    for (AnyHitOrder order : {AnyHitOrder::kNearest, AnyHitOrder::kStored, AnyHitOrder::kNearestStored}) {
+    for (AnyHitOrder order : {AnyHitOrder::kNearest, AnyHitOrder::kStored, AnyHitOrder::kNearestStored,
+                              AnyHitOrder::kFarthestStored}) {
       TraversalCounters any_binary, any_general;
       const Hit c =
           detail::traverse<TriangleTest, BoxTest, true, true, true>(bvh, tris, ray, &any_binary, order);

@@ -287,7 +287,7 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
       continue;
     }
     if (any_order == AnyHitOrder::kNearestStored || any_order == AnyHitOrder::kFarthestStored) {
-      // As storage order, then the nearest (farthest) child entered, ties to the earlier one, moved to
+      // As storage order, then the nearest (farthest) child entered, ties to the earlier slot, moved to
       // the top.
       const bool farthest = any_order == AnyHitOrder::kFarthestStored;
       uint32_t first = size;

@@ -279,10 +279,9 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const NormalBlock* blocks, uint32_t 
 
 // Rays [0, n) of `rays` as one packet, answers into hits[0, n) or occluded[0, n). Closest hit visits the
 // children the packet enters nearest first by their nearest ray's entry (ties to the higher slot), and
-// skips, per lane, entries beyond that ray's closest hit so far; any hit visits them in kOrder as
-// descend() does, kNearestStored and kFarthestStored taken as kStored (the nearest or farthest of eight
-// rays is not one child), and
-// drops each ray from the packet at its first hit.
+// skips, per lane, entries beyond that ray's closest hit so far; any hit visits them in slot order (the
+// nearest or farthest of eight rays is not one child; a ray that goes on alone takes kOrder as descend()
+// does), and drops each ray from the packet at its first hit.
 template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, AnyHitOrder kOrder>
 inline void trace_packet(const float* root_planes, const WideUnit* arena, const WideRay* rays, uint32_t n,
                          Hit* hits, uint8_t* occluded) {
@@ -442,10 +441,11 @@ void trace_packet_batch(const WideBatch& batch) {
     trace_alone<N, kTri, kBox, kAnyHit>(batch, alone, batch.count);
   };
   if constexpr (kAnyHit) {
-    if (batch.any_hit_order == AnyHitOrder::kStored || batch.any_hit_order == AnyHitOrder::kFarthestStored)
-      return run.template operator()<AnyHitOrder::kStored>();
+    if (batch.any_hit_order == AnyHitOrder::kStored) return run.template operator()<AnyHitOrder::kStored>();
     if (batch.any_hit_order == AnyHitOrder::kNearestStored)
       return run.template operator()<AnyHitOrder::kNearestStored>();
+    if (batch.any_hit_order == AnyHitOrder::kFarthestStored)
+      return run.template operator()<AnyHitOrder::kFarthestStored>();
   }
   run.template operator()<AnyHitOrder::kNearest>();
 }

@@ -687,8 +687,8 @@ TEST(Layouts, WideAnyHitVisitsTheReferenceTraversalsNodesInEveryOrder) {
 
 // The orders differ where they should: a ray enters a near leaf whose triangle it misses and a far one
 // whose triangle it hits. Nearest first visits both leaves, farthest first the far one alone; storage
-// order follows the slots (the far leaf stored first here, the near one second), and nearest_stored
-// the near leaf. Every layout, on both slot orders of the same two leaves.
+// order enters the leaf in the first slot first, and nearest_stored the near leaf. Every layout, on both
+// slot orders of the same two leaves.
 TEST(Layouts, AnyHitOrdersVisitTheLeavesTheyName) {
   // Near (z = 1): its box covers the ray along the z axis, the triangle does not (the axis passes
   // beyond its long edge). Far (z = 5): covers it.

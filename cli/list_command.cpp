@@ -9,6 +9,7 @@
 #include "builders/registry.h"
 #include "scenes/procedural.h"
 #include "scenes/scene_path.h"
+#include "traversal/kernel_variant.h"
 #include "traversal/layout.h"
 
 namespace sahbench {
@@ -48,7 +49,8 @@ void print_catalogue(std::ostream& out) {
 
   fmt::print(out,
              "\nlayouts (config: layouts = "
-             "[\"NAME[:tri=watertight|mt|mt0|mtn,box=robust|fast|fma,anyhit=...,isa=...]\"]):\n");
+             "[\"NAME[:tri=watertight|mt|mt0|mtn,box=robust|fast|fma,anyhit={},isa=...]\"]):\n",
+             any_hit_order_names("|"));
   for (const auto& l : layouts())
     fmt::print(out, "  {:<14} arity {}{}  {}\n", l.name, l.arity, l.has_isa ? ", isa option" : "", l.summary);
   fmt::print(out, "  kernel ISAs available here:");

@@ -116,6 +116,14 @@ std::optional<KernelIsa> parse_kernel_isa(std::string_view name) {
 std::optional<AnyHitOrder> parse_any_hit_order(std::string_view name) {
   return value_of(kAnyHitOrderNames, name);
 }
+std::string any_hit_order_names(std::string_view separator) {
+  std::string out;
+  for (const auto& [order, name] : kAnyHitOrderNames) {
+    if (!out.empty()) out += separator;
+    out += name;
+  }
+  return out;
+}
 
 bool cpu_supports_kernel_isa(KernelIsa isa) {
   return cpu_supports(isa);

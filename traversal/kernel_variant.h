@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <string_view>
 
 namespace sahbench {
@@ -61,6 +62,8 @@ std::optional<TriangleTestKind> parse_triangle_test(std::string_view name);
 std::optional<BoxTestKind> parse_box_test(std::string_view name);
 std::optional<KernelIsa> parse_kernel_isa(std::string_view name);
 std::optional<AnyHitOrder> parse_any_hit_order(std::string_view name);
+/// Every any-hit order's name, auto first, joined by `separator`: for help and error messages.
+std::string any_hit_order_names(std::string_view separator);
 
 /// Whether the CPU (and OS) can run code for `isa`, whether or not this program compiled kernels for it:
 /// tells an ISA the CPU lacks from one the build left out. kScalar always; kAuto never.

@@ -196,8 +196,7 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     } else if (key == "anyhit") {
       const auto order = parse_any_hit_order(value);
       if (!order)
-        throw Error(where + ": anyhit = '" + value +
-                    "' is not one of auto, nearest, stored, nearest_stored, farthest_stored");
+        throw Error(where + ": anyhit = '" + value + "' is not one of " + any_hit_order_names(", "));
       spec.variant.any_hit = *order;
     } else if (key == "isa" && info.has_isa) {
       const auto isa = parse_kernel_isa(value);

@@ -9,10 +9,12 @@
 #include <bit>
 #include <cmath>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "builders/registry.h"
+#include "cli/list_command.h"
 #include "core/error.h"
 #include "core/refit.h"
 #include "core/validate.h"
@@ -729,6 +731,14 @@ TEST(Layouts, AnyHitOrdersVisitTheLeavesTheyName) {
       }
     }
   }
+}
+
+// `sahbench list` names every any-hit order a layout takes, from the same table the parser reads.
+TEST(Layouts, ListNamesEveryAnyHitOrder) {
+  std::ostringstream out;
+  print_catalogue(out);
+  EXPECT_NE(out.str().find("anyhit=auto|nearest|stored|nearest_stored|farthest_stored,"), std::string::npos)
+      << out.str();
 }
 
 TEST(Layouts, WideRaySetupHasTheScalarWatertightShear) {

@@ -40,7 +40,10 @@ inline std::optional<std::string> missing_shared_scene(std::string_view name) {
   std::string why = "shared scene '";
   why += name;
   why += "' not found; looked in:";
-  for (const auto& dir : scene_search_path_candidates()) why += " " + dir.string();
+  for (const auto& dir : scene_search_path_candidates()) {
+    why += ' ';
+    why += dir.string();
+  }
   if (in_ci()) ADD_FAILURE() << why << " (CI=true: the shared scenes must be present)";
   return why;
 }

@@ -232,8 +232,8 @@ struct WideBatch {
   Hit* hits;
   uint8_t* occluded;
   WideCounts* counts;
-  /// The order in which any hit visits children (not kAuto), resolved by the
-  /// layout from its anyhit option and the tree (bvh2_traversal.h: resolve_any_hit_order).
+  /// The order in which any hit visits children (not kAuto), resolved by the layout from its anyhit
+  /// option and the tree (bvh2_traversal.h: resolve_any_hit_order).
   AnyHitOrder any_hit_order;
   /// The lowest of the rays' WideRay::int_order (make_wide_rays' answer): the path the box=fma kernels
   /// take for the batch.

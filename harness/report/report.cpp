@@ -20,6 +20,7 @@
 #include "harness/report/ratio_stats.h"
 #include "harness/report/report_table.h"
 #include "harness/report/result_cells.h"
+#include "harness/report/standing.h"
 #include "harness/report/stress_report.h"
 #include "harness/report/table_fit.h"
 #include "harness/run/csv.h"
@@ -359,6 +360,7 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     const CsvRow& any = *by_set.begin()->second;
     ReportRow row{label, short_label.at(label), layout, {}};
     row.marked = compared_robust(any);
+    row.against_packets = compared_to_packets(any);
     const Anchors& anchors_by_shard = compared_to_packets(any)
                                           ? (row.marked ? robust_packet_anchor : packet_anchor)
                                       : row.marked ? robust_anchor
@@ -568,13 +570,7 @@ void print_report(const ReportOptions& options, std::ostream& out) {
     if (std::find(groups.begin(), groups.end(), group_of(*r)) == groups.end()) groups.push_back(group_of(*r));
   const auto others = cells_of_other_runs(all, run, fingerprint);
   bool any_marked = false;
-  for (const auto& key : groups) {
-    std::vector<const CsvRow*> group;
-    for (const CsvRow* r : rows)
-      if (group_of(*r) == key) group.push_back(r);
-    ReportTable table = select_columns(make_table(key, group, timings, options.format), options.columns);
-    table.notes = missing_cell_notes(key, group, others);
-    for (const ReportRow& row : table.rows) any_marked |= row.marked;
+  auto render = [&](const ReportTable& table) {
     if (html)
       render_html(table, out);
     else if (latex)
@@ -585,7 +581,24 @@ void print_report(const ReportOptions& options, std::ostream& out) {
       }
     else
       render_markdown(table, out);
+  };
+  std::vector<ReportTable> tables;
+  for (const auto& key : groups) {
+    std::vector<const CsvRow*> group;
+    for (const CsvRow* r : rows)
+      if (group_of(*r) == key) group.push_back(r);
+    ReportTable table = select_columns(make_table(key, group, timings, options.format), options.columns);
+    table.notes = missing_cell_notes(key, group, others);
+    for (const ReportRow& row : table.rows) any_marked |= row.marked;
+    render(table);
     render_predictors(key.text(), predictor_rows(group), options.format, out);
+    tables.push_back(std::move(table));
+  }
+  // Over two or more tables, each row's standing against Embree in all of them.
+  if (tables.size() > 1) {
+    std::vector<std::string> shared;
+    const ReportTable standing = standing_table(tables, run, short_labels(rows, shared));
+    if (!standing.rows.empty()) render(standing);
   }
   // Groups another run of the same fingerprint had and this one lacks altogether have no table to note.
   std::vector<std::string> lost;

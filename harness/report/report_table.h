@@ -45,6 +45,8 @@ struct ReportRow {
   /// Its ratios are to the table's other anchor, which the caption names: printed with a dagger after
   /// the layout ("bvh8 †", LaTeX "bvh8$^\dagger$").
   bool marked = false;
+  /// Its rays/s ratios are to Embree's packets (our packet layouts where the run has them).
+  bool against_packets = false;
 };
 
 struct ReportTable {

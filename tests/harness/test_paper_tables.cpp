@@ -261,7 +261,8 @@ TEST(HtmlReport, OnePageWithEveryTableAndFigureEmbedded) {
   std::size_t tables = 0;
   for (std::size_t at = page.find("<table>"); at != std::string::npos; at = page.find("<table>", at + 1))
     ++tables;
-  EXPECT_EQ(tables, 2u) << page;
+  EXPECT_EQ(tables, 3u) << page;  // one per scene, and the standing against Embree over both
+  EXPECT_NE(page.find("Standing against Embree"), std::string::npos) << page;
   EXPECT_NE(page.find("src=\"data:image/png;base64," + base64_encode("PNGDATA") + "\""), std::string::npos)
       << page;
   EXPECT_NE(page.find("src=\"data:image/svg+xml;base64," + base64_encode("<svg/>") + "\""),

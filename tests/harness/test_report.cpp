@@ -599,6 +599,101 @@ TEST(Report, RatiosComeFromPairedSamplesWithAnIntervalAndAMarkOnlyOutsideTheNois
   EXPECT_NE(ratio_line(w).find("}$\\textdownarrow}"), std::string::npos) << tex.str();
 }
 
+TEST(Report, TheStandingCountsEachRowsCellsOverEveryTable) {
+  const std::vector<double> embree = {8.0, 6.0, 9.0, 7.5, 8.5};
+  const std::vector<double> fast = {12.1, 9.0, 13.4, 11.3, 12.8};  // about 1.5, tight: ahead, at 1.1
+  const std::vector<double> nearly = {8.4, 6.3, 9.45, 7.9, 8.9};   // about 1.05, tight: ahead only
+  const std::vector<double> same = {9.0, 5.5, 8.0, 8.2, 7.9};      // about 1.0, loose: within noise
+  const std::vector<double> slow = {6.3, 4.8, 7.1, 6.1, 6.7};      // about 0.8, tight: behind
+  auto with = [](CsvRow row, const std::string& scene, const std::vector<double>& trace) {
+    row["scene"] = scene;
+    row["trace_mrays_samples"] = join(trace);
+    std::vector<double> sorted = trace;
+    std::sort(sorted.begin(), sorted.end());
+    row["trace_mrays_median"] = std::to_string(sorted[2]);
+    return row;
+  };
+  // `scenes` tables (one per scene); in each, Embree 1-ray and 8-ray, and two rows of ours.
+  auto write = [&](const std::string& name, int scenes) {
+    const auto path = temp_csv(name);
+    CsvWriter w(path, columns_with_samples());
+    const std::vector<double>* ours[2][2] = {{&fast, &nearly}, {&same, &slow}};
+    for (int s = 0; s < scenes; ++s) {
+      const std::string scene = s == 0 ? "proc:a" : "proc:b";
+      for (int r = 0; r < 2; ++r) {
+        const std::string rs = r == 0 ? "primary" : "shadow";
+        w.append(
+            with(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 1 << 20, "", 0), scene, embree));
+        w.append(
+            with(make_row("embree", "quality=medium", "embree_8", rs, 10.0, 1 << 20, "", 0), scene, fast));
+        w.append(with(make_row("ours", "", "bvh2", rs, 5.0, 1 << 20, "40", 0), scene, *ours[s][r]));
+        w.append(with(make_row("ours", "", "bvh2_packed", rs, 5.0, 1 << 20, "40", 0), scene, fast));
+      }
+    }
+    return path;
+  };
+  std::ostringstream out;
+  print_report({{write("standing.csv", 2)}, ""}, out);
+  const std::string md = out.str();
+  const std::size_t at = md.find("## Standing against Embree");
+  ASSERT_NE(at, std::string::npos) << md;
+  const std::string standing = md.substr(at, md.find("\nRatios are to", at) - at);  // up to the footer
+  const std::string lowest = format_value(paired_ratio(slow, embree).estimate, 2),
+                    highest = format_value(paired_ratio(fast, embree).estimate, 2);
+  EXPECT_EQ(highest.substr(0, 4), "1.50") << highest;
+  // bvh2: 4 cells, ahead 2 (at 1.1: 1), within noise 1, behind 1; Embree's own rows are not counted.
+  EXPECT_NE(standing.find("| ours | bvh2 | 4 | 2 | 1 | 1 | 1 | " + lowest + " | " + highest + " |"),
+            std::string::npos)
+      << standing;
+  EXPECT_NE(standing.find("| ours | bvh2_packed | 4 | 4 | 4 | 0 | 0 | " + highest + " | " + highest + " |"),
+            std::string::npos)
+      << standing;
+  EXPECT_EQ(standing.find("embree_8"), std::string::npos) << standing;
+  EXPECT_NE(standing.find("over the 2 tables of run r1"), std::string::npos) << standing;
+  // No robust or packet anchors in this run: the legend names neither, and no column of bare ratios.
+  EXPECT_EQ(standing.find("robust"), std::string::npos) << standing;
+  EXPECT_EQ(standing.find("packet width"), std::string::npos) << standing;
+  EXPECT_EQ(standing.find("no interval"), std::string::npos) << standing;
+  // One table has no summary: it would repeat the table.
+  std::ostringstream one;
+  print_report({{write("standing_one.csv", 1)}, ""}, one);
+  EXPECT_EQ(one.str().find("Standing against Embree"), std::string::npos) << one.str();
+  // Ratios without an interval (rows without samples: medians) are counted in a column of their own and
+  // in no verdict; exact kernels against Embree robust are marked and named.
+  {
+    const auto path = temp_csv("standing_bare.csv");
+    {
+      CsvWriter w(path, columns_with_samples());
+      for (const std::string scene : {"proc:a", "proc:b"}) {
+        auto bare = [&](CsvRow row) {
+          row["scene"] = scene;
+          row["trace_mrays_samples"] = "";
+          return row;
+        };
+        w.append(bare(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0)));
+        w.append(bare(
+            make_row("embree", "quality=medium;robust=1", "embree_1", "primary", 10.0, 1 << 20, "", 4.0)));
+        w.append(bare(make_row("ours", "", "bvh8", "primary", 5.0, 1 << 20, "40", 6.0)));
+      }
+    }
+    std::ostringstream bare_out;
+    print_report({{path}, ""}, bare_out);
+    const std::string text = bare_out.str();
+    const std::size_t from = text.find("## Standing against Embree");
+    ASSERT_NE(from, std::string::npos) << text;
+    // 6 / 4 against Embree robust, twice, without intervals.
+    EXPECT_NE(text.find("| ours \u2020 | 2 | 0 | 0 | 0 | 0 | 2 | 1.50 | 1.50 |", from), std::string::npos)
+        << text;
+    EXPECT_NE(text.find("rows marked \u2020 against Embree's robust mode", from), std::string::npos) << text;
+    EXPECT_NE(text.find("No interval: a ratio from one round or from medians", from), std::string::npos)
+        << text;
+  }
+  // LaTeX and HTML carry it too.
+  std::ostringstream tex;
+  print_report({{write("standing_tex.csv", 2)}, "", ReportFormat::kLatex}, tex);
+  EXPECT_NE(tex.str().find("\\label{tab:standing}"), std::string::npos) << tex.str();
+}
+
 TEST(Report, RowsWithoutSamplesFallBackToTheRatioOfMediansWithoutAnInterval) {
   const auto path = temp_csv("no_samples.csv");
   {

@@ -231,15 +231,40 @@ def main(argv=None):
     header += [f"{n} vs {names[0]}" for n in names[1:]]
     print("| " + " | ".join(header) + " |")
     print("|" + "---|" * len(header))
+    changes = [[] for _ in per_build[1:]]  # per later build: (is a build cell, change)
     for key in cells:
         medians = [statistics.median(p[key].values()) if key in p else None for p in per_build]
         row = [str(key[0]), str(key[1]), str(key[2]) or "-", str(key[3]) or "-", str(key[4]), str(key[5]) or "build"]
         row += [f"{m:.3f}" if m is not None else "-" for m in medians]
         base = [per_build[0].get(key, {}).get(r) for r in range(args.rounds)]
-        for p in per_build[1:]:
-            row.append(format_change(change(base, [p.get(key, {}).get(r) for r in range(args.rounds)])))
+        for i, p in enumerate(per_build[1:]):
+            c = change(base, [p.get(key, {}).get(r) for r in range(args.rounds)])
+            row.append(format_change(c))
+            if c is not None:
+                changes[i].append((not key[5], c))
         print("| " + " | ".join(row) + " |")
+    print()
+    for name, build_changes in zip(names[1:], changes):
+        for is_build, kind in ((False, "trace"), (True, "build")):
+            print(summary_line(f"{name} vs {names[0]}, {kind} cells",
+                               [c for b, c in build_changes if b == is_build]))
     return 0
+
+
+def summary_line(title, cell_changes):
+    """One build's verdicts over its cells: how many are faster (▲), slower (▼) or within noise by their
+    intervals, and the median change, so that a change is read over the whole config, not one cell."""
+    if not cell_changes:
+        return f"# {title}: none"
+    faster = sum(1 for _, low, _ in cell_changes if low is not None and low > 0)
+    slower = sum(1 for _, _, high in cell_changes if high is not None and high < 0)
+    bare = sum(1 for _, low, _ in cell_changes if low is None)
+    noise = len(cell_changes) - faster - slower - bare
+    text = f"# {title}: {len(cell_changes)}, ▲ {faster}, ▼ {slower}, within noise {noise}"
+    if bare:
+        text += f", {bare} of one round"
+    median = statistics.median(estimate for estimate, _, _ in cell_changes)
+    return text + f"; median change {median:+.1%}"
 
 
 if __name__ == "__main__":

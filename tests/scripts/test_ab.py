@@ -132,6 +132,9 @@ def main():
         check(rows and not any(line.startswith("| bunny | embree |") for line in rows),
               f"Embree's own rows are anchors, not cells: {rows}")
         check(f"# A: {a}" in out and f"# B: {b}" in out, "the legend names each build")
+        check("# B vs A, trace cells: 2, ▲ 2, ▼ 0, within noise 0; median change +12.5%" in out
+              and "# B vs A, build cells: 1, ▲ 1, ▼ 0, within noise 0; median change +12.5%" in out,
+              f"a summary line per kind of cell: {out}")
         order = log.read_text().split()
         check(order == ["sahbench-a", "sahbench-b", "sahbench-b", "sahbench-a", "sahbench-a", "sahbench-b"],
               f"rounds alternate the order: {order}")
@@ -147,6 +150,8 @@ def main():
         done = run_ab(ab, "--rounds", "1", str(config), a, b)
         trace = [line for line in done.stdout.splitlines() if "| bvh8 |" in line]
         check(len(trace) == 1 and "| +12.5% (1 round) |" in trace[0], f"one round has no interval: {trace}")
+        check("▲ 0, ▼ 0, within noise 0, 1 of one round; median change +12.5%" in done.stdout,
+              f"one round gives no verdict in the summary: {done.stdout}")
 
         # Samples give 0.862, the geometric mean of 4/5, 10/10 and 16/20 (build: 40/50, 80/80,
         # 160/200), where the medians would give 1.

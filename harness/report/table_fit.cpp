@@ -141,8 +141,8 @@ double ratio_pt(const ReportCell& cell) {
         std::string digits = fmt::format("{:.2f}", std::fabs(v));
         return digits.starts_with("0.") ? digits.substr(1) : digits;
       };
-      pt += std::max(text_pt("+" + offset(*r.hi - r.estimate), kScriptScriptPt),
-                     text_pt("-" + offset(r.estimate - *r.lo), kScriptScriptPt)) +
+      pt += std::max(text_pt(fmt::format("+{}", offset(*r.hi - r.estimate)), kScriptScriptPt),
+                     text_pt(fmt::format("-{}", offset(r.estimate - *r.lo)), kScriptScriptPt)) +
             0.2 * kScriptPt;  // the script's kern
     }
     return pt;

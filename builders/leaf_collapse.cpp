@@ -13,7 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
-#include <optional>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -127,28 +127,53 @@ class DepthBound {
 // size, so large subtrees are written by tasks of their own, and the output does not depend on which.
 class Emitter {
  public:
-  Emitter(const ClusterTree& tree, Bvh& bvh) : tree_(tree), bvh_(bvh) {}
+  // With `gather_refs` false the references are already in place (ClusterTree::leaves_in_order).
+  Emitter(const ClusterTree& tree, Bvh& bvh, bool gather_refs)
+      : tree_(tree), bvh_(bvh), gather_refs_(gather_refs) {}
 
   // Writes the node of `tag` at nodes[index] (whose box is already written), its children at
   // [children, children + 2) and their subtrees after them, its references from `refs` on.
   void place(uint32_t tag, uint32_t index, uint32_t children, uint32_t refs) const {
-    Node& node = bvh_.nodes[index];
     const Size size = size_of(tag);
-    if (size.out_nodes == 1) {
-      node.first = refs;
-      node.prim_count = static_cast<uint16_t>(size.prims);
+    if (size.out_nodes == 1)
+      place_leaf(tag, index, refs, size.prims);
+    else if (size.out_nodes >= 2 * kTaskNodes)
+      place_inner<true>(tag, index, children, refs);
+    else
+      place_inner<false>(tag, index, children, refs);
+  }
+
+ private:
+  struct Size {
+    uint32_t out_nodes, prims;
+  };
+  // Subtrees of this many nodes or more are written by a task of their own: tens of microseconds of
+  // copying (the value only affects speed).
+  static constexpr uint32_t kTaskNodes = 4096;
+
+  Size size_of(uint32_t tag) const {
+    if (is_leaf_tag(tag)) return {1, 1};
+    return {tree_.costs[tag].out_nodes, tree_.costs[tag].prims};
+  }
+
+  void place_leaf(uint32_t tag, uint32_t index, uint32_t refs, uint32_t prims) const {
+    Node& node = bvh_.nodes[index];
+    node.first = refs;
+    node.prim_count = static_cast<uint16_t>(prims);
+    if (gather_refs_) {
       uint32_t* out = bvh_.prim_refs.data() + refs;
       gather(tag, out);
-      return;
     }
+  }
+
+  // An inner node, with its leaf children written here rather than by a call each. With kTasks (a
+  // large subtree), its large children are written by tasks; without, the frame holds no task group.
+  template <bool kTasks>
+  void place_inner(uint32_t tag, uint32_t index, uint32_t children, uint32_t refs) const {
+    Node& node = bvh_.nodes[index];
     node.first = children;
     node.child_count = 2;
     const ClusterNode& inner = tree_.nodes[tag];
-    // Subtrees of this many nodes or more are written by a task of their own: tens of microseconds of
-    // copying (the value only affects speed).
-    constexpr uint32_t kTaskNodes = 4096;
-    std::optional<tbb::task_group> group;
-    if (size.out_nodes >= 2 * kTaskNodes) group.emplace();
     // Both children's sizes and boxes first, then the grandchildren asked for: the walk goes down a tree
     // that a bottom-up pass wrote in its own order, and each node's read is otherwise a cache miss
     // that the next step waits on.
@@ -163,27 +188,28 @@ class Emitter {
         __builtin_prefetch(&tree_.costs[grandchild]);
       }
     }
+    struct NoGroup {
+      void wait() {}
+    };
+    std::conditional_t<kTasks, tbb::task_group, NoGroup> group;
     uint32_t below = children + 2;
     for (uint32_t c = 0; c < 2; ++c) {
       const uint32_t tag_c = child[c], at = children + c, grandchildren = below, child_refs = refs;
-      if (group && child_size[c].out_nodes >= kTaskNodes)
-        group->run(
-            [this, tag_c, at, grandchildren, child_refs] { place(tag_c, at, grandchildren, child_refs); });
-      else
-        place(tag_c, at, grandchildren, child_refs);
+      if (child_size[c].out_nodes == 1) {
+        place_leaf(tag_c, at, child_refs, child_size[c].prims);
+      } else if constexpr (kTasks) {
+        if (child_size[c].out_nodes >= kTaskNodes)
+          group.run(
+              [this, tag_c, at, grandchildren, child_refs] { place(tag_c, at, grandchildren, child_refs); });
+        else
+          place_inner<false>(tag_c, at, grandchildren, child_refs);
+      } else {
+        place_inner<false>(tag_c, at, grandchildren, child_refs);
+      }
       below += child_size[c].out_nodes - 1;
       refs += child_size[c].prims;
     }
-    if (group) group->wait();
-  }
-
- private:
-  struct Size {
-    uint32_t out_nodes, prims;
-  };
-  Size size_of(uint32_t tag) const {
-    if (is_leaf_tag(tag)) return {1, 1};
-    return {tree_.costs[tag].out_nodes, tree_.costs[tag].prims};
+    group.wait();
   }
 
   // The primitives under `tag`, left to right.
@@ -198,6 +224,7 @@ class Emitter {
 
   const ClusterTree& tree_;
   Bvh& bvh_;
+  bool gather_refs_;
 };
 
 // Resizes a vector whose elements are then all overwritten. Value-initialising a large vector touches
@@ -232,13 +259,21 @@ HugePageArray<Aabb> bounds_in_order(std::span<const Aabb> prim_bounds, std::span
 Bvh finish_cluster_tree(const ClusterTree& tree, const LeafCollapse& rule) {
   Bvh bvh;
   if (tree.order.empty()) return bvh;
-  if (!is_leaf_tag(tree.root) && tree.costs[tree.root].height > kClusterDepthLimit)
-    DepthBound(tree, rule).run();
+  // The rebuilt subtrees reorder their leaves.
+  const bool too_deep = !is_leaf_tag(tree.root) && tree.costs[tree.root].height > kClusterDepthLimit;
+  if (too_deep) DepthBound(tree, rule).run();
+  const bool refs_in_order = tree.leaves_in_order && !too_deep;
   const SubtreeCost root = rule.of(tree, tree.root);
   resize_on_huge_pages(bvh.nodes, root.out_nodes);
   resize_on_huge_pages(bvh.prim_refs, root.prims);
   bvh.nodes[0].bounds = tag_bounds(tree, tree.root);
-  Emitter(tree, bvh).place(tree.root, 0, 1, 0);
+  if (refs_in_order)
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.order.size(), std::size_t{1} << 16),
+                      [&](const auto& r) {
+                        std::copy(tree.order.begin() + r.begin(), tree.order.begin() + r.end(),
+                                  bvh.prim_refs.begin() + r.begin());
+                      });
+  Emitter(tree, bvh, !refs_in_order).place(tree.root, 0, 1, 0);
   return bvh;
 }
 

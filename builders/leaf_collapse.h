@@ -61,6 +61,9 @@ struct ClusterTree {
   std::span<const uint32_t> order;    ///< primitive at each leaf position
   std::span<const Aabb> leaf_bounds;  ///< box of the primitive at each leaf position (bounds_in_order)
   uint32_t root = 0;                  ///< a tag; leaf_tag(0) for a single primitive
+  /// True where every subtree's leaves are consecutive positions, left to right (a radix tree over
+  /// sorted codes): the output's references are then `order` itself, and no leaf's are gathered.
+  bool leaves_in_order = false;
 };
 
 /// The primitives' boxes in leaf order: out[i] = prim_bounds[order[i]], gathered in parallel. The

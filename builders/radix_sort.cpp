@@ -1,7 +1,9 @@
 #include "builders/radix_sort.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -24,6 +26,14 @@ constexpr uint32_t kDigitBits = 10;
 constexpr std::size_t kChunk = std::size_t{1} << 15;
 // Buckets of more elements than this are sorted by the parallel passes too (clustered codes).
 constexpr std::size_t kLocalLimit = std::size_t{1} << 17;
+
+// Threads the sort may use: the arena's, or fewer where a global_control limits them (the harness's
+// thread counts).
+int threads() {
+  return std::min<int>(
+      tbb::this_task_arena::max_concurrency(),
+      static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
+}
 
 template <class Key>
 uint32_t digit(Key key, uint32_t shift, uint32_t mask) {
@@ -86,20 +96,46 @@ bool sort_low_digits(Pairs<Key> a, Pairs<Key> b, std::size_t begin, std::size_t 
   if (n < 2) return true;
   const uint32_t mask = (1u << kDigitBits) - 1;
   bool in_a = true;
-  for (uint32_t shift = 0; shift < top_shift; shift += kDigitBits) {
-    const uint32_t bits = std::min(kDigitBits, top_shift - shift);
-    const Pairs<Key> in = in_a ? a : b, out = in_a ? b : a;
-    if (n > kLocalLimit) {
-      if (parallel_pass(in, out, begin, end, shift, bits)) in_a = !in_a;
-      continue;
+  if (n > kLocalLimit || (n >= 2 * kChunk && threads() > 1)) {
+    for (uint32_t shift = 0; shift < top_shift; shift += kDigitBits) {
+      const Pairs<Key> in = in_a ? a : b, out = in_a ? b : a;
+      if (parallel_pass(in, out, begin, end, shift, std::min(kDigitBits, top_shift - shift))) in_a = !in_a;
     }
-    std::array<uint32_t, 1u << kDigitBits> next{};
-    for (std::size_t i = begin; i < end; ++i) ++next[digit(in.keys[i], shift, mask)];
-    if (*std::max_element(next.begin(), next.end()) == n) continue;  // one digit: nothing to move
-    auto position = static_cast<uint32_t>(begin);
-    for (uint32_t& count : next) position += std::exchange(count, position);
+    return in_a;
+  }
+  // Every digit's counts in one read: a stable pass leaves each digit's counts as they were.
+  constexpr uint32_t kMaxPasses = (64 + kDigitBits - 1) / kDigitBits;
+  const uint32_t passes = (top_shift + kDigitBits - 1) / kDigitBits;
+  std::array<std::array<uint32_t, 1u << kDigitBits>, kMaxPasses> next;
+  for (uint32_t p = 0; p < passes; ++p) next[p].fill(0);
+  // Unrolled for the usual counts (two within a top-digit bucket of 30-bit codes, three for a small
+  // array of them): a loop over the passes inside the loop over keys was slower.
+  if (passes == 2) {
     for (std::size_t i = begin; i < end; ++i) {
-      const uint32_t at = next[digit(in.keys[i], shift, mask)]++;
+      const Key key = a.keys[i];
+      ++next[0][digit(key, 0, mask)];
+      ++next[1][digit(key, kDigitBits, mask)];
+    }
+  } else if (passes == 3) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Key key = a.keys[i];
+      ++next[0][digit(key, 0, mask)];
+      ++next[1][digit(key, kDigitBits, mask)];
+      ++next[2][digit(key, 2 * kDigitBits, mask)];
+    }
+  } else {
+    for (std::size_t i = begin; i < end; ++i)
+      for (uint32_t p = 0; p < passes; ++p) ++next[p][digit(a.keys[i], p * kDigitBits, mask)];
+  }
+  for (uint32_t p = 0; p < passes; ++p) {
+    std::array<uint32_t, 1u << kDigitBits>& counts = next[p];
+    if (*std::max_element(counts.begin(), counts.end()) == n) continue;  // one digit: nothing to move
+    auto position = static_cast<uint32_t>(begin);
+    for (uint32_t& count : counts) position += std::exchange(count, position);
+    const Pairs<Key> in = in_a ? a : b, out = in_a ? b : a;
+    const uint32_t shift = p * kDigitBits;
+    for (std::size_t i = begin; i < end; ++i) {
+      const uint32_t at = counts[digit(in.keys[i], shift, mask)]++;
       out.keys[at] = in.keys[i];
       out.values[at] = in.values[i];
     }

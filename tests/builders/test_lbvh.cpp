@@ -169,9 +169,13 @@ TEST(Lbvh, DeepRadixTreesAreRebuiltWithinTheDepthLimit) {
 }
 
 TEST(Lbvh, ApetreisPassFindsKarrasTree) {
-  std::vector<Triangle> clustered;
+  // Apetrei's pass walks the leaves in chunks of 4096 and takes atomics only at the nodes over a chunk
+  // boundary: scenes of one chunk and of many, and runs of equal codes thousands long that straddle the
+  // boundaries.
+  std::vector<Triangle> clustered, long_runs;
   for (int i = 0; i < 3000; ++i) clustered.push_back(around({float(i % 7), float(i % 3), 0.0f}, 0.25f));
-  for (const auto& tris : {test::random_triangles(50000, 41), clustered, axis_chain()}) {
+  for (int i = 0; i < 40000; ++i) long_runs.push_back(around({float(i % 7), float(i % 3), 0.0f}, 0.25f));
+  for (const auto& tris : {test::random_triangles(50000, 41), clustered, long_runs, axis_chain()}) {
     for (const char* bits : {"30", "63"}) {
       for (const char* max_leaf : {"1", "8"}) {
         auto with = [&](const char* hierarchy) {

@@ -1,16 +1,21 @@
 // The builders' passes: one binning split search, one full-sweep split search, the EPO cost, the collapse
-// to 8-wide (greedy and SAH-optimal), the wide layout compile and refit. Items are primitives per second.
+// to 8-wide (greedy and SAH-optimal), the wide layout compile and refit, and the LBVH's Morton sort and
+// whole build. Items are primitives per second.
 
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
 #include <numeric>
 
 #include "bench/bench_data.h"
 #include "builders/binned_sah.h"
 #include "builders/collapse.h"
+#include "builders/lbvh.h"
+#include "builders/morton.h"
 #include "builders/sweep_sah.h"
 #include "core/epo.h"
 #include "core/refit.h"
+#include "scenes/generators.h"
 #include "traversal/wide_bvh.h"
 
 namespace sahbench::bench {
@@ -95,6 +100,35 @@ void BM_RefitTree8(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * 100'000));
 }
 BENCHMARK(BM_RefitTree8)->Name("refit/tree8")->Unit(benchmark::kMillisecond);
+
+// A mesh's triangles in their file order, as the LBVH meets them: a 100k-triangle terrain, whose
+// neighbouring triangles are neighbours in space (a soup's codes would come in random order).
+const BuildInput& terrain_input() {
+  static const std::vector<Triangle> tris = generate_terrain(100'000, 1, 6);
+  static const BuildInput input = BuildInput::from_triangles(tris);
+  return input;
+}
+
+// The Morton codes of the terrain's centres, sorted with their primitives (builders/morton.h), on the
+// argument's number of threads.
+void BM_MortonSort(benchmark::State& state) {
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(state.range(0)));
+  const BuildInput& input = terrain_input();
+  for (auto _ : state) benchmark::DoNotOptimize(sort_by_morton<uint32_t>(input.bounds.span()));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * input.size()));
+}
+BENCHMARK(BM_MortonSort)->Name("morton_sort/30")->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
+
+// The whole LBVH build of the terrain at its defaults, from the primitives' boxes.
+void BM_Lbvh(benchmark::State& state) {
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(state.range(0)));
+  const BuildInput& input = terrain_input();
+  for (auto _ : state) benchmark::DoNotOptimize(build_lbvh(input, {}));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * input.size()));
+}
+BENCHMARK(BM_Lbvh)->Name("lbvh")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace sahbench::bench

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cstring>
 #include <utility>
 #include <vector>
@@ -87,61 +88,69 @@ bool parallel_pass(Pairs<Key> in, Pairs<Key> out, std::size_t begin, std::size_t
   return true;
 }
 
-// Sorts [begin, end) of `a` by the bits below `top_shift`, least significant digit first, with `b` as
-// working space over the same positions. Serial for a bucket that fits the cache, by the parallel passes
-// for a larger one. Returns true where the result is in `a`, false where it is in `b`.
-template <class Key>
-bool sort_low_digits(Pairs<Key> a, Pairs<Key> b, std::size_t begin, std::size_t end, uint32_t top_shift) {
-  const std::size_t n = end - begin;
-  if (n < 2) return true;
-  const uint32_t mask = (1u << kDigitBits) - 1;
+// Every digit's counts for a serial sort of [begin, end) by kPasses digits of kBits, in one read of the
+// keys: a stable pass leaves each digit's counts as they were. The number of passes is a constant so
+// that the loop over them unrolls; a loop over a variable count was slower.
+template <uint32_t kBits, uint32_t kPasses, class Key, class Counts>
+void count_digits(const Key* keys, std::size_t begin, std::size_t end, Counts& counts) {
+  for (std::size_t i = begin; i < end; ++i) {
+    const Key key = keys[i];
+    for (uint32_t p = 0; p < kPasses; ++p) ++counts[p][digit(key, p * kBits, (1u << kBits) - 1)];
+  }
+}
+
+// count_digits for `passes` (1 to sizeof...(P)) known only at run time.
+template <uint32_t kBits, class Key, class Counts, uint32_t... P>
+void count_digits(uint32_t passes, const Key* keys, std::size_t begin, std::size_t end, Counts& counts,
+                  std::integer_sequence<uint32_t, P...>) {
+  ((passes == P + 1 ? count_digits<kBits, P + 1>(keys, begin, end, counts) : void()), ...);
+}
+
+// Sorts [begin, end) of `a` by the bits below `top_shift` in the cache, serially, least significant
+// digit of kBits first, with `b` as working space over the same positions. Returns true where the
+// result is in `a`, false where it is in `b`.
+template <uint32_t kBits, class Key>
+bool sort_serial(Pairs<Key> a, Pairs<Key> b, std::size_t begin, std::size_t end, uint32_t top_shift) {
+  constexpr uint32_t kMaxPasses = (8 * sizeof(Key) + kBits - 1) / kBits;
+  const uint32_t passes = (top_shift + kBits - 1) / kBits;
+  std::array<std::array<uint32_t, 1u << kBits>, kMaxPasses> counts;
+  for (uint32_t p = 0; p < passes; ++p) counts[p].fill(0);
+  count_digits<kBits>(passes, a.keys, begin, end, counts, std::make_integer_sequence<uint32_t, kMaxPasses>());
   bool in_a = true;
-  if (n > kLocalLimit || (n >= 2 * kChunk && threads() > 1)) {
-    for (uint32_t shift = 0; shift < top_shift; shift += kDigitBits) {
-      const Pairs<Key> in = in_a ? a : b, out = in_a ? b : a;
-      if (parallel_pass(in, out, begin, end, shift, std::min(kDigitBits, top_shift - shift))) in_a = !in_a;
-    }
-    return in_a;
-  }
-  // Every digit's counts in one read: a stable pass leaves each digit's counts as they were.
-  constexpr uint32_t kMaxPasses = (64 + kDigitBits - 1) / kDigitBits;
-  const uint32_t passes = (top_shift + kDigitBits - 1) / kDigitBits;
-  std::array<std::array<uint32_t, 1u << kDigitBits>, kMaxPasses> next;
-  for (uint32_t p = 0; p < passes; ++p) next[p].fill(0);
-  // Unrolled for the usual counts (two within a top-digit bucket of 30-bit codes, three for a small
-  // array of them): a loop over the passes inside the loop over keys was slower.
-  if (passes == 2) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const Key key = a.keys[i];
-      ++next[0][digit(key, 0, mask)];
-      ++next[1][digit(key, kDigitBits, mask)];
-    }
-  } else if (passes == 3) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const Key key = a.keys[i];
-      ++next[0][digit(key, 0, mask)];
-      ++next[1][digit(key, kDigitBits, mask)];
-      ++next[2][digit(key, 2 * kDigitBits, mask)];
-    }
-  } else {
-    for (std::size_t i = begin; i < end; ++i)
-      for (uint32_t p = 0; p < passes; ++p) ++next[p][digit(a.keys[i], p * kDigitBits, mask)];
-  }
   for (uint32_t p = 0; p < passes; ++p) {
-    std::array<uint32_t, 1u << kDigitBits>& counts = next[p];
-    if (*std::max_element(counts.begin(), counts.end()) == n) continue;  // one digit: nothing to move
+    std::array<uint32_t, 1u << kBits>& next = counts[p];
+    if (*std::max_element(next.begin(), next.end()) == end - begin) continue;  // one digit: nothing to move
     auto position = static_cast<uint32_t>(begin);
-    for (uint32_t& count : counts) position += std::exchange(count, position);
+    for (uint32_t& count : next) position += std::exchange(count, position);
     const Pairs<Key> in = in_a ? a : b, out = in_a ? b : a;
-    const uint32_t shift = p * kDigitBits;
+    const uint32_t shift = p * kBits;
     for (std::size_t i = begin; i < end; ++i) {
-      const uint32_t at = counts[digit(in.keys[i], shift, mask)]++;
+      const uint32_t at = next[digit(in.keys[i], shift, (1u << kBits) - 1)]++;
       out.keys[at] = in.keys[i];
       out.values[at] = in.values[i];
     }
     in_a = !in_a;
   }
   return in_a;
+}
+
+// Sorts [begin, end) of `a` by the bits below `top_shift`, least significant digit first, with `b` as
+// working space over the same positions: by the parallel passes where the range is large, or where more
+// than one thread may run and it is large enough to share, serially otherwise. Returns true where the
+// result is in `a`, false where it is in `b`.
+template <class Key>
+bool sort_low_digits(Pairs<Key> a, Pairs<Key> b, std::size_t begin, std::size_t end, uint32_t top_shift) {
+  const std::size_t n = end - begin;
+  if (n < 2) return true;
+  if (n > kLocalLimit || (n >= 2 * kChunk && threads() > 1)) {
+    bool in_a = true;
+    for (uint32_t shift = 0; shift < top_shift; shift += kDigitBits) {
+      const Pairs<Key> in = in_a ? a : b, out = in_a ? b : a;
+      if (parallel_pass(in, out, begin, end, shift, std::min(kDigitBits, top_shift - shift))) in_a = !in_a;
+    }
+    return in_a;
+  }
+  return sort_serial<kDigitBits>(a, b, begin, end, top_shift);
 }
 
 // Copies [begin, end) of `from` to `to`.

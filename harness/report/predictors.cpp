@@ -183,9 +183,15 @@ void render_predictors(const std::string& title, const std::vector<PredictorRow>
                       : fmt::format("Not ranked, fewer than {} builders (layout, ray set, builders): {}.",
                                     kMinRankedBuilders, too_few);
   const bool latex = format == ReportFormat::kLatex;
-  // Nothing to rank in this table: one line rather than an empty section.
+  // Nothing to rank in this table: one short line rather than an empty section or a list of every
+  // layout and ray set (a claim run's table has dozens, each with one builder).
   if (ranked.empty()) {
-    fmt::print(out, "{}Costs against rays/s, {}: {}\n\n", latex ? "% " : "", title, skipped);
+    std::size_t most = 0;
+    for (const PredictorRow& r : rows) most = std::max(most, r.builders);
+    fmt::print(out,
+               "{}Costs against rays/s, {}: not ranked, no layout and ray set has {} builders or more (at "
+               "most {}).\n\n",
+               latex ? "% " : "", title, kMinRankedBuilders, most);
     return;
   }
   if (latex) {

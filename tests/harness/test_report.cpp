@@ -953,6 +953,31 @@ TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
       << tex.str();
 }
 
+// A table with nothing to rank (two builders at most in every layout and ray set, as in a claim run's
+// tables) gets one short line, not a list of every layout and ray set.
+TEST(ReportPredictors, ATableWithNothingToRankGetsOneShortLine) {
+  const auto path = temp_csv("predictors_none.csv");
+  std::vector<std::string> columns = columns_with_samples();
+  for (const char* c : {"epo_cost", "sah_epo_cost", "cost_per_ray"}) columns.push_back(c);
+  {
+    CsvWriter w(path, columns);
+    w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 9.0));
+    for (const char* layout : {"bvh2", "bvh4", "bvh8"})
+      for (const char* bins : {"8", "16"})
+        w.append(make_row("binned_sah", std::string("bins=") + bins, layout, "primary", 5.0, 1 << 20, "30.0",
+                          bins[0] == '8' ? 3.0 : 4.0));
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("Costs against rays/s, proc:soup at 2 threads: not ranked, no layout and ray set has 3 "
+                    "builders or more (at most 2)."),
+            std::string::npos)
+      << md;
+  EXPECT_EQ(md.find("bvh4 primary (2)"), std::string::npos) << md;
+  EXPECT_EQ(md.find("### How well the costs predict rays/s"), std::string::npos) << md;
+}
+
 // SAH costs under other constants are on another scale (c_trav = 3 about doubles them): each set of
 // constants is ranked apart, never against the others.
 TEST(ReportPredictors, CostsUnderOtherConstantsAreRankedApart) {

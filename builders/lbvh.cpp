@@ -166,8 +166,10 @@ uint32_t apetrei_pass(const ClusterTree& tree, const RadixTree<Code>& radix, con
       const uint32_t last = std::min(n, (chunk + 1) * kChunk);
       for (uint32_t leaf = chunk * kChunk; leaf != last; ++leaf) {
         uint32_t tag = leaf_tag(leaf), a = leaf, b = leaf;
+        // The prefix lengths at the range's two ends; a step moves one end, so one is kept.
+        int before_a = split_delta(int64_t{a} - 1), after_b = split_delta(b);
         for (;;) {
-          const bool left = split_delta(b) > split_delta(int64_t{a} - 1);
+          const bool left = after_b > before_a;
           const uint32_t p = left ? b : a - 1;
           tree.nodes[p].child[left ? 0 : 1] = tag;
           std::atomic_ref<uint32_t> slot(other_end[p]);
@@ -182,7 +184,13 @@ uint32_t apetrei_pass(const ClusterTree& tree, const RadixTree<Code>& radix, con
           } else {
             end = slot.load(std::memory_order_relaxed);
           }
-          (left ? b : a) = end;
+          if (left) {
+            b = end;
+            after_b = split_delta(b);
+          } else {
+            a = end;
+            before_a = split_delta(int64_t{a} - 1);
+          }
           ClusterNode& node = tree.nodes[p];
           node.bounds = merge(tag_bounds(tree, node.child[0]), tag_bounds(tree, node.child[1]));
           tree.costs[p] =

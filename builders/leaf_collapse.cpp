@@ -174,20 +174,11 @@ class Emitter {
     node.first = children;
     node.child_count = 2;
     const ClusterNode& inner = tree_.nodes[tag];
-    // Both children's sizes and boxes first, then the grandchildren asked for: the walk goes down a tree
-    // that a bottom-up pass wrote in its own order, and each node's read is otherwise a cache miss
-    // that the next step waits on.
+    // The walk is bound by its branches, not by cache misses: it took as long per node on a tree that
+    // fits the second-level cache, and asking for the grandchildren ahead made it slower.
     const uint32_t child[2] = {inner.child[0], inner.child[1]};
     const Size child_size[2] = {size_of(child[0]), size_of(child[1])};
-    for (uint32_t c = 0; c < 2; ++c) {
-      bvh_.nodes[children + c].bounds = tag_bounds(tree_, child[c]);
-      if (is_leaf_tag(child[c])) continue;
-      for (const uint32_t grandchild : tree_.nodes[child[c]].child) {
-        if (is_leaf_tag(grandchild)) continue;
-        __builtin_prefetch(&tree_.nodes[grandchild]);
-        __builtin_prefetch(&tree_.costs[grandchild]);
-      }
-    }
+    for (uint32_t c = 0; c < 2; ++c) bvh_.nodes[children + c].bounds = tag_bounds(tree_, child[c]);
     struct NoGroup {
       void wait() {}
     };

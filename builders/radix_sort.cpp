@@ -22,8 +22,8 @@ namespace {
 // below it take two passes; on the terrain that sorted 10-20% faster than eight-bit digits.
 constexpr uint32_t kTopBits = 11;
 constexpr uint32_t kDigitBits = 10;
-// Elements per chunk of the parallel passes: some tens of microseconds of work. Fixed, so the chunks do
-// not depend on the thread count (the order never depends on them: the sort is stable).
+// Elements per chunk of the parallel passes over arrays larger than the cache: some tens of microseconds
+// of work. The sorted order never depends on the chunks (the sort is stable).
 constexpr std::size_t kChunk = std::size_t{1} << 15;
 // Buckets of more elements than this are sorted by the parallel passes too (clustered codes).
 constexpr std::size_t kLocalLimit = std::size_t{1} << 17;
@@ -49,17 +49,18 @@ struct Pairs {
 
 // One stable counting pass over [begin, end) on the digit of `bits` bits at `shift`, from `in` to
 // `out` (same positions), in parallel over fixed chunks. Returns false, writing nothing, where every key
-// has the same digit (the pass would copy). `first_of` receives each digit's first position.
+// has the same digit (the pass would copy). `first_of` receives each digit's first position. The chunks
+// are `chunk` elements long (fixed by the caller; the order never depends on them).
 template <class Key>
 bool parallel_pass(Pairs<Key> in, Pairs<Key> out, std::size_t begin, std::size_t end, uint32_t shift,
-                   uint32_t bits, std::vector<uint32_t>* first_of = nullptr) {
+                   uint32_t bits, std::vector<uint32_t>* first_of = nullptr, std::size_t chunk = kChunk) {
   const uint32_t digits = 1u << bits, mask = digits - 1;
-  const std::size_t n = end - begin, chunks = (n + kChunk - 1) / kChunk;
+  const std::size_t n = end - begin, chunks = (n + chunk - 1) / chunk;
   std::vector<uint32_t> offsets(chunks * digits);  // [chunk][digit]
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     uint32_t* counts = &offsets[c * digits];
-    const std::size_t last = std::min(end, begin + (c + 1) * kChunk);
-    for (std::size_t i = begin + c * kChunk; i < last; ++i) ++counts[digit(in.keys[i], shift, mask)];
+    const std::size_t last = std::min(end, begin + (c + 1) * chunk);
+    for (std::size_t i = begin + c * chunk; i < last; ++i) ++counts[digit(in.keys[i], shift, mask)];
   });
   // Output positions: digit by digit, and within a digit chunk by chunk, which keeps the sort stable.
   auto position = static_cast<uint32_t>(begin);
@@ -78,8 +79,8 @@ bool parallel_pass(Pairs<Key> in, Pairs<Key> out, std::size_t begin, std::size_t
   if (first_of) (*first_of)[digits] = position;
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
     uint32_t* next = &offsets[c * digits];
-    const std::size_t last = std::min(end, begin + (c + 1) * kChunk);
-    for (std::size_t i = begin + c * kChunk; i < last; ++i) {
+    const std::size_t last = std::min(end, begin + (c + 1) * chunk);
+    for (std::size_t i = begin + c * chunk; i < last; ++i) {
       const uint32_t at = next[digit(in.keys[i], shift, mask)]++;
       out.keys[at] = in.keys[i];
       out.values[at] = in.values[i];
@@ -143,10 +144,15 @@ bool sort_low_digits(Pairs<Key> a, Pairs<Key> b, std::size_t begin, std::size_t 
   const std::size_t n = end - begin;
   if (n < 2) return true;
   if (n > kLocalLimit || (n >= 2 * kChunk && threads() > 1)) {
+    // A range held in the cache in one chunk per thread: each chunk writes a slice of every digit's
+    // output, and neighbouring slices share a cache line, so fewer chunks share fewer (on 100k codes at
+    // 2 threads, 0.76 ms for the three passes in 2 chunks against 0.86 in 4).
+    const std::size_t chunk = n > kLocalLimit ? kChunk : (n + threads() - 1) / threads();
     bool in_a = true;
     for (uint32_t shift = 0; shift < top_shift; shift += kDigitBits) {
       const Pairs<Key> in = in_a ? a : b, out = in_a ? b : a;
-      if (parallel_pass(in, out, begin, end, shift, std::min(kDigitBits, top_shift - shift))) in_a = !in_a;
+      if (parallel_pass(in, out, begin, end, shift, std::min(kDigitBits, top_shift - shift), nullptr, chunk))
+        in_a = !in_a;
     }
     return in_a;
   }

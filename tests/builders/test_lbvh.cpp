@@ -172,10 +172,15 @@ TEST(Lbvh, ApetreisPassFindsKarrasTree) {
   // Apetrei's pass walks the leaves in chunks of 4096 and takes atomics only at the nodes over a chunk
   // boundary: scenes of one chunk and of many, and runs of equal codes thousands long that straddle the
   // boundaries.
-  std::vector<Triangle> clustered, long_runs;
+  std::vector<Triangle> clustered, long_runs, one_run;
   for (int i = 0; i < 3000; ++i) clustered.push_back(around({float(i % 7), float(i % 3), 0.0f}, 0.25f));
   for (int i = 0; i < 40000; ++i) long_runs.push_back(around({float(i % 7), float(i % 3), 0.0f}, 0.25f));
-  for (const auto& tris : {test::random_triangles(50000, 41), clustered, long_runs, axis_chain()}) {
+  // One run of equal codes over several whole chunks, between a few distinct primitives.
+  for (int i = 0; i < 20000; ++i) one_run.push_back(around({1.0f, 2.0f, 3.0f}, 0.25f));
+  for (int i = 0; i < 5; ++i) one_run.push_back(around({float(i), 0.0f, 0.0f}, 0.25f));
+  // Counts that end a chunk exactly, and one past it (a last chunk of one leaf).
+  for (const auto& tris : {test::random_triangles(50000, 41), test::random_triangles(8192, 42),
+                           test::random_triangles(8193, 43), clustered, long_runs, one_run, axis_chain()}) {
     for (const char* bits : {"30", "63"}) {
       for (const char* max_leaf : {"1", "8"}) {
         auto with = [&](const char* hierarchy) {

@@ -73,6 +73,10 @@ TEST(RadixSort, SortsStablyLikeStdStableSort) {
     // Every key in one bucket of the top digit: the bucket is too large to sort in the cache.
     expect_sorts_like_stable_sort<uint32_t>(400000, 30, (1u << 19) - 1, 3);
     expect_sorts_like_stable_sort<uint64_t>(400000, 63, (uint64_t{1} << 40) - 1, 4);
+    // Four buckets of the top digit of about 100k keys each, three of them starting inside the array:
+    // each is sorted in the cache, on two threads by the parallel passes.
+    expect_sorts_like_stable_sort<uint32_t>(400000, 30, (1u << 21) - 1, 5);
+    expect_sorts_like_stable_sort<uint64_t>(400000, 63, (uint64_t{1} << 54) - 1, 6);
   }
 }
 

@@ -1,6 +1,6 @@
 // The builders' passes: one binning split search, one full-sweep split search, the EPO cost, the collapse
-// to 8-wide (greedy and SAH-optimal), the wide layout compile and refit, and the LBVH's Morton sort and
-// whole build. Items are primitives per second.
+// to 8-wide (greedy and SAH-optimal), the wide layout compile and refit, the LBVH's Morton sort and
+// whole build, and the PLOC build. Items are primitives per second.
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -12,6 +12,7 @@
 #include "builders/collapse.h"
 #include "builders/lbvh.h"
 #include "builders/morton.h"
+#include "builders/ploc.h"
 #include "builders/sweep_sah.h"
 #include "core/epo.h"
 #include "core/refit.h"
@@ -129,6 +130,16 @@ void BM_Lbvh(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * input.size()));
 }
 BENCHMARK(BM_Lbvh)->Name("lbvh")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+// The whole PLOC build of the same terrain at its defaults (radius 16).
+void BM_Ploc(benchmark::State& state) {
+  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(state.range(0)));
+  const BuildInput& input = terrain_input();
+  for (auto _ : state) benchmark::DoNotOptimize(build_ploc(input, {}));
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * input.size()));
+}
+BENCHMARK(BM_Ploc)->Name("ploc")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace sahbench::bench

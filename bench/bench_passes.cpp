@@ -110,34 +110,31 @@ const BuildInput& terrain_input() {
   return input;
 }
 
-// The Morton codes of the terrain's centres, sorted with their primitives (builders/morton.h), on the
-// argument's number of threads.
-void BM_MortonSort(benchmark::State& state) {
+// Times `step` on the terrain's boxes with the benchmark's argument as the number of threads.
+template <class Step>
+void on_terrain(benchmark::State& state, Step step) {
   const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
                                     static_cast<std::size_t>(state.range(0)));
   const BuildInput& input = terrain_input();
-  for (auto _ : state) benchmark::DoNotOptimize(sort_by_morton<uint32_t>(input.bounds.span()));
+  for (auto _ : state) benchmark::DoNotOptimize(step(input));
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * input.size()));
+}
+
+// The Morton codes of the terrain's centres, sorted with their primitives (builders/morton.h).
+void BM_MortonSort(benchmark::State& state) {
+  on_terrain(state, [](const BuildInput& input) { return sort_by_morton<uint32_t>(input.bounds.span()); });
 }
 BENCHMARK(BM_MortonSort)->Name("morton_sort/30")->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 // The whole LBVH build of the terrain at its defaults, from the primitives' boxes.
 void BM_Lbvh(benchmark::State& state) {
-  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
-                                    static_cast<std::size_t>(state.range(0)));
-  const BuildInput& input = terrain_input();
-  for (auto _ : state) benchmark::DoNotOptimize(build_lbvh(input, {}));
-  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * input.size()));
+  on_terrain(state, [](const BuildInput& input) { return build_lbvh(input, {}); });
 }
 BENCHMARK(BM_Lbvh)->Name("lbvh")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // The whole PLOC build of the same terrain at its defaults (radius 16).
 void BM_Ploc(benchmark::State& state) {
-  const tbb::global_control threads(tbb::global_control::max_allowed_parallelism,
-                                    static_cast<std::size_t>(state.range(0)));
-  const BuildInput& input = terrain_input();
-  for (auto _ : state) benchmark::DoNotOptimize(build_ploc(input, {}));
-  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * input.size()));
+  on_terrain(state, [](const BuildInput& input) { return build_ploc(input, {}); });
 }
 BENCHMARK(BM_Ploc)->Name("ploc")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 

@@ -7,8 +7,9 @@
 /// order, which Karras appends to each key (section 4), so runs of equal codes become balanced subtrees.
 /// The tree is found either by Karras's searches, one parallel task per inner node (section 4, Figure 4),
 /// or by Apetrei's bottom-up pass ("Fast and Simple Agglomerative LBVH Construction", C. Apetrei, 2014),
-/// which finds the same tree along with the boxes. The fast-build end of the registry: no split is ever
-/// searched for by cost.
+/// which finds the same tree along with the boxes, walking the leaves in fixed chunks so that only the
+/// nodes over a chunk boundary need an atomic arrival (lbvh.cpp). The fast-build end of the registry: no
+/// split is ever searched for by cost.
 
 #include <cstdint>
 

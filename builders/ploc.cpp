@@ -142,16 +142,12 @@ class Clustering {
         const uint32_t span = std::min(count - 1, i + radius_) - i;  // neighbours after i
         const uint32_t inside = std::min(end - 1 - i, span);         // of them in this chunk
         distances_after(clusters, i, span, d);
-        // candidate(d[k], k + 1, i, after) for each k, in loops the compiler vectorizes.
-        const uint64_t parity = uint64_t{i & 1u} << 1;
+        // Over consecutive distances and keys: loops the compiler vectorizes.
         uint64_t mine = nearest[i - begin];
-        for (uint32_t k = 0; k < span; ++k)
-          mine = std::min(mine,
-                          uint64_t{std::bit_cast<uint32_t>(d[k])} << 32 | uint64_t{k + 1} << 2 | parity | 1);
+        for (uint32_t k = 0; k < span; ++k) mine = std::min(mine, candidate(d[k], k + 1, i, true));
         uint64_t* const theirs = nearest.data() + (i + 1 - begin);
         for (uint32_t k = 0; k < inside; ++k)
-          theirs[k] = std::min(theirs[k],
-                               uint64_t{std::bit_cast<uint32_t>(d[k])} << 32 | uint64_t{k + 1} << 2 | parity);
+          theirs[k] = std::min(theirs[k], candidate(d[k], k + 1, i, false));
         neighbour_[i] = neighbour_of(i, mine);
       }
     });

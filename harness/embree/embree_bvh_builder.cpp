@@ -1,9 +1,7 @@
 #include "harness/embree/embree_bvh_builder.h"
 
 #include <embree3/rtcore_builder.h>
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
@@ -18,6 +16,7 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
+#include "core/threads.h"
 
 namespace sahbench {
 namespace {
@@ -171,13 +170,6 @@ void split_primitive(const RTCBuildPrimitive* prim, unsigned dim, float pos, RTC
   };
   write(left, true, *left_out);
   write(right, false, *right_out);
-}
-
-// The caller's TBB thread limit: the smaller of the global control and the current arena.
-int caller_threads() {
-  const auto global = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
-  const auto arena = static_cast<std::size_t>(tbb::this_task_arena::max_concurrency());
-  return static_cast<int>(std::max<std::size_t>(1, std::min(global, arena)));
 }
 
 // Checks that need no input; run when a config is loaded, before any cell.

@@ -49,6 +49,13 @@ std::vector<std::string> columns_with_models() {
   return columns;
 }
 
+// columns_with_samples() and the columns of the costs the report ranks against rays/s.
+std::vector<std::string> columns_with_predictors() {
+  std::vector<std::string> columns = columns_with_samples();
+  for (const char* c : {"epo_cost", "sah_epo_cost", "cost_per_ray"}) columns.push_back(c);
+  return columns;
+}
+
 // `row` with its SAH cost under c_trav, c_isect = 1 and sah_block.
 CsvRow with_model(CsvRow row, const std::string& c_trav, const std::string& block) {
   row.insert_or_assign("sah_c_trav", c_trav);
@@ -891,10 +898,8 @@ TEST(ReportPredictors, FittedEpoWeightRecoversTheBlendOfTheTimes) {
 // time per ray (1 / rays/s), not to rays/s.
 TEST(ReportPredictors, TablePrintsTheWeightFittedToTheTimePerRay) {
   const auto path = temp_csv("predictors_fit.csv");
-  std::vector<std::string> columns = columns_with_samples();
-  for (const char* c : {"epo_cost", "sah_epo_cost", "cost_per_ray"}) columns.push_back(c);
   {
-    CsvWriter w(path, columns);
+    CsvWriter w(path, columns_with_predictors());
     w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 9.0));
     const std::vector<double> sah = {70, 80, 75, 90}, epo = {20, 5, 12, 9};
     for (std::size_t i = 0; i < sah.size(); ++i) {
@@ -915,10 +920,8 @@ TEST(ReportPredictors, TablePrintsTheWeightFittedToTheTimePerRay) {
 // reverse, and whose EPO only two have; two builders on bvh4, too few to rank; Embree takes no part.
 TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
   const auto path = temp_csv("predictors.csv");
-  std::vector<std::string> columns = columns_with_samples();
-  for (const char* c : {"epo_cost", "sah_epo_cost", "cost_per_ray"}) columns.push_back(c);
   {
-    CsvWriter w(path, columns);
+    CsvWriter w(path, columns_with_predictors());
     w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 9.0));
     const std::vector<double> speed = {4.0, 1.0, 3.0, 2.0};
     for (std::size_t i = 0; i < speed.size(); ++i) {
@@ -957,10 +960,8 @@ TEST(ReportPredictors, EachTableIsFollowedByTheCorrelationsOfItsCosts) {
 // tables) gets one short line, not a list of every layout and ray set.
 TEST(ReportPredictors, ATableWithNothingToRankGetsOneShortLine) {
   const auto path = temp_csv("predictors_none.csv");
-  std::vector<std::string> columns = columns_with_samples();
-  for (const char* c : {"epo_cost", "sah_epo_cost", "cost_per_ray"}) columns.push_back(c);
   {
-    CsvWriter w(path, columns);
+    CsvWriter w(path, columns_with_predictors());
     w.append(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 9.0));
     for (const char* layout : {"bvh2", "bvh4", "bvh8"})
       for (const char* bins : {"8", "16"})

@@ -52,7 +52,11 @@ void print_catalogue(std::ostream& out) {
              "[\"NAME[:tri=watertight|mt|mt0|mtn,box=robust|fast|fma,anyhit={},isa=...]\"]):\n",
              any_hit_order_names("|"));
   for (const auto& l : layouts())
-    fmt::print(out, "  {:<14} arity {}{}  {}\n", l.name, l.arity, l.has_isa ? ", isa option" : "", l.summary);
+    fmt::print(out, "  {:<14} arity {}{}  {}\n", l.name, l.arity,
+               l.has_isa      ? ", isa and packet options"
+               : l.has_packet ? ", packet option"
+                              : "",
+               l.summary);
   fmt::print(out, "  kernel ISAs available here:");
   for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
     if (kernel_isa_available(isa)) fmt::print(out, " {}", to_string(isa));

@@ -9,13 +9,28 @@ if(NOT status EQUAL 0)
 endif()
 # Functions of the SIMD kernels' namespaces that are meant to be called: the entry points, the
 # per-ray, per-pair and per-packet loop bodies, a packet batch's run of lone rays (trace_alone), the
-# benchmark loops, the tests' one-node test and the watertight block test (kept as a call on purpose).
+# benchmark loops, the tests' one-node test, the watertight block test (kept as a call on purpose) and
+# bvh2_packed's packet kernel (pair_packets.inl).
 set(allowed
-    "trace_batch|trace_packet_batch|trace_alone|trace_ray|trace_ray_pair|trace_packet|node_test_loop|node_test_one|block_test_loop|intersect_block_watertight")
+    "trace_batch|trace_packet_batch|trace_alone|trace_ray|trace_ray_pair|trace_packet|node_test_loop|node_test_one|block_test_loop|intersect_block_watertight|trace_pair_packet")
 string(REPLACE "\n" ";" lines "${symbols}")
 set(found 0)
 set(offending "")
+set(member "")
+set(shared "")
 foreach(line IN LISTS lines)
+  if(line MATCHES "^(.*\\.o):$")
+    set(member "${CMAKE_MATCH_1}")
+  endif()
+  # An inline function of the other layers (a triangle test, the binary walk) left out of line in a
+  # kernel file is a copy built for that file's instruction set, which the linker may pick for every
+  # caller: pair_packets.inl is flattened so that none is left.
+  if(member MATCHES "wide_kernels_(sse|avx2|avx512)" AND line MATCHES " [wWvV] (sahbench::.*)$")
+    set(symbol "${CMAKE_MATCH_1}")
+    if(NOT line MATCHES "sahbench::wide_(sse|avx2|avx512)::")
+      string(APPEND shared "  ${member}: ${symbol}\n")
+    endif()
+  endif()
   # The function's own name: the first after the namespace, before any template arguments (which may
   # name the namespace's types again, e.g. trace_packet_batch<wide_avx512::Lanes16, ...>).
   if(line MATCHES " [tTwW] ([^<(]*sahbench::wide_(sse|avx2|avx512)::([A-Za-z_0-9]+).*)$")
@@ -29,6 +44,9 @@ foreach(line IN LISTS lines)
 endforeach()
 if(found EQUAL 0)
   message(FATAL_ERROR "no symbol of the SIMD kernels found in ${LIBRARY}: is it the right library?")
+endif()
+if(NOT shared STREQUAL "")
+  message(FATAL_ERROR "inline functions of other layers compiled out of line in a kernel file:\n${shared}")
 endif()
 if(NOT offending STREQUAL "")
   message(FATAL_ERROR "kernel helpers compiled out of line (mark them SAHBENCH_KERNEL_INLINE):\n${offending}")

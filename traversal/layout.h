@@ -56,10 +56,10 @@ class CompiledLayout {
 ///   box = robust | fast | fma           (ray/box test)
 ///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto: kernel_variant.h's
 ///                                                preferred_kernel_isa: the widest available)
-///   packet = 1 | 8 | 16                 (SIMD layouts only: rays traced one at a time, or 8 or 16 at a
-///                                        time by the packet kernels of wide_packets.inl: 8 with avx2
-///                                        and avx512, 16 with avx512)
-/// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2", "bvh8:packet=8".
+///   packet = 1 | 8 | 16                 (SIMD layouts and bvh2_packed: rays traced one at a time, or 8
+///                                        or 16 at a time by the packet kernels of wide_packets.inl and
+///                                        pair_packets.inl: 8 with avx2 and avx512, 16 with avx512)
+/// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2", "bvh8:packet=8", "bvh2_packed:packet=16".
 /// The largest packet of the packet kernels (layout option packet=16): ray chunks hold whole packets.
 inline constexpr uint32_t kMaxWidePacket = 16;
 
@@ -82,8 +82,11 @@ struct LayoutInfo {
   /// The arity of the trees this layout is meant for; the harness pairs a builder only with the
   /// layouts of its arity (a layout may still compile narrower trees, e.g. in tests).
   uint32_t arity = 2;
-  /// Whether the `isa` and `packet` options apply (the SIMD layouts).
+  /// Whether the `isa` option applies (the SIMD layouts).
   bool has_isa = false;
+  /// Whether the `packet` option applies: the SIMD layouts, and bvh2_packed, whose packet kernels run
+  /// with the instruction set isa=auto picks.
+  bool has_packet = false;
   /// Compiles `bvh` over `triangles` (which must outlive the result). Throws Error when the tree does
   /// not suit the layout (e.g. arity too large) or the ISA is not available, naming both.
   std::unique_ptr<CompiledLayout> (*compile)(const Bvh& bvh, std::span<const Triangle> triangles,

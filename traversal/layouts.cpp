@@ -110,18 +110,19 @@ std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Tri
 
 const std::vector<LayoutInfo>& registry() {
   static const std::vector<LayoutInfo> all = {
-      {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false,
+      {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false, false,
        compile_bvh2},
-      {"bvh2_packed", "64-byte nodes holding both children's boxes, triangles copied into leaf order", 2,
-       false, compile_packed_bvh2},
+      {"bvh2_packed",
+       "64-byte nodes holding both children's boxes, triangles copied into leaf order, packets of 8 or 16", 2,
+       false, true, compile_packed_bvh2},
       {"bvh4", "4-wide SoA nodes (128 B), triangles packed 4 per block, SIMD kernels (sse/avx2/avx512)", 4,
-       true,
+       true, true,
        [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
          return compile_wide_layout(4, bvh, tris, spec);
        }},
       {"bvh8",
        "8-wide SoA nodes (256 B), triangles packed 4 per block, SIMD kernels (avx2/avx512, sse in halves)", 8,
-       true,
+       true, true,
        [](const Bvh& bvh, std::span<const Triangle> tris, const LayoutSpec& spec) {
          return compile_wide_layout(8, bvh, tris, spec);
        }},
@@ -170,6 +171,8 @@ LayoutSpec parse_layout_spec(std::string_view text) {
   if (colon == std::string_view::npos) return spec;
 
   const std::string where = "layout '" + std::string(text) + "'";
+  const std::string keys =
+      std::string("tri, box, anyhit") + (info.has_isa ? ", isa" : "") + (info.has_packet ? ", packet" : "");
   std::string_view rest = text.substr(colon + 1);
   std::vector<std::string> seen;
   while (true) {
@@ -177,9 +180,8 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     const std::string_view item = rest.substr(0, comma);
     const auto eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0)
-      throw Error(where + ": option '" + std::string(item) +
-                  "' is not of the form key=value (keys: tri, box, anyhit" +
-                  (info.has_isa ? ", isa, packet)" : ")"));
+      throw Error(where + ": option '" + std::string(item) + "' is not of the form key=value (keys: " + keys +
+                  ")");
     const std::string key(item.substr(0, eq));
     const std::string value(item.substr(eq + 1));
     if (std::find(seen.begin(), seen.end(), key) != seen.end())
@@ -202,14 +204,13 @@ LayoutSpec parse_layout_spec(std::string_view text) {
       const auto isa = parse_kernel_isa(value);
       if (!isa) throw Error(where + ": isa = '" + value + "' is not one of auto, scalar, sse, avx2, avx512");
       spec.isa = *isa;
-    } else if (key == "packet" && info.has_isa) {
+    } else if (key == "packet" && info.has_packet) {
       if (value == "1" || value == "8" || value == "16")
         spec.packet = static_cast<uint32_t>(std::stoul(value));
       else
         throw Error(where + ": packet = '" + value + "' is not one of 1, 8, 16");
     } else {
-      throw Error(where + ": unknown option '" + key + "' (known: tri, box, anyhit" +
-                  (info.has_isa ? ", isa, packet)" : ")"));
+      throw Error(where + ": unknown option '" + key + "' (known: " + keys + ")");
     }
     if (comma == std::string_view::npos) break;
     rest = rest.substr(comma + 1);
@@ -224,12 +225,12 @@ LayoutSpec parse_layout_spec(std::string_view text) {
 }
 
 std::optional<std::string> layout_unavailable(const LayoutSpec& spec, KernelIsa widest) {
-  return find_layout(spec.name).has_isa ? wide_layout_unavailable(spec, widest) : std::nullopt;
+  return find_layout(spec.name).has_isa || spec.packet != 1 ? wide_layout_unavailable(spec, widest)
+                                                            : std::nullopt;
 }
 
 bool layout_depends_on_cpu(const LayoutSpec& spec) {
-  return find_layout(spec.name).has_isa &&
-         (spec.packet != 1 || (spec.isa != KernelIsa::kAuto && spec.isa != KernelIsa::kScalar));
+  return spec.packet != 1 || (spec.isa != KernelIsa::kAuto && spec.isa != KernelIsa::kScalar);
 }
 
 std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,

@@ -2,11 +2,14 @@
 
 #include <tbb/parallel_for.h>
 
+#include <bit>
 #include <utility>
 
 #include "core/error.h"
 #include "traversal/ray_chunks.h"
 #include "traversal/variant_dispatch.h"
+#include "traversal/wide_kernels_isa.h"
+#include "traversal/wide_layout.h"
 
 namespace sahbench {
 
@@ -83,25 +86,52 @@ namespace {
 // Rays handed to one task, as the other layouts.
 constexpr std::size_t kRayChunk = 256;
 
+// The packet kernels of `isa` (AVX2 or AVX-512) for `variant`; nullptr where none are compiled in.
+PairPacketKernel find_pair_packet_kernel([[maybe_unused]] KernelIsa isa,
+                                         [[maybe_unused]] const KernelVariant& variant,
+                                         [[maybe_unused]] bool any_hit, [[maybe_unused]] uint32_t packet) {
+#if defined(SAHBENCH_HAVE_X86_KERNELS)
+  if (isa == KernelIsa::kAvx2) return detail::pair_packet_kernel_avx2(variant, any_hit, packet);
+  if (isa == KernelIsa::kAvx512) return detail::pair_packet_kernel_avx512(variant, any_hit, packet);
+#endif
+  return nullptr;
+}
+
 template <class Tri, class Box>
 class PackedBvh2Layout final : public CompiledLayout {
  public:
-  PackedBvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, AnyHitOrder order)
+  /// `packet` 1: the single-ray kernel; 8 or 16: the packet kernels of `isa`.
+  PackedBvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, const KernelVariant& variant,
+                   uint32_t packet, KernelIsa isa)
       : tree_(PackedBvh2::compile(bvh, triangles)),
         scene_triangles_(triangles.size()),
-        order_(resolve_any_hit_order(bvh, order)) {}
+        order_(resolve_any_hit_order(bvh, variant.any_hit)),
+        packet_(packet),
+        isa_(packet == 1 ? KernelIsa::kScalar : isa) {
+    if (packet == 1) return;
+    closest_packet_ = find_pair_packet_kernel(isa, variant, false, packet);
+    any_packet_ = find_pair_packet_kernel(isa, variant, true, packet);
+    if (!closest_packet_ || !any_packet_)
+      throw Error("layout bvh2_packed: no " + std::string(to_string(isa)) + " " + std::to_string(packet) +
+                  "-ray packet kernels compiled in");
+  }
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      trace_in_pairs<false>(rays, b, e, [&](std::size_t i, Hit hit) {
-        if (hit.found()) hit.prim = tree_.ids[hit.prim];
-        hits[i] = hit;
-      });
+      if (packet_ == 1)
+        trace_in_pairs<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
+      else
+        trace_in_packets<false>(rays, b, e, hits.data(), nullptr);
+      for (std::size_t i = b; i != e; ++i)
+        if (hits[i].found()) hits[i].prim = tree_.ids[hits[i].prim];
     });
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      trace_in_pairs<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
+      if (packet_ == 1)
+        trace_in_pairs<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
+      else
+        trace_in_packets<true>(rays, b, e, nullptr, occluded.data());
     });
   }
   TraceCounts count_closest(std::span<const Ray> rays) const override { return count<false>(rays); }
@@ -115,6 +145,7 @@ class PackedBvh2Layout final : public CompiledLayout {
   }
 
   std::size_t bytes() const override { return tree_.bytes(); }
+  std::string isa() const override { return std::string(to_string(isa_)); }
 
  private:
   template <bool kAnyHit>
@@ -141,9 +172,60 @@ class PackedBvh2Layout final : public CompiledLayout {
     if (i < end) put(i, detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, rays[i], nullptr, order_));
   }
 
+  // Rays [begin, end) in packets of packet_ rays (a chunk starts at a multiple of kRayChunk, so packets
+  // are cut at the same rays whatever the thread count). A packet's rays of each direction octant go down
+  // the tree together (detail::pair_octant), as Embree's hybrid kernels split a packet by octant; a ray
+  // alone in its octant, one that cannot go in a packet, and every ray of a tree that is one leaf or none
+  // go in pairs.
+  template <bool kAnyHit>
+  void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,
+                        uint8_t* occluded) const {
+    const bool packets = !tree_.empty && tree_.root_count == 0;
+    const PairPacketKernel kernel = kAnyHit ? any_packet_ : closest_packet_;
+    auto put = [&](std::size_t i, const Hit& hit) {
+      if constexpr (kAnyHit)
+        occluded[i] = hit.found();
+      else
+        hits[i] = hit;
+    };
+    for (std::size_t first = begin; first < end; first += packet_) {
+      const auto n = static_cast<uint32_t>(std::min<std::size_t>(packet_, end - first));
+      uint32_t by_octant[detail::kPairAlone + 1] = {};
+      for (uint32_t j = 0; j < n; ++j)
+        by_octant[packets ? detail::pair_octant<Box>(rays[first + j]) : detail::kPairAlone] |= 1u << j;
+      uint32_t alone = by_octant[detail::kPairAlone];
+      for (uint32_t octant = 0; octant < detail::kPairAlone; ++octant) {
+        const uint32_t mask = by_octant[octant];
+        if (std::popcount(mask) == 1) alone |= mask;
+        if (std::popcount(mask) < 2) continue;
+        kernel(tree_, &rays[first], n, mask, order_, kAnyHit ? nullptr : hits + first,
+               kAnyHit ? occluded + first : nullptr);
+      }
+      // The rest two at a time, the last one alone.
+      while (alone != 0) {
+        const auto a = static_cast<uint32_t>(std::countr_zero(alone));
+        alone &= alone - 1;
+        if (alone == 0) {
+          put(first + a,
+              detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, rays[first + a], nullptr, order_));
+          break;
+        }
+        const auto b = static_cast<uint32_t>(std::countr_zero(alone));
+        alone &= alone - 1;
+        Hit hit_a, hit_b;
+        detail::trace_pair<Tri, Box, kAnyHit>(tree_, rays[first + a], rays[first + b], order_, hit_a, hit_b);
+        put(first + a, hit_a);
+        put(first + b, hit_b);
+      }
+    }
+  }
+
   PackedBvh2 tree_;
   std::size_t scene_triangles_;  // for refit's check
   AnyHitOrder order_;
+  uint32_t packet_;
+  KernelIsa isa_;  // of the packet kernels; scalar for the single-ray kernel
+  PairPacketKernel closest_packet_ = nullptr, any_packet_ = nullptr;
 };
 
 }  // namespace
@@ -153,8 +235,12 @@ std::unique_ptr<CompiledLayout> compile_packed_bvh2(const Bvh& bvh, std::span<co
   if (bvh.arity != 2)
     throw Error("layout 'bvh2_packed' needs a binary tree, the builder gave arity " +
                 std::to_string(bvh.arity));
+  if (spec.packet != 1) {
+    if (const auto why = wide_layout_unavailable(spec)) throw Error("layout '" + spec.text() + "': " + *why);
+  }
+  const KernelIsa isa = spec.packet == 1 ? KernelIsa::kScalar : wide_layout_isa(spec);
   return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
-    return std::make_unique<PackedBvh2Layout<Tri, Box>>(bvh, triangles, spec.variant.any_hit);
+    return std::make_unique<PackedBvh2Layout<Tri, Box>>(bvh, triangles, spec.variant, spec.packet, isa);
   });
 }
 

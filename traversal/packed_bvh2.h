@@ -308,9 +308,31 @@ void trace_pair(const PackedBvh2& tree, const Ray& ray_a, const Ray& ray_b, AnyH
   hit_b = b.hit();
 }
 
+// Which packet of pair_packets.inl a ray can go down the tree in: its direction octant (bit i set for a
+// negative component i), as one near and one far plane per axis must serve a packet; kPairAlone for a
+// ray that is not traceable or (box=fma) outside the box test's domain, which goes alone.
+inline constexpr uint32_t kPairAlone = 8;
+template <class BoxTest>
+uint32_t pair_octant(const Ray& r) {
+  if (!traceable(r)) return kPairAlone;
+  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
+    if (!FmaRayBox::takes(r)) return kPairAlone;
+  }
+  return uint32_t{std::signbit(r.dir.x)} | uint32_t{std::signbit(r.dir.y)} << 1 |
+         uint32_t{std::signbit(r.dir.z)} << 2;
+}
+
 }  // namespace detail
 
-/// The bvh2_packed layout of a binary `bvh` over `triangles`, with `spec`'s triangle and box tests.
+/// A packet kernel of bvh2_packed (pair_packets.inl): the rays of `mask` among rays [0, n) (n at most 8 or
+/// 16) as one packet, rays of one octant by detail::pair_octant, over a tree whose root is an inner node;
+/// their closest hits (packed triangle indices, PackedBvh2::ids maps them to the scene's) into `hits` or
+/// occlusion into `occluded`. Any hit visits children in `order`.
+using PairPacketKernel = void (*)(const PackedBvh2& tree, const Ray* rays, uint32_t n, uint32_t mask,
+                                  AnyHitOrder order, Hit* hits, uint8_t* occluded);
+
+/// The bvh2_packed layout of a binary `bvh` over `triangles`, with `spec`'s triangle and box tests; with
+/// packet=8 or 16, its rays traced in packets by the kernels of the instruction set isa=auto picks.
 std::unique_ptr<CompiledLayout> compile_packed_bvh2(const Bvh& bvh, std::span<const Triangle> triangles,
                                                     const LayoutSpec& spec);
 

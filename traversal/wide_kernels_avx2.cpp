@@ -4,11 +4,14 @@
 #define SAHBENCH_WIDE_AVX2
 #include <immintrin.h>
 
+#include "traversal/variant_dispatch.h"
 #include "traversal/wide_kernels_isa.h"
 
 namespace sahbench::wide_avx2 {
 #include "traversal/wide_kernels.inl"
 #include "traversal/wide_packets.inl"
+// After the two above, whose lanes, packet rays and box test it uses.
+#include "traversal/pair_packets.inl"
 }  // namespace sahbench::wide_avx2
 
 namespace sahbench::detail {
@@ -20,6 +23,10 @@ WideKernel wide_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind bo
 WideKernel wide_packet_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
                                    uint32_t packet) {
   return wide_avx2::select_packet_kernel(width, tri, box, any_hit, packet);
+}
+
+PairPacketKernel pair_packet_kernel_avx2(const KernelVariant& variant, bool any_hit, uint32_t packet) {
+  return wide_avx2::select_pair_packet_kernel(variant, any_hit, packet);
 }
 
 WideBenchLoops wide_bench_loops_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box) {

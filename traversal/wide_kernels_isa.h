@@ -7,6 +7,7 @@
 
 #include "core/bvh.h"
 #include "traversal/kernel_variant.h"
+#include "traversal/packed_bvh2.h"
 #include "traversal/ray_box.h"
 #include "traversal/triangle_tests.h"
 #include "traversal/wide_bvh.h"
@@ -29,6 +30,8 @@ WideKernel wide_packet_kernel_avx2(uint32_t width, TriangleTestKind tri, BoxTest
                                    uint32_t packet);
 WideKernel wide_packet_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTestKind box, bool any_hit,
                                      uint32_t packet);
+PairPacketKernel pair_packet_kernel_avx2(const KernelVariant& variant, bool any_hit, uint32_t packet);
+PairPacketKernel pair_packet_kernel_avx512(const KernelVariant& variant, bool any_hit, uint32_t packet);
 #endif
 
 }  // namespace sahbench::detail

@@ -125,8 +125,14 @@ Bvh tree_for(const LayoutInfo& layout, const std::vector<Triangle>& triangles) {
 
 // The watertight variant of every layout on every instruction set available here.
 std::vector<std::string> watertight_specs(const LayoutInfo& layout, test::Skips& skips) {
-  if (!layout.has_isa) return {layout.name + ":tri=watertight"};
   std::vector<std::string> out;
+  if (!layout.has_isa) {
+    out.push_back(layout.name + ":tri=watertight");
+    // bvh2_packed's packet kernels, with the instruction set isa=auto picks.
+    if (layout.has_packet && skips.have_isa(KernelIsa::kAvx2)) out.push_back(layout.name + ":packet=8");
+    if (layout.has_packet && skips.have_isa(KernelIsa::kAvx512)) out.push_back(layout.name + ":packet=16");
+    return out;
+  }
   for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
     if (skips.have_isa(isa))
       out.push_back(layout.name + ":tri=watertight,isa=" + std::string(to_string(isa)));
@@ -186,6 +192,7 @@ std::vector<std::string> specs_with(const LayoutInfo& layout, const std::string&
     const std::string variant = layout.name + ":" + option + "," + other;
     if (!layout.has_isa) {
       out.push_back(variant);
+      if (layout.has_packet && skips.have_isa(KernelIsa::kAvx512)) out.push_back(variant + ",packet=16");
       continue;
     }
     for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})

@@ -28,6 +28,7 @@
 #include "traversal/triangle_tests.h"
 #include "traversal/variant_dispatch.h"
 #include "traversal/wide_bvh.h"
+#include "traversal/wide_layout.h"
 
 namespace sahbench {
 namespace {
@@ -52,13 +53,23 @@ std::vector<std::string> specs_for(const LayoutInfo& layout, test::Skips& skips)
       for (const char* box : {"robust", "fast", "fma"})
         out.push_back(layout.name + ":tri=" + tri + ",box=" + box + isa);
   };
+  const KernelIsa best = best_kernel_isa();
   if (!layout.has_isa) {
     add_variants("");
     for (const char* order : {"nearest", "stored", "nearest_stored", "farthest_stored"})
       out.push_back(layout.name + ":anyhit=" + order);
+    // bvh2_packed's packet kernels, with the instruction set isa=auto picks: every variant and any-hit
+    // order in packets of 8, and of 16 on AVX-512.
+    if (layout.has_packet && skips.have_isa(KernelIsa::kAvx2)) {
+      for (const char* packet : {",packet=8", ",packet=16"}) {
+        if (std::string(packet) == ",packet=16" && !skips.have_isa(KernelIsa::kAvx512)) continue;
+        add_variants(packet);
+        for (const char* order : {"nearest", "stored", "nearest_stored", "farthest_stored"})
+          out.push_back(layout.name + ":anyhit=" + order + packet);
+      }
+    }
     return out;
   }
-  const KernelIsa best = best_kernel_isa();
   add_variants(",isa=scalar");
   if (best != KernelIsa::kScalar) add_variants(",isa=" + std::string(to_string(best)));
   // Every any-hit order, whichever the tree's arity picks by default.
@@ -172,13 +183,14 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
               ASSERT_EQ(occluded[i] != 0, expected_any) << "ray " << i;
               const Hit expected =
                   closest_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_closest);
-              if (layout.arity > 2 && hits[i].prim != expected.prim && hits[i].found() && expected.found() &&
-                  hits[i].t == expected.t) {
+              if ((layout.arity > 2 || spec.packet > 1) && hits[i].prim != expected.prim && hits[i].found() &&
+                  expected.found() && hits[i].t == expected.t) {
                 // An exact tie, broken differently: a SIMD block tests its four triangles against the
                 // same tmax where the scalar kernel lowers tmax after each hit (the watertight test
                 // compares t * det with tmax * det, so a second hit at exactly tmax may or may not
-                // pass). Both answers hit at that very t. Binary layouts test one triangle at a time
-                // and are held to the scalar kernel's tie rule.
+                // pass), and a packet meets the two triangles in another order than the ray alone.
+                // Both answers hit at that very t. Binary layouts tracing one ray at a time test one
+                // triangle at a time in the scalar kernel's order and are held to its tie rule.
                 float t, u, v;
                 ASSERT_TRUE(Tri(rays[i]).intersect(scene.triangles[hits[i].prim], rays[i].tmin, rays[i].tmax,
                                                    t, u, v));
@@ -191,12 +203,17 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
                 // A packet visits leaves in another order, and the fast variants' distances may put a
                 // triangle's hit a rounding before its box's entry: a leaf culled in one order is
                 // tested in the other. Both answers are hits of this test within a few ulps of each
-                // other; the default variant is held to brute force below.
+                // other; the default variant is held to brute force below. On the huge half of
+                // huge_and_tiny the binary layouts' scalar Möller–Trumbore products overflow (the SIMD
+                // kernels decide those lanes in double), so there its hits are hits of the test but
+                // their t may be far from the truth.
                 float t, u, v;
                 ASSERT_TRUE(Tri(rays[i]).intersect(scene.triangles[hits[i].prim], rays[i].tmin, rays[i].tmax,
                                                    t, u, v));
                 ASSERT_EQ(t, hits[i].t) << "ray " << i;
-                ASSERT_LE(std::fabs(t - expected.t), 1e-5f * std::fabs(expected.t)) << "ray " << i;
+                if (!(layout.arity == 2 && scene.name == "huge_and_tiny")) {
+                  ASSERT_LE(std::fabs(t - expected.t), 1e-5f * std::fabs(expected.t)) << "ray " << i;
+                }
                 tie_broken_differently = true;
                 continue;
               }
@@ -547,6 +564,12 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
   EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0, mtn"),
             std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
+  // bvh2_packed takes packets (with the instruction set isa=auto picks) but no isa.
+  EXPECT_EQ(parse_layout_spec("bvh2_packed:packet=16,tri=mt").text(), "bvh2_packed:tri=mt,packet=16");
+  EXPECT_NE(error_of("bvh2_packed:isa=avx2").find("unknown option 'isa' (known: tri, box, anyhit, packet)"),
+            std::string::npos);
+  EXPECT_NE(error_of("bvh2_packed:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
+  EXPECT_NE(error_of("bvh2:packet").find("(keys: tri, box, anyhit)"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
   EXPECT_NE(error_of("bvh2:packet=8").find("unknown option 'packet'"), std::string::npos);
@@ -598,6 +621,11 @@ TEST(Layouts, UnavailableLayoutsSayWhy) {
             std::string::npos);
   EXPECT_NE(capped("bvh8:packet=8", KernelIsa::kSse).find("8-ray packets need AVX2 or AVX-512"),
             std::string::npos);
+  EXPECT_NE(capped("bvh2_packed:packet=16", KernelIsa::kAvx2).find("16-ray packets need AVX-512"),
+            std::string::npos);
+  EXPECT_NE(capped("bvh2_packed:packet=8", KernelIsa::kSse).find("8-ray packets need AVX2 or AVX-512"),
+            std::string::npos);
+  EXPECT_EQ(capped("bvh2_packed", KernelIsa::kScalar), "");
   if (kernel_isa_available(KernelIsa::kAvx2)) {
     EXPECT_EQ(capped("bvh8:packet=8", KernelIsa::kAvx2), "");
     // The reason names what isa=auto takes under the cap: the widest the capped CPU has, on any vendor.
@@ -613,6 +641,8 @@ TEST(Layouts, UnavailableLayoutsSayWhy) {
   EXPECT_FALSE(layout_depends_on_cpu(parse_layout_spec("bvh8")));
   EXPECT_FALSE(layout_depends_on_cpu(parse_layout_spec("bvh8:isa=scalar")));
   EXPECT_TRUE(layout_depends_on_cpu(parse_layout_spec("bvh8:packet=8")));
+  EXPECT_TRUE(layout_depends_on_cpu(parse_layout_spec("bvh2_packed:packet=8")));
+  EXPECT_FALSE(layout_depends_on_cpu(parse_layout_spec("bvh2_packed")));
   EXPECT_TRUE(layout_depends_on_cpu(parse_layout_spec("bvh4:isa=sse")));
   const auto packets16 = layout_unavailable(parse_layout_spec("bvh8:packet=16"));
   const auto avx512 = layout_unavailable(parse_layout_spec("bvh4:isa=avx512"));
@@ -630,6 +660,24 @@ TEST(Layouts, UnavailableLayoutsSayWhy) {
         info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
     EXPECT_THROW(compile_layout("bvh8:packet=16", wide8, tris), Error);
   }
+}
+
+// The CSV's isa column: bvh2_packed's single-ray kernel is scalar code, its packet kernels run with the
+// instruction set isa=auto picks.
+TEST(Layouts, PackedBinaryLayoutNamesTheInstructionSetOfItsKernels) {
+  const auto tris = test::random_triangles(200, 4);
+  const BuilderInfo& info = find_builder("binned_sah");
+  const Bvh bvh = info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
+  EXPECT_EQ(compile_layout("bvh2_packed", bvh, tris)->isa(), "scalar");
+  test::Skips skips;
+  if (skips.have_isa(KernelIsa::kAvx2)) {
+    EXPECT_EQ(compile_layout("bvh2_packed:packet=8", bvh, tris)->isa(),
+              to_string(wide_layout_isa(parse_layout_spec("bvh2_packed:packet=8"))));
+  }
+  if (skips.have_isa(KernelIsa::kAvx512)) {
+    EXPECT_EQ(compile_layout("bvh2_packed:packet=16", bvh, tris)->isa(), "avx512");
+  }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 // On a binary tree the wide kernels take the binary kernel's path: the same nodes in the same order

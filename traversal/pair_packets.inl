@@ -13,7 +13,8 @@
 // otherwise its rays are traced two at a time by the single-ray kernel (packed_bvh2.cpp). Each lane
 // computes the single-ray kernel's slab test (PairSlabs: the same products, the far distances scaled the
 // same way, the same NaN rule) and every leaf's triangles are tested ray by ray with the layout's
-// triangle test, so every ray gets the hit it gets alone; only the order of the visits differs.
+// triangle test, so every ray gets the hit it gets alone, up to a tie within a rounding that the other
+// order of the visits breaks the other way.
 
 // The BoxTestKind of a box test class of ray_box.h.
 template <class Box>

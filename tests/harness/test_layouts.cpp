@@ -146,8 +146,10 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
     for (const Ray& r : test::diverging_rays(scene.triangles, 400, 8, kMaxWidePacket)) rays.push_back(r);
     for (const Ray& r : test::interleaved_rays(scene.triangles, 6 * 4 * kMaxWidePacket, 9, kMaxWidePacket, 4))
       rays.push_back(r);
-    // An odd count: the binary layouts trace rays in pairs and the last one alone.
-    rays.push_back(test::random_rays(scene.triangles, 1, 7).front());
+    // An odd count: the binary layouts trace rays in pairs and the last one alone; and the packet
+    // layouts' last packet holds 7 rays, its other lanes unused.
+    for (const Ray& r : test::coherent_rays(scene.triangles, 7, 7, 7)) rays.push_back(r);
+    ASSERT_EQ(rays.size() % kMaxWidePacket, 7u);
     std::vector<Hit> reference(rays.size());
     std::vector<uint8_t> reference_any(rays.size());
     for (std::size_t i = 0; i < rays.size(); ++i) {

@@ -291,6 +291,7 @@ TEST(Layouts, RefitLayoutsMatchBruteForceOnDeformedGeometry) {
     const Bvh bvh = info.build(BuildInput::from_triangles(original),
                                resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
     std::vector<std::string> specs{"bvh2", "bvh2_packed"};
+    if (kernel_isa_available(KernelIsa::kAvx2)) specs.push_back("bvh2_packed:packet=8");
     if (arity > 2) {
       specs.clear();
       // The robust default (blocks of vertices) and Möller–Trumbore (blocks of edges, and of edges and
@@ -456,7 +457,10 @@ TEST(Layouts, RefitMovesATreeThatIsOneLeaf) {
   for (Triangle& t : moved)
     t = {t.v0 + Vec3{40.0f, -25.0f, 7.0f}, t.v1 + Vec3{40.0f, -25.0f, 7.0f},
          t.v2 + Vec3{40.0f, -25.0f, 7.0f}};
-  for (const char* spec : {"bvh4", "bvh8", "bvh8:isa=scalar"}) {
+  std::vector<std::string> specs{"bvh4", "bvh8", "bvh8:isa=scalar"};
+  // A packet layout over a tree that is one leaf traces its rays in pairs.
+  if (kernel_isa_available(KernelIsa::kAvx2)) specs.push_back("bvh2_packed:packet=8");
+  for (const std::string& spec : specs) {
     SCOPED_TRACE(spec);
     auto layout = compile_layout(spec, bvh, original);
     layout->refit(moved);
@@ -486,15 +490,20 @@ TEST(Layouts, EmptyTreeMissesEverything) {
   const std::vector<Triangle> none;
   const auto rays = test::random_rays(test::random_triangles(10, 1), 50, 2);
   for (const LayoutInfo& layout : layouts()) {
-    const Bvh empty{{}, {}, layout.arity};  // bvh2 borrows the tree: it must outlive the layout
-    const auto compiled = compile_layout(layout.name, empty, none);
-    std::vector<Hit> hits(rays.size(), Hit{7, 1.0f, 0, 0});
-    std::vector<uint8_t> occluded(rays.size(), 1);
-    compiled->trace_closest(rays, hits);
-    compiled->trace_any(rays, occluded);
-    for (std::size_t i = 0; i < rays.size(); ++i) {
-      EXPECT_FALSE(hits[i].found()) << layout.name;
-      EXPECT_EQ(occluded[i], 0) << layout.name;
+    std::vector<std::string> specs{layout.name};
+    if (layout.has_packet && kernel_isa_available(KernelIsa::kAvx2))
+      specs.push_back(layout.name + ":packet=8");
+    for (const std::string& spec : specs) {
+      const Bvh empty{{}, {}, layout.arity};  // bvh2 borrows the tree: it must outlive the layout
+      const auto compiled = compile_layout(spec, empty, none);
+      std::vector<Hit> hits(rays.size(), Hit{7, 1.0f, 0, 0});
+      std::vector<uint8_t> occluded(rays.size(), 1);
+      compiled->trace_closest(rays, hits);
+      compiled->trace_any(rays, occluded);
+      for (std::size_t i = 0; i < rays.size(); ++i) {
+        EXPECT_FALSE(hits[i].found()) << spec;
+        EXPECT_EQ(occluded[i], 0) << spec;
+      }
     }
   }
 }

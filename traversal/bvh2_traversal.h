@@ -4,6 +4,8 @@
 // with no indirect calls, and the statistics kernels are separate instantiations of the same body.
 
 #include <algorithm>
+#include <bit>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <type_traits>
@@ -349,6 +351,46 @@ void trace_binary_pair(const Bvh& bvh, std::span<const Triangle> triangles, cons
   hit_b = b.hit();
 }
 
+// Which packet of pair_packets.inl (the binary layouts' packet kernels) a ray can go down the tree in: its
+// direction octant (bit i set for a negative component i), as one near and one far plane per axis must serve
+// a packet; kPairAlone for a ray that is not traceable or (box=fma) outside the box test's domain, which goes
+// alone.
+inline constexpr uint32_t kPairAlone = 8;
+template <class BoxTest>
+uint32_t pair_octant(const Ray& r) {
+  if (!traceable(r)) return kPairAlone;
+  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
+    if (!FmaRayBox::takes(r)) return kPairAlone;
+  }
+  return uint32_t{std::signbit(r.dir.x)} | uint32_t{std::signbit(r.dir.y)} << 1 |
+         uint32_t{std::signbit(r.dir.z)} << 2;
+}
+
+// Rays [first, first + n) (n at most 32), each packet of a binary layout: its rays of each direction
+// octant (pair_octant) as one packet, `packet(mask)` with the lanes of that octant, where two or more
+// share it (Embree's hybrid kernels split a packet by octant too); the others two at a time,
+// `pair(i, j)`, and the last one alone, `one(i)` (ray indices from `first`). With `packets` false (a
+// tree that is one leaf or none) every ray goes in pairs.
+template <class BoxTest, class Packet, class Pair, class One>
+void trace_by_octant(const Ray* rays, uint32_t n, bool packets, Packet&& packet, Pair&& pair, One&& one) {
+  uint32_t by_octant[kPairAlone + 1] = {};
+  for (uint32_t j = 0; j < n; ++j) by_octant[packets ? pair_octant<BoxTest>(rays[j]) : kPairAlone] |= 1u << j;
+  uint32_t alone = by_octant[kPairAlone];
+  for (uint32_t octant = 0; octant < kPairAlone; ++octant) {
+    const uint32_t mask = by_octant[octant];
+    if (std::popcount(mask) == 1) alone |= mask;
+    if (std::popcount(mask) >= 2) packet(mask);
+  }
+  while (alone != 0) {
+    const auto a = static_cast<uint32_t>(std::countr_zero(alone));
+    alone &= alone - 1;
+    if (alone == 0) return one(a);
+    const auto b = static_cast<uint32_t>(std::countr_zero(alone));
+    alone &= alone - 1;
+    pair(a, b);
+  }
+}
+
 }  // namespace detail
 
 /// Closest hit of `ray` within [ray.tmin, ray.tmax] among `triangles`, traversing `bvh` (any arity up to
@@ -384,5 +426,12 @@ bool any_hit_counted(const Bvh& bvh, std::span<const Triangle> triangles, const 
                      TraversalCounters& counters, AnyHitOrder order = AnyHitOrder::kAuto) {
   return detail::traverse<TriangleTest, BoxTest, true, true>(bvh, triangles, ray, &counters, order).found();
 }
+
+/// A packet kernel of bvh2 (pair_packets.inl): the rays of `mask` among rays [0, n) (n at most 8 or 16)
+/// as one packet, rays of one octant by detail::pair_octant, over the binary `bvh` (whose root is an
+/// inner node) over `triangles`; their closest hits into `hits` or occlusion into `occluded`. Any hit
+/// visits children in `order`.
+using BinaryPacketKernel = void (*)(const Bvh& bvh, const Triangle* triangles, const Ray* rays, uint32_t n,
+                                    uint32_t mask, AnyHitOrder order, Hit* hits, uint8_t* occluded);
 
 }  // namespace sahbench

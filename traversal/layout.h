@@ -56,8 +56,8 @@ class CompiledLayout {
 ///   box = robust | fast | fma           (ray/box test)
 ///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto: kernel_variant.h's
 ///                                                preferred_kernel_isa: the widest available)
-///   packet = 1 | 8 | 16                 (SIMD layouts and bvh2_packed: rays traced one at a time, or 8
-///                                        or 16 at a time by the packet kernels of wide_packets.inl and
+///   packet = 1 | 8 | 16                 (rays traced one at a time, or 8 or 16 at a time by the packet
+///                                        kernels of wide_packets.inl and, for the binary layouts,
 ///                                        pair_packets.inl: 8 with avx2 and avx512, 16 with avx512)
 /// e.g. "bvh8", "bvh2:tri=mt,box=fast", "bvh8:isa=avx2", "bvh8:packet=8", "bvh2_packed:packet=16".
 /// The largest packet of the packet kernels (layout option packet=16): ray chunks hold whole packets.
@@ -84,8 +84,8 @@ struct LayoutInfo {
   uint32_t arity = 2;
   /// Whether the `isa` option applies (the SIMD layouts).
   bool has_isa = false;
-  /// Whether the `packet` option applies: the SIMD layouts, and bvh2_packed, whose packet kernels run
-  /// with the instruction set isa=auto picks.
+  /// Whether the `packet` option applies: the SIMD layouts, and the binary ones, whose packet kernels
+  /// run with the instruction set isa=auto picks.
   bool has_packet = false;
   /// Compiles `bvh` over `triangles` (which must outlive the result). Throws Error when the tree does
   /// not suit the layout (e.g. arity too large) or the ISA is not available, naming both.

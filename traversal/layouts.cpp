@@ -9,6 +9,7 @@
 #include "traversal/packed_bvh2.h"
 #include "traversal/ray_chunks.h"
 #include "traversal/variant_dispatch.h"
+#include "traversal/wide_kernels_isa.h"
 #include "traversal/wide_layout.h"
 
 namespace sahbench {
@@ -27,23 +28,54 @@ TraceCounts count_rays(std::size_t count, Trace trace) {
   });
 }
 
+// The packet kernels of bvh2 for `isa` (AVX2 or AVX-512); nullptr where none are compiled in.
+BinaryPacketKernel find_binary_packet_kernel([[maybe_unused]] KernelIsa isa,
+                                             [[maybe_unused]] const KernelVariant& variant,
+                                             [[maybe_unused]] bool any_hit,
+                                             [[maybe_unused]] uint32_t packet) {
+#if defined(SAHBENCH_HAVE_X86_KERNELS)
+  if (isa == KernelIsa::kAvx2) return detail::binary_packet_kernel_avx2(variant, any_hit, packet);
+  if (isa == KernelIsa::kAvx512) return detail::binary_packet_kernel_avx512(variant, any_hit, packet);
+#endif
+  return nullptr;
+}
+
 /// A binary tree in the common format as built, traversed by the traversal/ kernels, its triangles reached
 /// through the references. The triangle and box tests are template parameters (variant_dispatch.h).
 template <class Tri, class Box>
 class Bvh2Layout final : public CompiledLayout {
  public:
-  /// `bvh` and `triangles` must outlive the layout. Any hit visits children in `order`.
-  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, AnyHitOrder order)
-      : bvh_(&bvh), triangles_(triangles), order_(order) {}
+  /// `bvh` and `triangles` must outlive the layout. Any hit visits children in `variant.any_hit`;
+  /// `packet` 1: the single-ray kernel; 8 or 16: the packet kernels of `isa`.
+  Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, const KernelVariant& variant,
+             uint32_t packet, KernelIsa isa)
+      : bvh_(&bvh),
+        triangles_(triangles),
+        order_(variant.any_hit),
+        packet_(packet),
+        isa_(packet == 1 ? KernelIsa::kScalar : isa) {
+    if (packet == 1) return;
+    closest_packet_ = find_binary_packet_kernel(isa, variant, false, packet);
+    any_packet_ = find_binary_packet_kernel(isa, variant, true, packet);
+    if (!closest_packet_ || !any_packet_)
+      throw Error("layout bvh2: no " + std::string(to_string(isa)) + " " + std::to_string(packet) +
+                  "-ray packet kernels compiled in");
+  }
 
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      trace_in_pairs<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
+      if (packet_ == 1)
+        trace_in_pairs<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
+      else
+        trace_in_packets<false>(rays, b, e, hits.data(), nullptr);
     });
   }
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      trace_in_pairs<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
+      if (packet_ == 1)
+        trace_in_pairs<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
+      else
+        trace_in_packets<true>(rays, b, e, nullptr, occluded.data());
     });
   }
   TraceCounts count_closest(std::span<const Ray> rays) const override {
@@ -71,6 +103,7 @@ class Bvh2Layout final : public CompiledLayout {
   }
 
   std::size_t bytes() const override { return bvh_->bytes(); }
+  std::string isa() const override { return std::string(to_string(isa_)); }
 
  private:
   // Rays [begin, end) two at a time (detail::trace_binary_pair), the last one alone; `put(i, hit)` takes
@@ -88,10 +121,50 @@ class Bvh2Layout final : public CompiledLayout {
       put(i, detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, rays[i], nullptr, order_));
   }
 
+  // Rays [begin, end) in packets of packet_ rays, each split by octant (detail::trace_by_octant), as
+  // bvh2_packed traces them.
+  template <bool kAnyHit>
+  void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,
+                        uint8_t* occluded) const {
+    const bool packets = !bvh_->nodes.empty() && !bvh_->root().is_leaf();
+    const BinaryPacketKernel kernel = kAnyHit ? any_packet_ : closest_packet_;
+    const AnyHitOrder order = resolve_any_hit_order(*bvh_, order_);
+    auto put = [&](std::size_t i, const Hit& hit) {
+      if constexpr (kAnyHit)
+        occluded[i] = hit.found();
+      else
+        hits[i] = hit;
+    };
+    for (std::size_t first = begin; first < end; first += packet_) {
+      const auto n = static_cast<uint32_t>(std::min<std::size_t>(packet_, end - first));
+      const Ray* packet = &rays[first];
+      detail::trace_by_octant<Box>(
+          packet, n, packets,
+          [&](uint32_t mask) {
+            kernel(*bvh_, triangles_.data(), packet, n, mask, order, kAnyHit ? nullptr : hits + first,
+                   kAnyHit ? occluded + first : nullptr);
+          },
+          [&](uint32_t a, uint32_t b) {
+            Hit hit_a, hit_b;
+            detail::trace_binary_pair<Tri, Box, kAnyHit>(*bvh_, triangles_, packet[a], packet[b], order_,
+                                                         hit_a, hit_b);
+            put(first + a, hit_a);
+            put(first + b, hit_b);
+          },
+          [&](uint32_t a) {
+            put(first + a,
+                detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, packet[a], nullptr, order_));
+          });
+    }
+  }
+
   const Bvh* bvh_ = nullptr;
   std::span<const Triangle> triangles_;
   Bvh owned_;  // once refitted
   AnyHitOrder order_ = AnyHitOrder::kAuto;
+  uint32_t packet_ = 1;
+  KernelIsa isa_ = KernelIsa::kScalar;  // of the packet kernels; scalar for the single-ray kernel
+  BinaryPacketKernel closest_packet_ = nullptr, any_packet_ = nullptr;
 };
 
 void require_binary(const Bvh& bvh, const char* layout) {
@@ -103,15 +176,19 @@ void require_binary(const Bvh& bvh, const char* layout) {
 std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Triangle> tris,
                                              const LayoutSpec& spec) {
   require_binary(bvh, "bvh2");
+  if (spec.packet != 1) {
+    if (const auto why = wide_layout_unavailable(spec)) throw Error("layout '" + spec.text() + "': " + *why);
+  }
+  const KernelIsa isa = spec.packet == 1 ? KernelIsa::kScalar : wide_layout_isa(spec);
   return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
-    return std::make_unique<Bvh2Layout<Tri, Box>>(bvh, tris, spec.variant.any_hit);
+    return std::make_unique<Bvh2Layout<Tri, Box>>(bvh, tris, spec.variant, spec.packet, isa);
   });
 }
 
 const std::vector<LayoutInfo>& registry() {
   static const std::vector<LayoutInfo> all = {
-      {"bvh2", "the common format as built: 32-byte nodes, triangles through references", 2, false, false,
-       compile_bvh2},
+      {"bvh2", "the common format as built: 32-byte nodes, triangles through references, packets of 8 or 16",
+       2, false, true, compile_bvh2},
       {"bvh2_packed",
        "64-byte nodes holding both children's boxes, triangles copied into leaf order, packets of 8 or 16", 2,
        false, true, compile_packed_bvh2},

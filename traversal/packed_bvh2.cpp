@@ -2,7 +2,6 @@
 
 #include <tbb/parallel_for.h>
 
-#include <bit>
 #include <utility>
 
 #include "core/error.h"
@@ -172,11 +171,8 @@ class PackedBvh2Layout final : public CompiledLayout {
     if (i < end) put(i, detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, rays[i], nullptr, order_));
   }
 
-  // Rays [begin, end) in packets of packet_ rays (a chunk starts at a multiple of kRayChunk, so packets
-  // are cut at the same rays whatever the thread count). A packet's rays of each direction octant go down
-  // the tree together (detail::pair_octant), as Embree's hybrid kernels split a packet by octant; a ray
-  // alone in its octant, one that cannot go in a packet, and every ray of a tree that is one leaf or none
-  // go in pairs.
+  // Rays [begin, end) in packets of packet_ rays, each split by octant (detail::trace_by_octant). A chunk
+  // starts at a multiple of kRayChunk, so packets are cut at the same rays whatever the thread count.
   template <bool kAnyHit>
   void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,
                         uint8_t* occluded) const {
@@ -190,33 +186,23 @@ class PackedBvh2Layout final : public CompiledLayout {
     };
     for (std::size_t first = begin; first < end; first += packet_) {
       const auto n = static_cast<uint32_t>(std::min<std::size_t>(packet_, end - first));
-      uint32_t by_octant[detail::kPairAlone + 1] = {};
-      for (uint32_t j = 0; j < n; ++j)
-        by_octant[packets ? detail::pair_octant<Box>(rays[first + j]) : detail::kPairAlone] |= 1u << j;
-      uint32_t alone = by_octant[detail::kPairAlone];
-      for (uint32_t octant = 0; octant < detail::kPairAlone; ++octant) {
-        const uint32_t mask = by_octant[octant];
-        if (std::popcount(mask) == 1) alone |= mask;
-        if (std::popcount(mask) < 2) continue;
-        kernel(tree_, &rays[first], n, mask, order_, kAnyHit ? nullptr : hits + first,
-               kAnyHit ? occluded + first : nullptr);
-      }
-      // The rest two at a time, the last one alone.
-      while (alone != 0) {
-        const auto a = static_cast<uint32_t>(std::countr_zero(alone));
-        alone &= alone - 1;
-        if (alone == 0) {
-          put(first + a,
-              detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, rays[first + a], nullptr, order_));
-          break;
-        }
-        const auto b = static_cast<uint32_t>(std::countr_zero(alone));
-        alone &= alone - 1;
-        Hit hit_a, hit_b;
-        detail::trace_pair<Tri, Box, kAnyHit>(tree_, rays[first + a], rays[first + b], order_, hit_a, hit_b);
-        put(first + a, hit_a);
-        put(first + b, hit_b);
-      }
+      const Ray* packet = &rays[first];
+      detail::trace_by_octant<Box>(
+          packet, n, packets,
+          [&](uint32_t mask) {
+            kernel(tree_, packet, n, mask, order_, kAnyHit ? nullptr : hits + first,
+                   kAnyHit ? occluded + first : nullptr);
+          },
+          [&](uint32_t a, uint32_t b) {
+            Hit hit_a, hit_b;
+            detail::trace_pair<Tri, Box, kAnyHit>(tree_, packet[a], packet[b], order_, hit_a, hit_b);
+            put(first + a, hit_a);
+            put(first + b, hit_b);
+          },
+          [&](uint32_t a) {
+            put(first + a,
+                detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, packet[a], nullptr, order_));
+          });
     }
   }
 

@@ -308,20 +308,6 @@ void trace_pair(const PackedBvh2& tree, const Ray& ray_a, const Ray& ray_b, AnyH
   hit_b = b.hit();
 }
 
-// Which packet of pair_packets.inl a ray can go down the tree in: its direction octant (bit i set for a
-// negative component i), as one near and one far plane per axis must serve a packet; kPairAlone for a
-// ray that is not traceable or (box=fma) outside the box test's domain, which goes alone.
-inline constexpr uint32_t kPairAlone = 8;
-template <class BoxTest>
-uint32_t pair_octant(const Ray& r) {
-  if (!traceable(r)) return kPairAlone;
-  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
-    if (!FmaRayBox::takes(r)) return kPairAlone;
-  }
-  return uint32_t{std::signbit(r.dir.x)} | uint32_t{std::signbit(r.dir.y)} << 1 |
-         uint32_t{std::signbit(r.dir.z)} << 2;
-}
-
 }  // namespace detail
 
 /// A packet kernel of bvh2_packed (pair_packets.inl): the rays of `mask` among rays [0, n) (n at most 8 or

@@ -1,5 +1,6 @@
-// Packet kernels on bvh2_packed: K rays go down the binary tree together, each PairNode read once for
-// all of them and each of its two child boxes tested against the K rays in one K-lane slab test, the
+// Packet kernels on the binary layouts (bvh2_packed's PairNodes, and bvh2, the common format as built): K
+// rays go down the tree together, each node read once for all of them and each of its two child boxes
+// tested against the K rays in one K-lane slab test, the
 // packet traversal of binary BVHs of Wald, Boulos and Shirley 2007 ("Ray Tracing Deformable Scenes Using
 // Dynamic Bounding Volume Hierarchies"), without its frustum test. A binary tree takes several times as
 // many node visits per ray as a wide one, and one ray's visit is a chain of a dependent load, a box test
@@ -22,10 +23,60 @@ inline constexpr BoxTestKind kBoxKindOf = std::is_same_v<Box, FmaRayBox>    ? Bo
                                           : std::is_same_v<Box, FastRayBox> ? BoxTestKind::kFast
                                                                             : BoxTestKind::kRobust;
 
-// The packet's slab constants from each ray's SlabSetup, as PairSlabs takes them. The planes a packet
-// reads are those of PairNode::planes seen two floats apart (min x, max x, min y, ... of one child), so
-// that plane i of a child is 2 * axis + (0 for min, 1 for max).
-template <class P>
+// A binary tree as the packet kernel walks it: bvh2_packed's PairNodes, a node's line holding both
+// children's boxes plane by plane (seen two floats apart, one child's planes are min x, max x, min y, ...)
+// and what each child is; a leaf's triangles copied into leaf order, hits reported by their packed index.
+struct PackedPairTree {
+  const PackedBvh2& tree;
+  static constexpr uint32_t kStride = 2;
+  // The index of a child's plane on `axis` (max: its far plane for a positive direction).
+  static constexpr uint32_t plane(uint32_t axis, bool max) { return 2 * axis + (max ? 1 : 0); }
+  uint32_t root() const { return tree.root; }
+  const Aabb& root_box() const { return tree.root_box; }
+  SAHBENCH_KERNEL_INLINE const float* child_planes(uint32_t node, int c) const {
+    return &tree.nodes[node].planes[0][c];
+  }
+  // Child c of inner node `node`: an inner node's index (count 0), or a leaf's first triangle and count.
+  SAHBENCH_KERNEL_INLINE void child(uint32_t node, int c, uint32_t& index, uint32_t& count) const {
+    index = tree.nodes[node].child[c];
+    count = tree.nodes[node].count[c];
+  }
+  // The triangle at position `slot` of a leaf, the index a hit reports and the scene index ties go by.
+  SAHBENCH_KERNEL_INLINE const Triangle& triangle(uint32_t slot) const { return tree.triangles[slot]; }
+  SAHBENCH_KERNEL_INLINE uint32_t prim(uint32_t slot) const { return slot; }
+  SAHBENCH_KERNEL_INLINE uint32_t scene_index(uint32_t prim) const { return tree.ids[prim]; }
+};
+
+// The common format as built: a node's two children side by side from its `first`, each with its box
+// (min x, min y, min z, max x, ...); a leaf's triangles through the references, hits reported by scene
+// index.
+struct CommonPairTree {
+  const Bvh& bvh;
+  const Triangle* triangles;
+  static constexpr uint32_t kStride = 1;
+  static constexpr uint32_t plane(uint32_t axis, bool max) { return axis + (max ? 3 : 0); }
+  uint32_t root() const { return 0; }
+  const Aabb& root_box() const { return bvh.nodes[0].bounds; }
+  SAHBENCH_KERNEL_INLINE const float* child_planes(uint32_t node, int c) const {
+    static_assert(sizeof(Aabb) == 6 * sizeof(float), "a box is its six planes, min then max");
+    return &bvh.nodes[bvh.nodes[node].first + static_cast<uint32_t>(c)].bounds.min.x;
+  }
+  SAHBENCH_KERNEL_INLINE void child(uint32_t node, int c, uint32_t& index, uint32_t& count) const {
+    const uint32_t n = bvh.nodes[node].first + static_cast<uint32_t>(c);
+    const Node& child = bvh.nodes[n];
+    index = child.is_leaf() ? child.first : n;
+    count = child.prim_count;
+  }
+  SAHBENCH_KERNEL_INLINE const Triangle& triangle(uint32_t slot) const {
+    return triangles[bvh.prim_refs[slot]];
+  }
+  SAHBENCH_KERNEL_INLINE uint32_t prim(uint32_t slot) const { return bvh.prim_refs[slot]; }
+  SAHBENCH_KERNEL_INLINE uint32_t scene_index(uint32_t prim) const { return prim; }
+};
+
+// The packet's slab constants from each ray's SlabSetup, as the single-ray box tests take them, and the
+// near and far planes of `Tree`'s numbering for the octant of ray `lead`.
+template <class P, class Tree>
 SAHBENCH_KERNEL_INLINE PacketRays<P> make_pair_packet(const Ray* rays, uint32_t n, uint32_t lead) {
   alignas(64) float lanes[13][P::kWidth];
   PacketRays<P> p;
@@ -48,27 +99,27 @@ SAHBENCH_KERNEL_INLINE PacketRays<P> make_pair_packet(const Ray* rays, uint32_t 
     p.dir[axis] = P::load(lanes[3 + axis]);
     p.inv[axis] = P::load(lanes[6 + axis]);
     p.org_inv[axis] = P::load(lanes[9 + axis]);
-    p.near_plane[axis] = 2 * axis + (first.negative[axis] ? 1 : 0);
-    p.far_plane[axis] = 2 * axis + (first.negative[axis] ? 0 : 1);
+    p.near_plane[axis] = Tree::plane(axis, first.negative[axis]);
+    p.far_plane[axis] = Tree::plane(axis, !first.negative[axis]);
   }
   p.tmin = P::load(lanes[12]);
   return p;
 }
 
 // The rays of `mask` among rays [0, n) as one packet (of one direction octant, detail::pair_octant),
-// closest hits (packed triangle indices) into hits[j] or occlusion into occluded[j] for each j of `mask`. The
-// tree's root is an inner node. Flattened: the single-ray code it calls (the triangle tests, the ray set-up)
-// is inlined here, compiled for this instruction set, and leaves no out-of-line copy that the linker could
-// pick for the baseline callers. Closest hit goes first to the child whose nearest ray enters it nearer and
-// skips, per lane, entries beyond that ray's closest hit so far; any hit takes `order` as the single-ray walk
-// does, by the packet's nearest entries, and drops each ray at its first hit.
-template <class P, class Tri, class Box, bool kAnyHit>
-[[gnu::flatten]] void trace_pair_packet(const PackedBvh2& tree, const Ray* rays, uint32_t n, uint32_t mask,
+// closest hits (the indices Tree::prim reports) into hits[j] or occlusion into occluded[j] for each j of
+// `mask`. The tree's root is an inner node. Flattened: the single-ray code it calls (the triangle tests, the
+// ray set-up) is inlined here, compiled for this instruction set, and leaves no out-of-line copy that the
+// linker could pick for the baseline callers. Closest hit goes first to the child whose nearest ray enters it
+// nearer and skips, per lane, entries beyond that ray's closest hit so far; any hit takes `order` as the
+// single-ray walk does, by the packet's nearest entries, and drops each ray at its first hit.
+template <class P, class Tri, class Box, bool kAnyHit, class Tree>
+[[gnu::flatten]] void trace_pair_packet(const Tree& tree, const Ray* rays, uint32_t n, uint32_t mask,
                                         AnyHitOrder order, Hit* hits, uint8_t* occluded) {
   using V = typename P::V;
   constexpr uint32_t K = P::kWidth;
   constexpr BoxTestKind kBox = kBoxKindOf<Box>;
-  const PacketRays<P> p = make_pair_packet<P>(rays, n, static_cast<uint32_t>(__builtin_ctz(mask)));
+  const PacketRays<P> p = make_pair_packet<P, Tree>(rays, n, static_cast<uint32_t>(__builtin_ctz(mask)));
   const V nan = P::set1(__builtin_nanf(""));
   alignas(64) float best_t[K];
   float tmin[K];
@@ -85,8 +136,11 @@ template <class P, class Tri, class Box, bool kAnyHit>
   for (uint32_t j = 0; j < K; ++j) new (&tests.lane[j]) Tri(rays[j < n ? j : 0]);
   static_assert(std::is_trivially_destructible_v<Tri>);
 
-  const Aabb& box = tree.root_box;
-  const float root_planes[6] = {box.min[0], box.max[0], box.min[1], box.max[1], box.min[2], box.max[2]};
+  float root_planes[6];  // the root's box in Tree's numbering, one float apart
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    root_planes[Tree::plane(axis, false)] = tree.root_box().min[axis];
+    root_planes[Tree::plane(axis, true)] = tree.root_box().max[axis];
+  }
   uint32_t root_mask;
   const V t_root = packet_enter<P, kBox>(root_planes, 1, p, P::load(best_t), root_mask);
   const bool nearest_first =
@@ -95,7 +149,7 @@ template <class P, class Tri, class Box, bool kAnyHit>
 
   PacketEntry<P> stack[detail::kStackCapacity];
   uint32_t size = 0;
-  PacketEntry<P> entry{P::select(root_mask, t_root, nan), tree.root, 0};
+  PacketEntry<P> entry{P::select(root_mask, t_root, nan), tree.root(), 0};
   while (root_mask != 0) {
     const V tmax = P::load(best_t);
     const uint32_t lanes = P::le(entry.t_entry, tmax);
@@ -103,8 +157,9 @@ template <class P, class Tri, class Box, bool kAnyHit>
       if (entry.count != 0) {
         const uint32_t end = entry.child + entry.count;
         uint32_t active = lanes;
-        for (uint32_t prim = entry.child; prim < end && active; ++prim) {
-          const Triangle& tri = tree.triangles[prim];
+        for (uint32_t slot = entry.child; slot < end && active; ++slot) {
+          const Triangle& tri = tree.triangle(slot);
+          const uint32_t prim = tree.prim(slot);
           for (uint32_t m = active; m; m &= m - 1) {
             const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
             float t, u, v;
@@ -115,7 +170,8 @@ template <class P, class Tri, class Box, bool kAnyHit>
               best[j] = {prim, t, u, v};
               best_t[j] = __builtin_nanf("");
               active &= ~(1u << j);
-            } else if (t < best_t[j] || !best[j].found() || tree.ids[prim] < tree.ids[best[j].prim]) {
+            } else if (t < best_t[j] || !best[j].found() ||
+                       tree.scene_index(prim) < tree.scene_index(best[j].prim)) {
               // On a tie the lowest scene index wins, as in the single-ray walk.
               best[j] = {prim, t, u, v};
               best_t[j] = t;
@@ -126,19 +182,22 @@ template <class P, class Tri, class Box, bool kAnyHit>
           if (P::ordered(P::load(best_t)) == 0) break;
         }
       } else {
-        const PairNode& node = tree.nodes[entry.child];
         const V active_tmax = P::select(lanes, tmax, nan);
-        uint32_t mask[2];
-        const V t0 = packet_enter<P, kBox>(&node.planes[0][0], 2, p, active_tmax, mask[0]);
-        const V t1 = packet_enter<P, kBox>(&node.planes[0][1], 2, p, active_tmax, mask[1]);
-        const PacketEntry<P> child[2] = {{P::select(mask[0], t0, nan), node.child[0], node.count[0]},
-                                         {P::select(mask[1], t1, nan), node.child[1], node.count[1]}};
-        if (mask[0] != 0 && mask[1] != 0) {
+        uint32_t enters[2], index[2], count[2];
+        const V t0 = packet_enter<P, kBox>(tree.child_planes(entry.child, 0), Tree::kStride, p, active_tmax,
+                                           enters[0]);
+        const V t1 = packet_enter<P, kBox>(tree.child_planes(entry.child, 1), Tree::kStride, p, active_tmax,
+                                           enters[1]);
+        tree.child(entry.child, 0, index[0], count[0]);
+        tree.child(entry.child, 1, index[1], count[1]);
+        const PacketEntry<P> child[2] = {{P::select(enters[0], t0, nan), index[0], count[0]},
+                                         {P::select(enters[1], t1, nan), index[1], count[1]}};
+        if (enters[0] != 0 && enters[1] != 0) {
           int first = 0;
           if (nearest_first || farthest_first) {
             const V inf = P::set1(__builtin_inff());
-            const float near0 = P::min_lane(P::select(mask[0], t0, inf));
-            const float near1 = P::min_lane(P::select(mask[1], t1, inf));
+            const float near0 = P::min_lane(P::select(enters[0], t0, inf));
+            const float near1 = P::min_lane(P::select(enters[1], t1, inf));
             first = (farthest_first ? near1 > near0 : near1 < near0) ? 1 : 0;
           }
           if (size == detail::kStackCapacity) [[unlikely]]
@@ -147,8 +206,8 @@ template <class P, class Tri, class Box, bool kAnyHit>
           entry = child[first];
           continue;
         }
-        if ((mask[0] | mask[1]) != 0) {
-          entry = child[mask[0] != 0 ? 0 : 1];
+        if ((enters[0] | enters[1]) != 0) {
+          entry = child[enters[0] != 0 ? 0 : 1];
           continue;
         }
       }
@@ -165,13 +224,44 @@ template <class P, class Tri, class Box, bool kAnyHit>
   }
 }
 
+// The entry points of the two trees (PairPacketKernel, BinaryPacketKernel), flattened as the loop is.
+template <class P, class Tri, class Box, bool kAnyHit>
+[[gnu::flatten]] void trace_packed_pair_packet(const PackedBvh2& tree, const Ray* rays, uint32_t n,
+                                               uint32_t mask, AnyHitOrder order, Hit* hits,
+                                               uint8_t* occluded) {
+  trace_pair_packet<P, Tri, Box, kAnyHit>(PackedPairTree{tree}, rays, n, mask, order, hits, occluded);
+}
+template <class P, class Tri, class Box, bool kAnyHit>
+[[gnu::flatten]] void trace_binary_packet(const Bvh& bvh, const Triangle* triangles, const Ray* rays,
+                                          uint32_t n, uint32_t mask, AnyHitOrder order, Hit* hits,
+                                          uint8_t* occluded) {
+  trace_pair_packet<P, Tri, Box, kAnyHit>(CommonPairTree{bvh, triangles}, rays, n, mask, order, hits,
+                                          occluded);
+}
+
 // The bvh2_packed packet kernel of this instruction set for `variant` and packets of `packet` rays: 8,
 // or (AVX-512) 16; nullptr for a width this set has no kernels for.
 inline PairPacketKernel select_pair_packet_kernel(const KernelVariant& variant, bool any_hit,
                                                   uint32_t packet) {
   auto table = [&]<class P>() {
     return with_test_types(variant, [&]<class Tri, class Box>() -> PairPacketKernel {
-      return any_hit ? &trace_pair_packet<P, Tri, Box, true> : &trace_pair_packet<P, Tri, Box, false>;
+      return any_hit ? &trace_packed_pair_packet<P, Tri, Box, true>
+                     : &trace_packed_pair_packet<P, Tri, Box, false>;
+    });
+  };
+  if (packet == Lanes8::kWidth) return table.template operator()<Lanes8>();
+#if defined(SAHBENCH_WIDE_AVX512)
+  if (packet == Lanes16::kWidth) return table.template operator()<Lanes16>();
+#endif
+  return nullptr;
+}
+
+// The same for bvh2's packets on the common format.
+inline BinaryPacketKernel select_binary_packet_kernel(const KernelVariant& variant, bool any_hit,
+                                                      uint32_t packet) {
+  auto table = [&]<class P>() {
+    return with_test_types(variant, [&]<class Tri, class Box>() -> BinaryPacketKernel {
+      return any_hit ? &trace_binary_packet<P, Tri, Box, true> : &trace_binary_packet<P, Tri, Box, false>;
     });
   };
   if (packet == Lanes8::kWidth) return table.template operator()<Lanes8>();

@@ -29,6 +29,10 @@ PairPacketKernel pair_packet_kernel_avx2(const KernelVariant& variant, bool any_
   return wide_avx2::select_pair_packet_kernel(variant, any_hit, packet);
 }
 
+BinaryPacketKernel binary_packet_kernel_avx2(const KernelVariant& variant, bool any_hit, uint32_t packet) {
+  return wide_avx2::select_binary_packet_kernel(variant, any_hit, packet);
+}
+
 WideBenchLoops wide_bench_loops_avx2(uint32_t width, TriangleTestKind tri, BoxTestKind box) {
   return wide_avx2::select_bench_loops(width, tri, box);
 }

@@ -32,6 +32,8 @@ WideKernel wide_packet_kernel_avx512(uint32_t width, TriangleTestKind tri, BoxTe
                                      uint32_t packet);
 PairPacketKernel pair_packet_kernel_avx2(const KernelVariant& variant, bool any_hit, uint32_t packet);
 PairPacketKernel pair_packet_kernel_avx512(const KernelVariant& variant, bool any_hit, uint32_t packet);
+BinaryPacketKernel binary_packet_kernel_avx2(const KernelVariant& variant, bool any_hit, uint32_t packet);
+BinaryPacketKernel binary_packet_kernel_avx512(const KernelVariant& variant, bool any_hit, uint32_t packet);
 #endif
 
 }  // namespace sahbench::detail

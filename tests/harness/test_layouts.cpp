@@ -291,7 +291,10 @@ TEST(Layouts, RefitLayoutsMatchBruteForceOnDeformedGeometry) {
     const Bvh bvh = info.build(BuildInput::from_triangles(original),
                                resolve_params(info.name, info.params, {{"arity", std::to_string(arity)}}));
     std::vector<std::string> specs{"bvh2", "bvh2_packed"};
-    if (kernel_isa_available(KernelIsa::kAvx2)) specs.push_back("bvh2_packed:packet=8");
+    if (kernel_isa_available(KernelIsa::kAvx2)) {
+      specs.push_back("bvh2:packet=8");
+      specs.push_back("bvh2_packed:packet=8");
+    }
     if (arity > 2) {
       specs.clear();
       // The robust default (blocks of vertices) and Möller–Trumbore (blocks of edges, and of edges and
@@ -459,7 +462,10 @@ TEST(Layouts, RefitMovesATreeThatIsOneLeaf) {
          t.v2 + Vec3{40.0f, -25.0f, 7.0f}};
   std::vector<std::string> specs{"bvh4", "bvh8", "bvh8:isa=scalar"};
   // A packet layout over a tree that is one leaf traces its rays in pairs.
-  if (kernel_isa_available(KernelIsa::kAvx2)) specs.push_back("bvh2_packed:packet=8");
+  if (kernel_isa_available(KernelIsa::kAvx2)) {
+    specs.push_back("bvh2:packet=8");
+    specs.push_back("bvh2_packed:packet=8");
+  }
   for (const std::string& spec : specs) {
     SCOPED_TRACE(spec);
     auto layout = compile_layout(spec, bvh, original);
@@ -575,15 +581,16 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
   EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0, mtn"),
             std::string::npos);
   EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
-  // bvh2_packed takes packets (with the instruction set isa=auto picks) but no isa.
+  // The binary layouts take packets (with the instruction set isa=auto picks) but no isa.
   EXPECT_EQ(parse_layout_spec("bvh2_packed:packet=16,tri=mt").text(), "bvh2_packed:tri=mt,packet=16");
   EXPECT_NE(error_of("bvh2_packed:isa=avx2").find("unknown option 'isa' (known: tri, box, anyhit, packet)"),
             std::string::npos);
   EXPECT_NE(error_of("bvh2_packed:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
-  EXPECT_NE(error_of("bvh2:packet").find("(keys: tri, box, anyhit)"), std::string::npos);
+  EXPECT_NE(error_of("bvh2:packet").find("(keys: tri, box, anyhit, packet)"), std::string::npos);
+  EXPECT_NE(error_of("bvh8:packet").find("(keys: tri, box, anyhit, isa, packet)"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
-  EXPECT_NE(error_of("bvh2:packet=8").find("unknown option 'packet'"), std::string::npos);
+  EXPECT_EQ(parse_layout_spec("bvh2:packet=8").packet, 8u);
   EXPECT_NE(error_of("bvh8:box").find("'box' is not of the form key=value"), std::string::npos);
   EXPECT_NE(error_of("bvh8:box=fast,box=robust").find("'box' is given twice"), std::string::npos);
 }
@@ -673,20 +680,22 @@ TEST(Layouts, UnavailableLayoutsSayWhy) {
   }
 }
 
-// The CSV's isa column: bvh2_packed's single-ray kernel is scalar code, its packet kernels run with the
-// instruction set isa=auto picks.
-TEST(Layouts, PackedBinaryLayoutNamesTheInstructionSetOfItsKernels) {
+// The CSV's isa column: the binary layouts' single-ray kernels are scalar code, their packet kernels run
+// with the instruction set isa=auto picks.
+TEST(Layouts, BinaryLayoutsNameTheInstructionSetOfTheirKernels) {
   const auto tris = test::random_triangles(200, 4);
   const BuilderInfo& info = find_builder("binned_sah");
   const Bvh bvh = info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
-  EXPECT_EQ(compile_layout("bvh2_packed", bvh, tris)->isa(), "scalar");
   test::Skips skips;
-  if (skips.have_isa(KernelIsa::kAvx2)) {
-    EXPECT_EQ(compile_layout("bvh2_packed:packet=8", bvh, tris)->isa(),
-              to_string(wide_layout_isa(parse_layout_spec("bvh2_packed:packet=8"))));
-  }
-  if (skips.have_isa(KernelIsa::kAvx512)) {
-    EXPECT_EQ(compile_layout("bvh2_packed:packet=16", bvh, tris)->isa(), "avx512");
+  for (const std::string name : {"bvh2", "bvh2_packed"}) {
+    EXPECT_EQ(compile_layout(name, bvh, tris)->isa(), "scalar");
+    if (skips.have_isa(KernelIsa::kAvx2)) {
+      EXPECT_EQ(compile_layout(name + ":packet=8", bvh, tris)->isa(),
+                to_string(wide_layout_isa(parse_layout_spec(name + ":packet=8"))));
+    }
+    if (skips.have_isa(KernelIsa::kAvx512)) {
+      EXPECT_EQ(compile_layout(name + ":packet=16", bvh, tris)->isa(), "avx512");
+    }
   }
   SAHBENCH_REPORT_SKIPS(skips);
 }

@@ -366,28 +366,48 @@ uint32_t pair_octant(const Ray& r) {
          uint32_t{std::signbit(r.dir.z)} << 2;
 }
 
-// Rays [first, first + n) (n at most 32), each packet of a binary layout: its rays of each direction
-// octant (pair_octant) as one packet, `packet(mask)` with the lanes of that octant, where two or more
-// share it (Embree's hybrid kernels split a packet by octant too); the others two at a time,
-// `pair(i, j)`, and the last one alone, `one(i)` (ray indices from `first`). With `packets` false (a
-// tree that is one leaf or none) every ray goes in pairs.
-template <class BoxTest, class Packet, class Pair, class One>
-void trace_by_octant(const Ray* rays, uint32_t n, bool packets, Packet&& packet, Pair&& pair, One&& one) {
-  uint32_t by_octant[kPairAlone + 1] = {};
-  for (uint32_t j = 0; j < n; ++j) by_octant[packets ? pair_octant<BoxTest>(rays[j]) : kPairAlone] |= 1u << j;
-  uint32_t alone = by_octant[kPairAlone];
-  for (uint32_t octant = 0; octant < kPairAlone; ++octant) {
-    const uint32_t mask = by_octant[octant];
-    if (std::popcount(mask) == 1) alone |= mask;
-    if (std::popcount(mask) >= 2) packet(mask);
-  }
-  while (alone != 0) {
-    const auto a = static_cast<uint32_t>(std::countr_zero(alone));
-    alone &= alone - 1;
-    if (alone == 0) return one(a);
-    const auto b = static_cast<uint32_t>(std::countr_zero(alone));
-    alone &= alone - 1;
-    pair(a, b);
+// Rays [begin, end) of a binary layout in packets of `width` rays (8 or 16), each split by octant: a
+// packet's rays of one direction octant (pair_octant) go down the tree together,
+// `packet(rays, n, mask, hits, occluded)` with the lanes of that octant among the packet's n rays, where
+// two or more share it (Embree's hybrid kernels split a packet by octant too); the others two at a time,
+// `pair(ray_a, ray_b, hit_a, hit_b)`, and the last one alone, `hit = one(ray)`. With `packets` false (a
+// tree that is one leaf or none) every ray goes in pairs. Closest hits go into `hits`, occlusion into
+// `occluded`.
+template <class BoxTest, bool kAnyHit, class Packet, class Pair, class One>
+void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, uint32_t width,
+                      bool packets, Hit* hits, uint8_t* occluded, Packet&& packet, Pair&& pair, One&& one) {
+  auto put = [&](std::size_t i, const Hit& hit) {
+    if constexpr (kAnyHit)
+      occluded[i] = hit.found();
+    else
+      hits[i] = hit;
+  };
+  for (std::size_t first = begin; first < end; first += width) {
+    const auto n = static_cast<uint32_t>(std::min<std::size_t>(width, end - first));
+    uint32_t by_octant[kPairAlone + 1] = {};
+    for (uint32_t j = 0; j < n; ++j)
+      by_octant[packets ? pair_octant<BoxTest>(rays[first + j]) : kPairAlone] |= 1u << j;
+    uint32_t alone = by_octant[kPairAlone];
+    for (uint32_t octant = 0; octant < kPairAlone; ++octant) {
+      const uint32_t mask = by_octant[octant];
+      if (std::popcount(mask) == 1) alone |= mask;
+      if (std::popcount(mask) >= 2)
+        packet(&rays[first], n, mask, kAnyHit ? nullptr : hits + first, kAnyHit ? occluded + first : nullptr);
+    }
+    while (alone != 0) {
+      const auto a = static_cast<uint32_t>(std::countr_zero(alone));
+      alone &= alone - 1;
+      if (alone == 0) {
+        put(first + a, one(rays[first + a]));
+        break;
+      }
+      const auto b = static_cast<uint32_t>(std::countr_zero(alone));
+      alone &= alone - 1;
+      Hit hit_a, hit_b;
+      pair(rays[first + a], rays[first + b], hit_a, hit_b);
+      put(first + a, hit_a);
+      put(first + b, hit_b);
+    }
   }
 }
 

@@ -121,41 +121,23 @@ class Bvh2Layout final : public CompiledLayout {
       put(i, detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, rays[i], nullptr, order_));
   }
 
-  // Rays [begin, end) in packets of packet_ rays, each split by octant (detail::trace_by_octant), as
-  // bvh2_packed traces them.
+  // Rays [begin, end) in packets of packet_ rays, each split by octant (detail::trace_in_packets).
   template <bool kAnyHit>
   void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,
                         uint8_t* occluded) const {
-    const bool packets = !bvh_->nodes.empty() && !bvh_->root().is_leaf();
     const BinaryPacketKernel kernel = kAnyHit ? any_packet_ : closest_packet_;
     const AnyHitOrder order = resolve_any_hit_order(*bvh_, order_);
-    auto put = [&](std::size_t i, const Hit& hit) {
-      if constexpr (kAnyHit)
-        occluded[i] = hit.found();
-      else
-        hits[i] = hit;
-    };
-    for (std::size_t first = begin; first < end; first += packet_) {
-      const auto n = static_cast<uint32_t>(std::min<std::size_t>(packet_, end - first));
-      const Ray* packet = &rays[first];
-      detail::trace_by_octant<Box>(
-          packet, n, packets,
-          [&](uint32_t mask) {
-            kernel(*bvh_, triangles_.data(), packet, n, mask, order, kAnyHit ? nullptr : hits + first,
-                   kAnyHit ? occluded + first : nullptr);
-          },
-          [&](uint32_t a, uint32_t b) {
-            Hit hit_a, hit_b;
-            detail::trace_binary_pair<Tri, Box, kAnyHit>(*bvh_, triangles_, packet[a], packet[b], order_,
-                                                         hit_a, hit_b);
-            put(first + a, hit_a);
-            put(first + b, hit_b);
-          },
-          [&](uint32_t a) {
-            put(first + a,
-                detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, packet[a], nullptr, order_));
-          });
-    }
+    detail::trace_in_packets<Box, kAnyHit>(
+        rays, begin, end, packet_, !bvh_->nodes.empty() && !bvh_->root().is_leaf(), hits, occluded,
+        [&](const Ray* packet, uint32_t n, uint32_t mask, Hit* h, uint8_t* o) {
+          kernel(*bvh_, triangles_.data(), packet, n, mask, order, h, o);
+        },
+        [&](const Ray& a, const Ray& b, Hit& hit_a, Hit& hit_b) {
+          detail::trace_binary_pair<Tri, Box, kAnyHit>(*bvh_, triangles_, a, b, order_, hit_a, hit_b);
+        },
+        [&](const Ray& a) {
+          return detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, a, nullptr, order_);
+        });
   }
 
   const Bvh* bvh_ = nullptr;

@@ -171,39 +171,23 @@ class PackedBvh2Layout final : public CompiledLayout {
     if (i < end) put(i, detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, rays[i], nullptr, order_));
   }
 
-  // Rays [begin, end) in packets of packet_ rays, each split by octant (detail::trace_by_octant). A chunk
+  // Rays [begin, end) in packets of packet_ rays, each split by octant (detail::trace_in_packets). A chunk
   // starts at a multiple of kRayChunk, so packets are cut at the same rays whatever the thread count.
   template <bool kAnyHit>
   void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,
                         uint8_t* occluded) const {
-    const bool packets = !tree_.empty && tree_.root_count == 0;
     const PairPacketKernel kernel = kAnyHit ? any_packet_ : closest_packet_;
-    auto put = [&](std::size_t i, const Hit& hit) {
-      if constexpr (kAnyHit)
-        occluded[i] = hit.found();
-      else
-        hits[i] = hit;
-    };
-    for (std::size_t first = begin; first < end; first += packet_) {
-      const auto n = static_cast<uint32_t>(std::min<std::size_t>(packet_, end - first));
-      const Ray* packet = &rays[first];
-      detail::trace_by_octant<Box>(
-          packet, n, packets,
-          [&](uint32_t mask) {
-            kernel(tree_, packet, n, mask, order_, kAnyHit ? nullptr : hits + first,
-                   kAnyHit ? occluded + first : nullptr);
-          },
-          [&](uint32_t a, uint32_t b) {
-            Hit hit_a, hit_b;
-            detail::trace_pair<Tri, Box, kAnyHit>(tree_, packet[a], packet[b], order_, hit_a, hit_b);
-            put(first + a, hit_a);
-            put(first + b, hit_b);
-          },
-          [&](uint32_t a) {
-            put(first + a,
-                detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, packet[a], nullptr, order_));
-          });
-    }
+    detail::trace_in_packets<Box, kAnyHit>(
+        rays, begin, end, packet_, !tree_.empty && tree_.root_count == 0, hits, occluded,
+        [&](const Ray* packet, uint32_t n, uint32_t mask, Hit* h, uint8_t* o) {
+          kernel(tree_, packet, n, mask, order_, h, o);
+        },
+        [&](const Ray& a, const Ray& b, Hit& hit_a, Hit& hit_b) {
+          detail::trace_pair<Tri, Box, kAnyHit>(tree_, a, b, order_, hit_a, hit_b);
+        },
+        [&](const Ray& a) {
+          return detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, a, nullptr, order_);
+        });
   }
 
   PackedBvh2 tree_;

@@ -54,7 +54,7 @@ void print_catalogue(std::ostream& out) {
   for (const auto& l : layouts())
     fmt::print(out, "  {:<14} arity {}{}  {}\n", l.name, l.arity,
                l.has_isa      ? ", isa and packet options"
-               : l.has_packet ? ", packet option"
+               : l.has_packet ? ", packet option (isa with it)"
                               : "",
                l.summary);
   fmt::print(out, "  kernel ISAs available here:");

@@ -82,10 +82,10 @@ struct LayoutInfo {
   /// The arity of the trees this layout is meant for; the harness pairs a builder only with the
   /// layouts of its arity (a layout may still compile narrower trees, e.g. in tests).
   uint32_t arity = 2;
-  /// Whether the `isa` option applies (the SIMD layouts).
+  /// Whether the `isa` option picks every kernel's build (the SIMD layouts).
   bool has_isa = false;
-  /// Whether the `packet` option applies: the SIMD layouts, and the binary ones, whose packet kernels
-  /// run with the instruction set isa=auto picks.
+  /// Whether the `packet` option applies: the SIMD layouts, and the binary ones, which take `isa` with
+  /// it to pick their packet kernels' build (isa=auto's by default).
   bool has_packet = false;
   /// Compiles `bvh` over `triangles` (which must outlive the result). Throws Error when the tree does
   /// not suit the layout (e.g. arity too large) or the ISA is not available, naming both.

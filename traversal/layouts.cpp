@@ -230,8 +230,11 @@ LayoutSpec parse_layout_spec(std::string_view text) {
   if (colon == std::string_view::npos) return spec;
 
   const std::string where = "layout '" + std::string(text) + "'";
+  // The binary layouts take `isa` with `packet` only: it picks their packet kernels' build, while
+  // their single-ray kernel has one, the baseline's.
+  const bool takes_isa = info.has_isa || info.has_packet;
   const std::string keys =
-      std::string("tri, box, anyhit") + (info.has_isa ? ", isa" : "") + (info.has_packet ? ", packet" : "");
+      std::string("tri, box, anyhit") + (takes_isa ? ", isa" : "") + (info.has_packet ? ", packet" : "");
   std::string_view rest = text.substr(colon + 1);
   std::vector<std::string> seen;
   while (true) {
@@ -259,7 +262,7 @@ LayoutSpec parse_layout_spec(std::string_view text) {
       if (!order)
         throw Error(where + ": anyhit = '" + value + "' is not one of " + any_hit_order_names(", "));
       spec.variant.any_hit = *order;
-    } else if (key == "isa" && info.has_isa) {
+    } else if (key == "isa" && takes_isa) {
       const auto isa = parse_kernel_isa(value);
       if (!isa) throw Error(where + ": isa = '" + value + "' is not one of auto, scalar, sse, avx2, avx512");
       spec.isa = *isa;
@@ -274,6 +277,9 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     if (comma == std::string_view::npos) break;
     rest = rest.substr(comma + 1);
   }
+  if (!info.has_isa && spec.isa != KernelIsa::kAuto && spec.packet == 1)
+    throw Error(where + ": isa picks the build of " + spec.name +
+                "'s packet kernels; its single-ray kernel has one build (add packet=8 or packet=16)");
   // Packet kernels exist for AVX2 and AVX-512 (8 rays) and AVX-512 (16 rays) only.
   const bool packet_isa = spec.isa == KernelIsa::kAuto || spec.isa == KernelIsa::kAvx512 ||
                           (spec.packet == 8 && spec.isa == KernelIsa::kAvx2);

@@ -128,9 +128,12 @@ std::vector<std::string> watertight_specs(const LayoutInfo& layout, test::Skips&
   std::vector<std::string> out;
   if (!layout.has_isa) {
     out.push_back(layout.name + ":tri=watertight");
-    // bvh2_packed's packet kernels, with the instruction set isa=auto picks.
+    // The binary layouts' packet kernels, with the instruction set isa=auto picks and with AVX2's.
     if (layout.has_packet && skips.have_isa(KernelIsa::kAvx2)) out.push_back(layout.name + ":packet=8");
-    if (layout.has_packet && skips.have_isa(KernelIsa::kAvx512)) out.push_back(layout.name + ":packet=16");
+    if (layout.has_packet && skips.have_isa(KernelIsa::kAvx512)) {
+      out.push_back(layout.name + ":packet=16");
+      out.push_back(layout.name + ":packet=8,isa=avx2");
+    }
     return out;
   }
   for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})
@@ -192,7 +195,10 @@ std::vector<std::string> specs_with(const LayoutInfo& layout, const std::string&
     const std::string variant = layout.name + ":" + option + "," + other;
     if (!layout.has_isa) {
       out.push_back(variant);
-      if (layout.has_packet && skips.have_isa(KernelIsa::kAvx512)) out.push_back(variant + ",packet=16");
+      if (layout.has_packet && skips.have_isa(KernelIsa::kAvx512)) {
+        out.push_back(variant + ",packet=16");
+        out.push_back(variant + ",packet=8,isa=avx2");
+      }
       continue;
     }
     for (KernelIsa isa : {KernelIsa::kScalar, KernelIsa::kSse, KernelIsa::kAvx2, KernelIsa::kAvx512})

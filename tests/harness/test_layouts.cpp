@@ -58,11 +58,14 @@ std::vector<std::string> specs_for(const LayoutInfo& layout, test::Skips& skips)
     add_variants("");
     for (const char* order : {"nearest", "stored", "nearest_stored", "farthest_stored"})
       out.push_back(layout.name + ":anyhit=" + order);
-    // bvh2_packed's packet kernels, with the instruction set isa=auto picks: every variant and any-hit
-    // order in packets of 8, and of 16 on AVX-512.
+    // The binary layouts' packet kernels: every variant and any-hit order in packets of 8 with the
+    // instruction set isa=auto picks, and in AVX2's packets of 8 and AVX-512's of 16 where that is
+    // another build.
     if (layout.has_packet && skips.have_isa(KernelIsa::kAvx2)) {
-      for (const char* packet : {",packet=8", ",packet=16"}) {
-        if (std::string(packet) == ",packet=16" && !skips.have_isa(KernelIsa::kAvx512)) continue;
+      std::vector<std::string> packets{",packet=8"};
+      if (skips.have_isa(KernelIsa::kAvx512))
+        packets.insert(packets.end(), {",packet=16", ",packet=8,isa=avx2"});
+      for (const std::string& packet : packets) {
         add_variants(packet);
         for (const char* order : {"nearest", "stored", "nearest_stored", "farthest_stored"})
           out.push_back(layout.name + ":anyhit=" + order + packet);
@@ -580,13 +583,17 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
       std::string::npos);
   EXPECT_NE(error_of("bvh2:tri=exact").find("tri = 'exact' is not one of watertight, mt, mt0, mtn"),
             std::string::npos);
-  EXPECT_NE(error_of("bvh2:isa=avx2").find("unknown option 'isa'"), std::string::npos);
-  // The binary layouts take packets (with the instruction set isa=auto picks) but no isa.
+  // The binary layouts take packets, and isa only with them: it picks the packet kernels' build.
   EXPECT_EQ(parse_layout_spec("bvh2_packed:packet=16,tri=mt").text(), "bvh2_packed:tri=mt,packet=16");
-  EXPECT_NE(error_of("bvh2_packed:isa=avx2").find("unknown option 'isa' (known: tri, box, anyhit, packet)"),
+  EXPECT_EQ(parse_layout_spec("bvh2:isa=avx2,packet=8").text(), "bvh2:isa=avx2,packet=8");
+  EXPECT_EQ(parse_layout_spec("bvh2_packed:packet=8,isa=avx2").isa, KernelIsa::kAvx2);
+  for (const char* spec : {"bvh2:isa=avx2", "bvh2_packed:isa=scalar", "bvh2:isa=avx512,packet=1"})
+    EXPECT_NE(error_of(spec).find("isa picks the build of bvh2"), std::string::npos) << spec;
+  EXPECT_NE(error_of("bvh2_packed:isa=avx2,packet=16").find("no avx2 kernels for packet=16"),
             std::string::npos);
+  EXPECT_NE(error_of("bvh2:isa=sse,packet=8").find("no sse kernels for packet=8"), std::string::npos);
   EXPECT_NE(error_of("bvh2_packed:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
-  EXPECT_NE(error_of("bvh2:packet").find("(keys: tri, box, anyhit, packet)"), std::string::npos);
+  EXPECT_NE(error_of("bvh2:packet").find("(keys: tri, box, anyhit, isa, packet)"), std::string::npos);
   EXPECT_NE(error_of("bvh8:packet").find("(keys: tri, box, anyhit, isa, packet)"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
@@ -681,7 +688,7 @@ TEST(Layouts, UnavailableLayoutsSayWhy) {
 }
 
 // The CSV's isa column: the binary layouts' single-ray kernels are scalar code, their packet kernels run
-// with the instruction set isa=auto picks.
+// with the instruction set isa=auto picks, or the one `isa` names.
 TEST(Layouts, BinaryLayoutsNameTheInstructionSetOfTheirKernels) {
   const auto tris = test::random_triangles(200, 4);
   const BuilderInfo& info = find_builder("binned_sah");
@@ -692,6 +699,7 @@ TEST(Layouts, BinaryLayoutsNameTheInstructionSetOfTheirKernels) {
     if (skips.have_isa(KernelIsa::kAvx2)) {
       EXPECT_EQ(compile_layout(name + ":packet=8", bvh, tris)->isa(),
                 to_string(wide_layout_isa(parse_layout_spec(name + ":packet=8"))));
+      EXPECT_EQ(compile_layout(name + ":packet=8,isa=avx2", bvh, tris)->isa(), "avx2");
     }
     if (skips.have_isa(KernelIsa::kAvx512)) {
       EXPECT_EQ(compile_layout(name + ":packet=16", bvh, tris)->isa(), "avx512");

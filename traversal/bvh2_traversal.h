@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <span>
 #include <type_traits>
 
@@ -351,28 +352,27 @@ void trace_binary_pair(const Bvh& bvh, std::span<const Triangle> triangles, cons
   hit_b = b.hit();
 }
 
-// Which packet of pair_packets.inl (the binary layouts' packet kernels) a ray can go down the tree in: its
-// direction octant (bit i set for a negative component i), as one near and one far plane per axis must serve
-// a packet; kPairAlone for a ray that is not traceable or (box=fma) outside the box test's domain, which goes
-// alone.
-inline constexpr uint32_t kPairAlone = 8;
-template <class BoxTest>
-uint32_t pair_octant(const Ray& r) {
-  if (!traceable(r)) return kPairAlone;
-  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
-    if (!FmaRayBox::takes(r)) return kPairAlone;
-  }
+// The octant of a ray's direction: bit i set for a negative component i.
+inline uint32_t direction_octant(const Ray& r) {
   return uint32_t{std::signbit(r.dir.x)} | uint32_t{std::signbit(r.dir.y)} << 1 |
          uint32_t{std::signbit(r.dir.z)} << 2;
 }
 
-// Rays [begin, end) of a binary layout in packets of `width` rays (8 or 16), each split by octant: a
-// packet's rays of one direction octant (pair_octant) go down the tree together,
-// `packet(rays, n, mask, hits, occluded)` with the lanes of that octant among the packet's n rays, where
-// two or more share it (Embree's hybrid kernels split a packet by octant too); the others two at a time,
-// `pair(ray_a, ray_b, hit_a, hit_b)`, and the last one alone, `hit = one(ray)`. With `packets` false (a
-// tree that is one leaf or none) every ray goes in pairs. Closest hits go into `hits`, occlusion into
-// `occluded`.
+// Whether a ray can go down the tree in a packet of pair_packets.inl (the binary layouts' packet kernels):
+// not one that is not traceable, nor (box=fma) one outside the box test's domain.
+template <class BoxTest>
+bool pair_packable(const Ray& r) {
+  if constexpr (std::is_same_v<BoxTest, FmaRayBox>)
+    return traceable(r) && FmaRayBox::takes(r);
+  else
+    return traceable(r);
+}
+
+// Rays [begin, end) of a binary layout in packets of `width` rays (8 or 16): a packet's rays that can
+// (pair_packable) go down the tree together, `packet(rays, n, mask, hits, occluded)` with those lanes
+// among the packet's n rays, where two or more can; the others two at a time, `pair(ray_a, ray_b, hit_a,
+// hit_b)`, and the last one alone, `hit = one(ray)`. With `packets` false (a tree that is one leaf or
+// none) every ray goes in pairs. Closest hits go into `hits`, occlusion into `occluded`.
 template <class BoxTest, bool kAnyHit, class Packet, class Pair, class One>
 void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, uint32_t width,
                       bool packets, Hit* hits, uint8_t* occluded, Packet&& packet, Pair&& pair, One&& one) {
@@ -384,16 +384,15 @@ void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t 
   };
   for (std::size_t first = begin; first < end; first += width) {
     const auto n = static_cast<uint32_t>(std::min<std::size_t>(width, end - first));
-    uint32_t by_octant[kPairAlone + 1] = {};
+    uint32_t together = 0;
     for (uint32_t j = 0; j < n; ++j)
-      by_octant[packets ? pair_octant<BoxTest>(rays[first + j]) : kPairAlone] |= 1u << j;
-    uint32_t alone = by_octant[kPairAlone];
-    for (uint32_t octant = 0; octant < kPairAlone; ++octant) {
-      const uint32_t mask = by_octant[octant];
-      if (std::popcount(mask) == 1) alone |= mask;
-      if (std::popcount(mask) >= 2)
-        packet(&rays[first], n, mask, kAnyHit ? nullptr : hits + first, kAnyHit ? occluded + first : nullptr);
-    }
+      if (packets && pair_packable<BoxTest>(rays[first + j])) together |= 1u << j;
+    uint32_t alone = ((1u << n) - 1u) & ~together;  // n is at most 16
+    if (std::popcount(together) >= 2)
+      packet(&rays[first], n, together, kAnyHit ? nullptr : hits + first,
+             kAnyHit ? occluded + first : nullptr);
+    else
+      alone |= together;
     while (alone != 0) {
       const auto a = static_cast<uint32_t>(std::countr_zero(alone));
       alone &= alone - 1;
@@ -448,9 +447,9 @@ bool any_hit_counted(const Bvh& bvh, std::span<const Triangle> triangles, const 
 }
 
 /// A packet kernel of bvh2 (pair_packets.inl): the rays of `mask` among rays [0, n) (n at most 8 or 16)
-/// as one packet, rays of one octant by detail::pair_octant, over the binary `bvh` (whose root is an
-/// inner node) over `triangles`; their closest hits into `hits` or occlusion into `occluded`. Any hit
-/// visits children in `order`.
+/// as one packet (rays detail::pair_packable takes, of any direction octants), over the binary `bvh`
+/// (whose root is an inner node) over `triangles`; their closest hits into `hits` or occlusion into
+/// `occluded`. Any hit visits children in `order`.
 using BinaryPacketKernel = void (*)(const Bvh& bvh, const Triangle* triangles, const Ray* rays, uint32_t n,
                                     uint32_t mask, AnyHitOrder order, Hit* hits, uint8_t* occluded);
 

@@ -311,7 +311,8 @@ void trace_pair(const PackedBvh2& tree, const Ray& ray_a, const Ray& ray_b, AnyH
 }  // namespace detail
 
 /// A packet kernel of bvh2_packed (pair_packets.inl): the rays of `mask` among rays [0, n) (n at most 8 or
-/// 16) as one packet, rays of one octant by detail::pair_octant, over a tree whose root is an inner node;
+/// 16) as one packet (rays detail::pair_packable takes, of any direction octants), over a tree whose root
+/// is an inner node;
 /// their closest hits (packed triangle indices, PackedBvh2::ids maps them to the scene's) into `hits` or
 /// occlusion into `occluded`. Any hit visits children in `order`.
 using PairPacketKernel = void (*)(const PackedBvh2& tree, const Ray* rays, uint32_t n, uint32_t mask,

@@ -8,14 +8,17 @@
 // (wide_kernels_avx2.cpp, wide_kernels_avx512.cpp include it after wide_packets.inl, whose lanes, packet
 // rays and box test it uses).
 //
-// Packets are the batch's rays K at a time, in the ray set's own order, as for the wide packet kernels. A
-// packet goes down the tree together only when its rays agree on the sign of each direction component
-// (one near and one far plane per axis serve all K) and (box=fma) every ray is in that test's domain;
-// otherwise its rays are traced two at a time by the single-ray kernel (packed_bvh2.cpp). Each lane
-// computes the single-ray kernel's slab test (PairSlabs: the same products, the far distances scaled the
-// same way, the same NaN rule) and every leaf's triangles are tested ray by ray with the layout's
-// triangle test, so every ray gets the hit it gets alone, up to a tie within a rounding that the other
-// order of the visits breaks the other way.
+// Packets are the batch's rays K at a time, in the ray set's own order, as for the wide packet kernels.
+// A packet's rays go down the tree together whatever their directions (box=fma: those in that test's
+// domain; the others are traced two at a time by the single-ray kernel). Where they agree on the sign of
+// each direction component, one near and one far plane per axis serve all K; where they do not (shadow
+// rays to several lights, diffuse and AO rays), each lane picks its planes by its own signs, a blend
+// before the same arithmetic (Embree's packet node test takes the min and max of both planes' distances
+// per lane, to the same end), rather than the packet being split by octant into fragments of two or
+// three rays. Each lane computes the single-ray kernel's slab
+// test (PairSlabs: the same products, the far distances scaled the same way, the same NaN rule) and every
+// leaf's triangles are tested ray by ray with the layout's triangle test, so every ray gets the hit it
+// gets alone, up to a tie within a rounding that the other order of the visits breaks the other way.
 
 // The BoxTestKind of a box test class of ray_box.h.
 template <class Box>
@@ -75,12 +78,14 @@ struct CommonPairTree {
 };
 
 // The packet's slab constants from each ray's SlabSetup, as the single-ray box tests take them, and the
-// near and far planes of `Tree`'s numbering for the octant of ray `lead`.
-template <class P, class Tree>
+// near and far planes of `Tree`'s numbering: those of the octant of ray `lead`, or (kPerLane) the min
+// and max planes, with the lanes of a negative direction on each axis.
+template <class P, class Tree, bool kPerLane>
 SAHBENCH_KERNEL_INLINE PacketRays<P> make_pair_packet(const Ray* rays, uint32_t n, uint32_t lead) {
   alignas(64) float lanes[13][P::kWidth];
   PacketRays<P> p;
   p.mtn_in_double = 0;
+  p.negative[0] = p.negative[1] = p.negative[2] = 0;
   for (uint32_t j = 0; j < P::kWidth; ++j) {
     const Ray& r = rays[j < n ? j : 0];  // unused lanes copy ray 0 and are never active
     const detail::SlabSetup setup(r);
@@ -90,6 +95,7 @@ SAHBENCH_KERNEL_INLINE PacketRays<P> make_pair_packet(const Ray* rays, uint32_t 
       lanes[3 + axis][j] = dir[axis];
       lanes[6 + axis][j] = setup.inv_dir[axis];
       lanes[9 + axis][j] = setup.org[axis] * setup.inv_dir[axis];
+      p.negative[axis] |= uint32_t{setup.negative[axis]} << j;
     }
     lanes[12][j] = r.tmin;
   }
@@ -99,27 +105,29 @@ SAHBENCH_KERNEL_INLINE PacketRays<P> make_pair_packet(const Ray* rays, uint32_t 
     p.dir[axis] = P::load(lanes[3 + axis]);
     p.inv[axis] = P::load(lanes[6 + axis]);
     p.org_inv[axis] = P::load(lanes[9 + axis]);
-    p.near_plane[axis] = Tree::plane(axis, first.negative[axis]);
-    p.far_plane[axis] = Tree::plane(axis, !first.negative[axis]);
+    const bool negative = !kPerLane && first.negative[axis];
+    p.near_plane[axis] = Tree::plane(axis, negative);
+    p.far_plane[axis] = Tree::plane(axis, !negative);
   }
   p.tmin = P::load(lanes[12]);
   return p;
 }
 
-// The rays of `mask` among rays [0, n) as one packet (of one direction octant, detail::pair_octant),
+// The rays of `mask` among rays [0, n) as one packet (kPerLane: of more than one direction octant),
 // closest hits (the indices Tree::prim reports) into hits[j] or occlusion into occluded[j] for each j of
 // `mask`. The tree's root is an inner node. Flattened: the single-ray code it calls (the triangle tests, the
 // ray set-up) is inlined here, compiled for this instruction set, and leaves no out-of-line copy that the
 // linker could pick for the baseline callers. Closest hit goes first to the child whose nearest ray enters it
 // nearer and skips, per lane, entries beyond that ray's closest hit so far; any hit takes `order` as the
 // single-ray walk does, by the packet's nearest entries, and drops each ray at its first hit.
-template <class P, class Tri, class Box, bool kAnyHit, class Tree>
+template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree>
 [[gnu::flatten]] void trace_pair_packet(const Tree& tree, const Ray* rays, uint32_t n, uint32_t mask,
                                         AnyHitOrder order, Hit* hits, uint8_t* occluded) {
   using V = typename P::V;
   constexpr uint32_t K = P::kWidth;
   constexpr BoxTestKind kBox = kBoxKindOf<Box>;
-  const PacketRays<P> p = make_pair_packet<P, Tree>(rays, n, static_cast<uint32_t>(__builtin_ctz(mask)));
+  const PacketRays<P> p =
+      make_pair_packet<P, Tree, kPerLane>(rays, n, static_cast<uint32_t>(__builtin_ctz(mask)));
   const V nan = P::set1(__builtin_nanf(""));
   alignas(64) float best_t[K];
   float tmin[K];
@@ -142,7 +150,7 @@ template <class P, class Tri, class Box, bool kAnyHit, class Tree>
     root_planes[Tree::plane(axis, true)] = tree.root_box().max[axis];
   }
   uint32_t root_mask;
-  const V t_root = packet_enter<P, kBox>(root_planes, 1, p, P::load(best_t), root_mask);
+  const V t_root = packet_enter<P, kBox, kPerLane>(root_planes, 1, p, P::load(best_t), root_mask);
   const bool nearest_first =
       !kAnyHit || order == AnyHitOrder::kNearest || order == AnyHitOrder::kNearestStored;
   const bool farthest_first = kAnyHit && order == AnyHitOrder::kFarthestStored;
@@ -184,10 +192,10 @@ template <class P, class Tri, class Box, bool kAnyHit, class Tree>
       } else {
         const V active_tmax = P::select(lanes, tmax, nan);
         uint32_t enters[2], index[2], count[2];
-        const V t0 = packet_enter<P, kBox>(tree.child_planes(entry.child, 0), Tree::kStride, p, active_tmax,
-                                           enters[0]);
-        const V t1 = packet_enter<P, kBox>(tree.child_planes(entry.child, 1), Tree::kStride, p, active_tmax,
-                                           enters[1]);
+        const V t0 = packet_enter<P, kBox, kPerLane>(tree.child_planes(entry.child, 0), Tree::kStride, p,
+                                                     active_tmax, enters[0]);
+        const V t1 = packet_enter<P, kBox, kPerLane>(tree.child_planes(entry.child, 1), Tree::kStride, p,
+                                                     active_tmax, enters[1]);
         tree.child(entry.child, 0, index[0], count[0]);
         tree.child(entry.child, 1, index[1], count[1]);
         const PacketEntry<P> child[2] = {{P::select(enters[0], t0, nan), index[0], count[0]},
@@ -225,18 +233,34 @@ template <class P, class Tri, class Box, bool kAnyHit, class Tree>
 }
 
 // The entry points of the two trees (PairPacketKernel, BinaryPacketKernel), flattened as the loop is.
+// Whether the rays of `mask` differ in the sign of a direction component.
+SAHBENCH_KERNEL_INLINE bool mixed_octants(const Ray* rays, uint32_t mask) {
+  const uint32_t lead = static_cast<uint32_t>(__builtin_ctz(mask));
+  const uint32_t octant = detail::direction_octant(rays[lead]);
+  for (uint32_t m = mask & (mask - 1); m; m &= m - 1)
+    if (detail::direction_octant(rays[__builtin_ctz(m)]) != octant) return true;
+  return false;
+}
 template <class P, class Tri, class Box, bool kAnyHit>
 [[gnu::flatten]] void trace_packed_pair_packet(const PackedBvh2& tree, const Ray* rays, uint32_t n,
                                                uint32_t mask, AnyHitOrder order, Hit* hits,
                                                uint8_t* occluded) {
-  trace_pair_packet<P, Tri, Box, kAnyHit>(PackedPairTree{tree}, rays, n, mask, order, hits, occluded);
+  if (mixed_octants(rays, mask))
+    trace_pair_packet<P, Tri, Box, kAnyHit, true>(PackedPairTree{tree}, rays, n, mask, order, hits, occluded);
+  else
+    trace_pair_packet<P, Tri, Box, kAnyHit, false>(PackedPairTree{tree}, rays, n, mask, order, hits,
+                                                   occluded);
 }
 template <class P, class Tri, class Box, bool kAnyHit>
 [[gnu::flatten]] void trace_binary_packet(const Bvh& bvh, const Triangle* triangles, const Ray* rays,
                                           uint32_t n, uint32_t mask, AnyHitOrder order, Hit* hits,
                                           uint8_t* occluded) {
-  trace_pair_packet<P, Tri, Box, kAnyHit>(CommonPairTree{bvh, triangles}, rays, n, mask, order, hits,
-                                          occluded);
+  if (mixed_octants(rays, mask))
+    trace_pair_packet<P, Tri, Box, kAnyHit, true>(CommonPairTree{bvh, triangles}, rays, n, mask, order, hits,
+                                                  occluded);
+  else
+    trace_pair_packet<P, Tri, Box, kAnyHit, false>(CommonPairTree{bvh, triangles}, rays, n, mask, order, hits,
+                                                   occluded);
 }
 
 // The bvh2_packed packet kernel of this instruction set for `variant` and packets of `packet` rays: 8,

@@ -139,6 +139,10 @@ struct PacketRays {
   uint32_t near_plane[3];
   uint32_t far_plane[3];
   uint32_t mtn_in_double;  // tri=mtn: the lanes whose ray the float test cannot take (WideRay::mtn_in_double)
+  // Per-lane planes (packet_enter's kPerLane, the binary layouts' packets): near_plane and far_plane are
+  // then the min and max planes, and these the lanes whose direction is negative on each axis, which take
+  // them the other way round.
+  uint32_t negative[3];
 };
 
 // A child slot entered by some of the packet's rays: their entry distances, NaN in the other lanes (a
@@ -168,6 +172,7 @@ SAHBENCH_KERNEL_INLINE PacketRays<P> make_packet(const WideRay* rays, uint32_t n
   alignas(64) float lanes[13][P::kWidth];
   PacketRays<P> p;
   p.mtn_in_double = 0;
+  p.negative[0] = p.negative[1] = p.negative[2] = 0;
   for (uint32_t j = 0; j < P::kWidth; ++j) {
     const WideRay& r = rays[j < n ? j : 0];  // unused lanes copy ray 0 and are never active
     for (uint32_t axis = 0; axis < 3; ++axis) {
@@ -193,16 +198,23 @@ SAHBENCH_KERNEL_INLINE PacketRays<P> make_packet(const WideRay* rays, uint32_t n
 
 // One box, given as six planes `stride` floats apart (min x, max x, min y, ...), against the packet's
 // rays within [tmin, tmax] per lane: the entry distances, and in `mask` the lanes that enter it. A lane
-// whose tmax is NaN enters nothing.
-template <class P, BoxTestKind kBox>
+// whose tmax is NaN enters nothing. With kPerLane each lane picks its near and far plane by the sign of
+// its own direction (PacketRays::negative), a blend before the same arithmetic, so that rays of every
+// octant can share a packet.
+template <class P, BoxTestKind kBox, bool kPerLane = false>
 SAHBENCH_KERNEL_INLINE typename P::V packet_enter(const float* planes, uint32_t stride,
                                                   const PacketRays<P>& p, typename P::V tmax,
                                                   uint32_t& mask) {
   using V = typename P::V;
   V t_near = p.tmin, t_far = tmax;
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    const V near = P::broadcast(planes + p.near_plane[axis] * stride);
-    const V far = P::broadcast(planes + p.far_plane[axis] * stride);
+    V near = P::broadcast(planes + p.near_plane[axis] * stride);
+    V far = P::broadcast(planes + p.far_plane[axis] * stride);
+    if constexpr (kPerLane) {
+      const V lo = near;
+      near = P::select(p.negative[axis], far, lo);
+      far = P::select(p.negative[axis], lo, far);
+    }
     V t0, t1;
     if constexpr (kBox == BoxTestKind::kFma) {
       t0 = P::fmsub(near, p.inv[axis], p.org_inv[axis]);
@@ -421,8 +433,9 @@ void trace_alone(const WideBatch& batch, std::size_t begin, std::size_t end) {
 
 // A batch in packets of P::kWidth rays, in the batch's order; the rays of packets that are not coherent
 // (packet_coherent) go one at a time (trace_alone), each run of such packets in one call. Splitting such
-// a packet by octant into smaller packets, as Embree's hybrid kernels do, was slower than tracing its
-// rays alone on most shadow and diffuse cells of configs/tune.toml (README, "Packets").
+// a packet by octant into smaller packets, as Embree's hybrid kernels do, or keeping it whole with
+// per-lane planes (packet_enter's kPerLane, which the binary layouts' packets gain by), was slower than
+// tracing its rays alone on most shadow and diffuse cells of configs/tune.toml (README, "Packets").
 template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>
 void trace_packet_batch(const WideBatch& batch) {
   constexpr uint32_t K = P::kWidth;

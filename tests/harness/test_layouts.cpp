@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -685,6 +686,77 @@ TEST(Layouts, UnavailableLayoutsSayWhy) {
         info.build(BuildInput::from_triangles(tris), resolve_params(info.name, info.params, {}));
     EXPECT_THROW(compile_layout("bvh8:packet=16", wide8, tris), Error);
   }
+}
+
+// Rays no kernel can trace (a NaN or infinite origin or direction, a NaN tmin or tmax) and degenerate
+// ones (a zero direction, an empty or reversed interval, -0 components), scattered among good rays of
+// every octant in each packet: every layout, one ray at a time and in packets of both widths and ISAs,
+// answers each ray as brute force does, so a packet neither takes up a ray it cannot trace nor loses the
+// others because of it. The fast variant, whose box test leaves some rays to the single-ray kernel,
+// answers as its own single-ray layout.
+TEST(Layouts, PacketsWithUntraceableRaysAnswerEachRayAsAlone) {
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const auto tris = test::random_triangles(600, 31);
+  std::vector<Ray> rays = test::random_rays(tris, 20 * kMaxWidePacket, 32);
+  const std::vector<Ray> odd{Ray{{nan, 0, 0}, 0.0f, {1, 0, 0}},       Ray{{0, 0, 0}, 0.0f, {nan, 1, 0}},
+                             Ray{{0, inf, 0}, 0.0f, {0, 0, 1}},       Ray{{0, 0, 0}, 0.0f, {-inf, 1, 1}},
+                             Ray{{0, 0, 0}, nan, {1, 1, 1}},          Ray{{0, 0, 0}, 0.0f, {1, -1, 1}, nan},
+                             Ray{{0, 0, 0}, 0.0f, {0, 0, 0}},         Ray{{0, 0, 0}, 5.0f, {1, 1, -1}, 1.0f},
+                             Ray{{0, 0, 0}, 0.0f, {-0.0f, 1, -0.0f}}, Ray{{0, 0, 0}, 2.0f, {1, 0, 0}, 2.0f}};
+  // One odd ray in each packet of eight, at a lane that moves from packet to packet, the rest good.
+  for (std::size_t p = 0; p < rays.size() / 8; ++p) {
+    const Ray& o = odd[p % odd.size()];
+    Ray& r = rays[p * 8 + (p * 3) % 8];
+    r = Ray{std::isfinite(o.org.x) && std::isfinite(o.org.y) && std::isfinite(o.org.z) ? r.org : o.org,
+            o.tmin, o.dir, o.tmax};
+  }
+  const Bvh binary = find_builder("binned_sah")
+                         .build(BuildInput::from_triangles(tris),
+                                resolve_params("binned_sah", find_builder("binned_sah").params, {}));
+  test::Skips skips;
+  for (const LayoutInfo& layout : layouts()) {
+    const Bvh bvh = layout.arity == 2
+                        ? binary
+                        : find_builder("wide_collapse")
+                              .build(BuildInput::from_triangles(tris),
+                                     resolve_params("wide_collapse", find_builder("wide_collapse").params,
+                                                    {{"arity", std::to_string(layout.arity)}}));
+    std::vector<std::string> packets;
+    if (layout.has_packet && skips.have_isa(KernelIsa::kAvx2)) packets.push_back(",packet=8,isa=avx2");
+    if (layout.has_packet && skips.have_isa(KernelIsa::kAvx512))
+      packets.insert(packets.end(), {",packet=8,isa=avx512", ",packet=16"});
+    for (const std::string variant : {"tri=watertight", "tri=mtn,box=fma"}) {
+      const std::string alone = layout.name + ":" + variant;
+      std::vector<Hit> expected(rays.size());
+      std::vector<uint8_t> expected_any(rays.size());
+      if (variant == "tri=watertight") {
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          expected[i] = brute_force_closest(tris, rays[i]);
+          expected_any[i] = brute_force_any(tris, rays[i]);
+        }
+      } else {
+        const auto single = compile_layout(alone, bvh, tris);
+        single->trace_closest(rays, expected);
+        single->trace_any(rays, expected_any);
+      }
+      std::vector<std::string> specs{alone};
+      for (const std::string& packet : packets) specs.push_back(alone + packet);
+      for (const std::string& spec : specs) {
+        SCOPED_TRACE(spec);
+        const auto compiled = compile_layout(spec, bvh, tris);
+        std::vector<Hit> hits(rays.size());
+        std::vector<uint8_t> occluded(rays.size());
+        compiled->trace_closest(rays, hits);
+        compiled->trace_any(rays, occluded);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          ASSERT_EQ(occluded[i], expected_any[i]) << "ray " << i;
+          ASSERT_EQ(hits[i].prim, expected[i].prim) << "ray " << i;
+          if (expected[i].found()) ASSERT_EQ(hits[i].t, expected[i].t) << "ray " << i;
+        }
+      }
+    }
+  }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 // The CSV's isa column: the binary layouts' single-ray kernels are scalar code, their packet kernels run

@@ -117,9 +117,9 @@ SAHBENCH_KERNEL_INLINE PacketRays<P> make_pair_packet(const Ray* rays, uint32_t 
 // closest hits (the indices Tree::prim reports) into hits[j] or occlusion into occluded[j] for each j of
 // `mask`. The tree's root is an inner node. Flattened: the single-ray code it calls (the triangle tests, the
 // ray set-up) is inlined here, compiled for this instruction set, and leaves no out-of-line copy that the
-// linker could pick for the baseline callers. Closest hit goes first to the child whose nearest ray enters it
-// nearer and skips, per lane, entries beyond that ray's closest hit so far; any hit takes `order` as the
-// single-ray walk does, by the packet's nearest entries, and drops each ray at its first hit.
+// linker could pick for the baseline callers. Closest hit goes first to the child that more of the rays
+// entering both enter nearer, and skips, per lane, entries beyond that ray's closest hit so far; any hit
+// takes `order` as the single-ray walk does, nearer by the same vote, and drops each ray at its first hit.
 template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree>
 [[gnu::flatten]] void trace_pair_packet(const Tree& tree, const Ray* rays, uint32_t n, uint32_t mask,
                                         AnyHitOrder order, Hit* hits, uint8_t* occluded) {
@@ -203,10 +203,13 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
         if (enters[0] != 0 && enters[1] != 0) {
           int first = 0;
           if (nearest_first || farthest_first) {
-            const V inf = P::set1(__builtin_inff());
-            const float near0 = P::min_lane(P::select(enters[0], t0, inf));
-            const float near1 = P::min_lane(P::select(enters[1], t1, inf));
-            first = (farthest_first ? near1 > near0 : near1 < near0) ? 1 : 0;
+            // The child nearer for more of the rays that enter both goes first (the left one on a tie):
+            // a vote of two compares, where the nearest ray's entry into each takes two reductions
+            // across the lanes on the way to the next node. The entries of those lanes are not NaN.
+            const uint32_t both = enters[0] & enters[1];
+            const int votes1 = std::popcount(both & ~P::le(t0, t1));
+            const int votes0 = std::popcount(both & ~P::le(t1, t0));
+            first = (farthest_first ? votes0 > votes1 : votes1 > votes0) ? 1 : 0;
           }
           if (size == detail::kStackCapacity) [[unlikely]]
             detail::throw_stack_overflow(entry.child, 2);

@@ -54,8 +54,9 @@ class CompiledLayout {
 ///   tri = watertight | mt | mt0 | mtn   (triangle test; mt0 is Möller–Trumbore with epsilon 0, mtn
 ///                                        Möller–Trumbore with a stored normal, as Embree's Triangle4)
 ///   box = robust | fast | fma           (ray/box test)
-///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts only; auto: kernel_variant.h's
-///                                                preferred_kernel_isa: the widest available)
+///   isa = auto | scalar | sse | avx2 | avx512   (SIMD layouts, and the binary layouts' packets only;
+///                                                auto: kernel_variant.h's preferred_kernel_isa: the
+///                                                widest available)
 ///   packet = 1 | 8 | 16                 (rays traced one at a time, or 8 or 16 at a time by the packet
 ///                                        kernels of wide_packets.inl and, for the binary layouts,
 ///                                        pair_packets.inl: 8 with avx2 and avx512, 16 with avx512)

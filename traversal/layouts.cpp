@@ -121,7 +121,7 @@ class Bvh2Layout final : public CompiledLayout {
       put(i, detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, rays[i], nullptr, order_));
   }
 
-  // Rays [begin, end) in packets of packet_ rays, each split by octant (detail::trace_in_packets).
+  // Rays [begin, end) in packets of packet_ rays (detail::trace_in_packets).
   template <bool kAnyHit>
   void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,
                         uint8_t* occluded) const {

@@ -171,7 +171,7 @@ class PackedBvh2Layout final : public CompiledLayout {
     if (i < end) put(i, detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, rays[i], nullptr, order_));
   }
 
-  // Rays [begin, end) in packets of packet_ rays, each split by octant (detail::trace_in_packets). A chunk
+  // Rays [begin, end) in packets of packet_ rays (detail::trace_in_packets). A chunk
   // starts at a multiple of kRayChunk, so packets are cut at the same rays whatever the thread count.
   template <bool kAnyHit>
   void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,

@@ -235,7 +235,6 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
   }
 }
 
-// The entry points of the two trees (PairPacketKernel, BinaryPacketKernel), flattened as the loop is.
 // Whether the rays of `mask` differ in the sign of a direction component.
 SAHBENCH_KERNEL_INLINE bool mixed_octants(const Ray* rays, uint32_t mask) {
   const uint32_t lead = static_cast<uint32_t>(__builtin_ctz(mask));
@@ -244,6 +243,8 @@ SAHBENCH_KERNEL_INLINE bool mixed_octants(const Ray* rays, uint32_t mask) {
     if (detail::direction_octant(rays[__builtin_ctz(m)]) != octant) return true;
   return false;
 }
+// The entry points of the two trees (PairPacketKernel, BinaryPacketKernel), flattened as the loop is;
+// per-lane planes only for a packet whose rays differ in a sign.
 template <class P, class Tri, class Box, bool kAnyHit>
 [[gnu::flatten]] void trace_packed_pair_packet(const PackedBvh2& tree, const Ray* rays, uint32_t n,
                                                uint32_t mask, AnyHitOrder order, Hit* hits,

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -169,6 +170,29 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
       for (const auto& [builder, overrides] : builders_for(layout.arity)) {
         const BuilderInfo& info = find_builder(builder);
         const Bvh bvh = info.build(input, resolve_params(builder, info.params, overrides));
+        // The scalar kernel's answers and counts on this tree, once per variant: the specs of other
+        // instruction sets and packet widths with the same variant compare against the same answers.
+        struct ScalarAnswers {
+          KernelVariant variant;
+          std::vector<Hit> closest;
+          std::vector<uint8_t> any;
+          TraversalCounters closest_counts, any_counts;
+        };
+        std::deque<ScalarAnswers> scalar_answers;  // references stay valid as it grows
+        auto scalar_for = [&](const KernelVariant& variant) -> const ScalarAnswers& {
+          for (const ScalarAnswers& a : scalar_answers)
+            if (a.variant == variant) return a;
+          ScalarAnswers a{variant, std::vector<Hit>(rays.size()), std::vector<uint8_t>(rays.size()), {}, {}};
+          with_test_types(variant, [&]<class Tri, class Box>() {
+            for (std::size_t i = 0; i < rays.size(); ++i) {
+              a.any[i] =
+                  any_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], a.any_counts, variant.any_hit);
+              a.closest[i] = closest_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], a.closest_counts);
+            }
+          });
+          scalar_answers.push_back(std::move(a));
+          return scalar_answers.back();
+        };
         for (const std::string& text : specs_for(layout, skips)) {
           SCOPED_TRACE(builder + " " + text);
           const LayoutSpec spec = parse_layout_spec(text);
@@ -181,15 +205,14 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
           const TraceCounts any_counts = compiled->count_any(rays);
 
           // The scalar kernel with the same tests, on the same tree, ray by ray.
-          TraversalCounters scalar_closest, scalar_any;
+          const ScalarAnswers& scalar = scalar_for(spec.variant);
+          const TraversalCounters& scalar_closest = scalar.closest_counts;
+          const TraversalCounters& scalar_any = scalar.any_counts;
           bool tie_broken_differently = false;
           with_test_types(spec.variant, [&]<class Tri, class Box>() {
             for (std::size_t i = 0; i < rays.size(); ++i) {
-              const bool expected_any =
-                  any_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_any, spec.variant.any_hit);
-              ASSERT_EQ(occluded[i] != 0, expected_any) << "ray " << i;
-              const Hit expected =
-                  closest_hit_counted<Tri, Box>(bvh, scene.triangles, rays[i], scalar_closest);
+              ASSERT_EQ(occluded[i] != 0, scalar.any[i] != 0) << "ray " << i;
+              const Hit& expected = scalar.closest[i];
               if ((layout.arity > 2 || spec.packet > 1) && hits[i].prim != expected.prim && hits[i].found() &&
                   expected.found() && hits[i].t == expected.t) {
                 // An exact tie, broken differently: a SIMD block tests its four triangles against the

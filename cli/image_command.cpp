@@ -173,6 +173,7 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   layout->count_closest_per_ray(rays, counts);
 
   const uint32_t w = options.width, h = options.height;
+  const std::vector<uint32_t> pixel = primary_pixel_order(w, h);  // ray i's pixel
   FloatImage nodes{w, h, {"Y"}, std::vector<float>(rays.size())};
   FloatImage prims{w, h, {"Y"}, std::vector<float>(rays.size())};
   FloatImage depth{w, h, {"Z"}, std::vector<float>(rays.size())};
@@ -180,27 +181,28 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   Range node_range, prim_range, depth_range;  // [min, max] of each map
   std::size_t hit_count = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
-    nodes.pixels[i] = static_cast<float>(counts[i].nodes_visited);
-    prims.pixels[i] = static_cast<float>(counts[i].prims_tested);
-    node_range.add(nodes.pixels[i]);
-    prim_range.add(prims.pixels[i]);
-    depth.pixels[i] = hits[i].found() ? hits[i].t : std::numeric_limits<float>::infinity();
+    const std::size_t p = pixel[i];
+    nodes.pixels[p] = static_cast<float>(counts[i].nodes_visited);
+    prims.pixels[p] = static_cast<float>(counts[i].prims_tested);
+    node_range.add(nodes.pixels[p]);
+    prim_range.add(prims.pixels[p]);
+    depth.pixels[p] = hits[i].found() ? hits[i].t : std::numeric_limits<float>::infinity();
     if (!hits[i].found()) continue;
     ++hit_count;
     depth_range.add(hits[i].t);
     const Vec3 n = normalize(scene.triangles[hits[i].prim].normal());
-    for (int c = 0; c < 3; ++c) normal.pixels[3 * i + c] = n[c];
+    for (int c = 0; c < 3; ++c) normal.pixels[3 * p + c] = n[c];
   }
 
   RgbImage depth_png{w, h, std::vector<uint8_t>(3 * rays.size(), 0)};
   RgbImage normal_png{w, h, std::vector<uint8_t>(3 * rays.size(), 0)};
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    if (!hits[i].found()) continue;
+  for (std::size_t p = 0; p < rays.size(); ++p) {
+    if (!std::isfinite(depth.pixels[p])) continue;
     // Near bright, far dark; a flat range (one hit distance) is drawn bright.
-    const uint8_t grey = to_byte(1.0f - 0.9f * depth_range.normalise(hits[i].t));
-    std::fill_n(depth_png.pixels.begin() + static_cast<std::ptrdiff_t>(3 * i), 3, grey);
+    const uint8_t grey = to_byte(1.0f - 0.9f * depth_range.normalise(depth.pixels[p]));
+    std::fill_n(depth_png.pixels.begin() + static_cast<std::ptrdiff_t>(3 * p), 3, grey);
     for (int c = 0; c < 3; ++c)
-      normal_png.pixels[3 * i + c] = to_byte(0.5f * (normal.pixels[3 * i + c] + 1.0f));
+      normal_png.pixels[3 * p + c] = to_byte(0.5f * (normal.pixels[3 * p + c] + 1.0f));
   }
 
   const Range node_scale{node_range.lo, std::max(node_range.lo, scale_top(nodes.pixels))};

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <numbers>
@@ -104,17 +105,14 @@ std::vector<Ray> primary_rays(const Scene& scene, const RaySetConfig& cfg, const
   const Vec3 true_up = cross(right, forward);
   const float aspect = static_cast<float>(cfg.width) / static_cast<float>(cfg.height);
   const float half_h = std::tan(0.5f * fov_y), half_w = half_h * aspect;
-  std::vector<Ray> rays(std::size_t{cfg.width} * cfg.height);
-  tbb::parallel_for(uint32_t{0}, cfg.height, [&](uint32_t y) {
-    for (uint32_t x = 0; x < cfg.width; ++x) {
-      const float sx =
-          (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(cfg.width) - 1.0f) * half_w;
-      const float sy =
-          (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(cfg.height)) * half_h;
-      Ray& r = rays[std::size_t{y} * cfg.width + x];
-      r.org = eye;
-      r.dir = normalize(forward + right * sx + true_up * sy);
-    }
+  const std::vector<uint32_t> pixels = primary_pixel_order(cfg.width, cfg.height);
+  std::vector<Ray> rays(pixels.size());
+  tbb::parallel_for(std::size_t{0}, pixels.size(), [&](std::size_t i) {
+    const uint32_t x = pixels[i] % cfg.width, y = pixels[i] / cfg.width;
+    const float sx = (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(cfg.width) - 1.0f) * half_w;
+    const float sy = (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(cfg.height)) * half_h;
+    rays[i].org = eye;
+    rays[i].dir = normalize(forward + right * sx + true_up * sy);
   });
   return rays;
 }
@@ -138,6 +136,17 @@ std::vector<Hitpoint> primary_hits(const Scene& scene, std::span<const Ray> rays
 }
 
 }  // namespace
+
+std::vector<uint32_t> primary_pixel_order(uint32_t width, uint32_t height) {
+  constexpr uint32_t kTile = 4;
+  std::vector<uint32_t> pixels;
+  pixels.reserve(std::size_t{width} * height);
+  for (uint32_t ty = 0; ty < height; ty += kTile)
+    for (uint32_t tx = 0; tx < width; tx += kTile)
+      for (uint32_t y = ty; y < std::min(ty + kTile, height); ++y)
+        for (uint32_t x = tx; x < std::min(tx + kTile, width); ++x) pixels.push_back(y * width + x);
+  return pixels;
+}
 
 std::vector<Vec3> automatic_lights(const Scene& scene, uint32_t count, uint64_t seed) {
   const Aabb box = scene_bounds(scene);

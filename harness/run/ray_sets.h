@@ -3,13 +3,13 @@
 // Embree (DESIGN.md). Each ray is a pure function of (seed, set, index), so generation runs in parallel
 // and gives the same rays for any thread count.
 //
-// Primary rays come from the scene's camera (glTF) when it has one, else from the automatic framing:
-// a pinhole camera with a 45-degree vertical field of view, looking at the centre of the scene's box
-// from the direction (1, 0.6, 1.4) (above and to the side, y up), at the distance where the box's
-// bounding sphere fills the view. Secondary rays (shadow, diffuse, ambient occlusion) start at the
-// primary hits, found by a reference tree (binned SAH, watertight test), and are offset from the
-// surface as in Waechter and Binder 2019, "A Fast and Robust Method for Avoiding Self-Intersection"
-// (Ray Tracing Gems, chapter 6).
+// Primary rays come in tiles of 4 x 4 pixels (primary_pixel_order) from the scene's camera (glTF) when it has
+// one, else from the automatic framing: a pinhole camera with a 45-degree vertical field of view, looking at
+// the centre of the scene's box from the direction (1, 0.6, 1.4) (above and to the side, y up), at the
+// distance where the box's bounding sphere fills the view. Secondary rays (shadow, diffuse, ambient
+// occlusion) start at the primary hits, found by a reference tree (binned SAH, watertight test), and are
+// offset from the surface as in Waechter and Binder 2019, "A Fast and Robust Method for Avoiding
+// Self-Intersection" (Ray Tracing Gems, chapter 6).
 
 #include <span>
 #include <string>
@@ -39,6 +39,13 @@ struct GeneratedRaySets {
 /// scene's own lights when it has none; secondary rays when no primary ray hits) is skipped with a
 /// reason rather than generated empty.
 GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetConfig> configs, uint64_t seed);
+
+/// The pixel (y * width + x) of each primary ray, in the order the rays are made: tiles of 4 x 4 pixels,
+/// tile rows top to bottom and tiles left to right along a row, each tile's pixels row by row (the part
+/// of a tile that the image has, at its right and bottom edges). So the rays of a 16-ray packet are one
+/// tile and those of an 8-ray packet half of one (4 x 2), as renderers feed Embree's rtcIntersect8/16
+/// (its tutorials trace 4 x 4 and 4 x 2 blocks of a tile); the secondary sets follow, ray by ray.
+std::vector<uint32_t> primary_pixel_order(uint32_t width, uint32_t height);
 
 /// The automatic point lights: `count` points in the top tenth of the scene box, spread over its middle
 /// 80% horizontally (y up), deterministic from the seed.

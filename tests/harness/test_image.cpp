@@ -74,10 +74,14 @@ TEST(HarnessImage, MapsHaveTheImageSizeAndMatchBruteForce) {
 
   const Scene scene = load_scene(kScene);
   const auto rays = primary_rays(scene, kWidth, kHeight);
+  std::vector<std::size_t> ray_of_pixel(rays.size());
+  const std::vector<uint32_t> order = primary_pixel_order(kWidth, kHeight);
+  for (std::size_t i = 0; i < order.size(); ++i) ray_of_pixel[order[i]] = i;
   int hits = 0, misses = 0;
   for (uint32_t y = 0; y < kHeight; ++y)
     for (uint32_t x = 0; x < kWidth; ++x) {
-      const Hit ref = brute_force_closest(scene.triangles, rays[std::size_t{y} * kWidth + x]);
+      const Ray& ray = rays[ray_of_pixel[std::size_t{y} * kWidth + x]];
+      const Hit ref = brute_force_closest(scene.triangles, ray);
       if (!ref.found()) {
         ++misses;
         EXPECT_TRUE(std::isinf(depth.at(x, y))) << x << "," << y;
@@ -88,7 +92,6 @@ TEST(HarnessImage, MapsHaveTheImageSizeAndMatchBruteForce) {
       EXPECT_NEAR(depth.at(x, y), ref.t, 1e-5f * ref.t) << x << "," << y;
       EXPECT_GT(nodes.at(x, y), 0.0f) << x << "," << y;
       EXPECT_GT(prims.at(x, y), 0.0f) << x << "," << y;
-      const Ray& ray = rays[std::size_t{y} * kWidth + x];
       const Vec3 got{normal.at(x, y, 0), normal.at(x, y, 1), normal.at(x, y, 2)};
       // Another triangle hit at the same distance (a shared edge) is a tie: its normal is as right.
       auto normal_of_a_hit_at_t = [&] {

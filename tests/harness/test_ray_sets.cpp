@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -31,6 +32,13 @@ bool same_rays(const std::vector<Ray>& a, const std::vector<Ray>& b) {
     if (!(a[i].org == b[i].org && a[i].dir == b[i].dir && a[i].tmin == b[i].tmin && a[i].tmax == b[i].tmax))
       return false;
   return true;
+}
+
+// The primary ray of pixel (x, y) of a width-wide image.
+const Ray& ray_at(const std::vector<Ray>& rays, uint32_t width, uint32_t height, uint32_t x, uint32_t y) {
+  const std::vector<uint32_t> order = primary_pixel_order(width, height);
+  const auto i = std::find(order.begin(), order.end(), y * width + x) - order.begin();
+  return rays.at(static_cast<std::size_t>(i));
 }
 
 TEST(HarnessRaySets, SameSeedSameRaysForAnyThreadCount) {
@@ -97,6 +105,47 @@ TEST(HarnessRaySets, SceneLightsMissingSkipsTheSetWithAReason) {
   EXPECT_NE(out.skipped[0].second.find("no lights"), std::string::npos);
 }
 
+TEST(HarnessRaySets, PrimaryRaysComeInTilesOfFourByFour) {
+  // 10 x 7: partial tiles at the right and bottom edges.
+  constexpr uint32_t kW = 10, kH = 7;
+  const std::vector<uint32_t> order = primary_pixel_order(kW, kH);
+  ASSERT_EQ(order.size(), std::size_t{kW} * kH);
+  std::vector<int> seen(order.size(), 0);
+  for (uint32_t p : order) ++seen.at(p);
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<std::ptrdiff_t>(order.size()));
+  // The first tile row by row, then the next tile to the right, then the part of a tile at the edge.
+  const std::vector<uint32_t> first(order.begin(), order.begin() + 24);
+  EXPECT_EQ(first, (std::vector<uint32_t>{0,  1,  2,  3,  10, 11, 12, 13, 20, 21, 22, 23,
+                                          30, 31, 32, 33, 4,  5,  6,  7,  14, 15, 16, 17}));
+  EXPECT_EQ(order[32], 8u);
+  EXPECT_EQ(order[33], 9u);
+  EXPECT_EQ(order[34], 18u);
+  EXPECT_EQ(order[40], 40u);  // the second row of tiles starts at row 4
+  EXPECT_EQ(order.back(), 69u);
+
+  // Each ray is its pixel's: the look-at camera's directions recomputed here for (x, y).
+  Scene scene = load_scene("proc:sphere:tris=200");
+  const Vec3 eye{0.0f, 0.0f, 5.0f}, target{0.0f, 0.0f, 0.0f}, up{0.0f, 1.0f, 0.0f};
+  scene.camera = look_at_camera(eye, target, up, 60.0f);
+  RaySetConfig primary;
+  primary.width = kW;
+  primary.height = kH;
+  const auto out = generate_ray_sets(scene, std::vector<RaySetConfig>{primary}, 1);
+  ASSERT_EQ(out.sets.size(), 1u);
+  const auto& rays = out.sets[0].rays;
+  ASSERT_EQ(rays.size(), order.size());
+  const float half_h = std::tan(0.5f * 60.0f * 3.14159265f / 180.0f), half_w = half_h * kW / kH;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const uint32_t x = order[i] % kW, y = order[i] / kW;
+    const float sx = (2.0f * (x + 0.5f) / kW - 1.0f) * half_w, sy = (1.0f - 2.0f * (y + 0.5f) / kH) * half_h;
+    // Looking down -z with y up: right is +x.
+    const Vec3 want = normalize(Vec3{sx, sy, -1.0f});
+    EXPECT_NEAR(rays[i].dir.x, want.x, 1e-5f) << "ray " << i << ", pixel " << x << "," << y;
+    EXPECT_NEAR(rays[i].dir.y, want.y, 1e-5f) << "ray " << i << ", pixel " << x << "," << y;
+    EXPECT_NEAR(rays[i].dir.z, want.z, 1e-5f) << "ray " << i << ", pixel " << x << "," << y;
+  }
+}
+
 TEST(HarnessRaySets, LookAtCameraAimsThePrimaryRaysAndRejectsBadViews) {
   Scene scene = load_scene("proc:sphere:tris=2000");
   const Vec3 eye{3.0f, 1.0f, -2.0f}, target{0.0f, 0.0f, 0.0f};
@@ -109,12 +158,13 @@ TEST(HarnessRaySets, LookAtCameraAimsThePrimaryRaysAndRejectsBadViews) {
   ASSERT_EQ(out.sets.size(), 1u);
   const auto& rays = out.sets[0].rays;
   for (const Ray& r : rays) EXPECT_EQ(r.org, eye);
-  const Vec3 centre = rays[16 * 33 + 16].dir, toward = normalize(target - eye);
+  const Vec3 centre = ray_at(rays, 33, 33, 16, 16).dir, toward = normalize(target - eye);
   EXPECT_NEAR(dot(centre, toward), 1.0f, 1e-6f);
   // Row 0 is the top of the image: its rays point further up than the bottom row's.
-  EXPECT_GT(rays[16].dir.y, rays[32 * 33 + 16].dir.y);
+  const Vec3 top = ray_at(rays, 33, 33, 16, 0).dir, bottom = ray_at(rays, 33, 33, 16, 32).dir;
+  EXPECT_GT(top.y, bottom.y);
   // The view spans the field of view: the top and bottom rows' rays are about 30 degrees apart.
-  const float spread = std::acos(dot(rays[16].dir, rays[32 * 33 + 16].dir)) * 180.0f / 3.14159265f;
+  const float spread = std::acos(dot(top, bottom)) * 180.0f / 3.14159265f;
   EXPECT_NEAR(spread, 30.0f * 32.0f / 33.0f, 0.1f);
 
   auto message = [](auto&& make) {

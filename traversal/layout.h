@@ -88,10 +88,6 @@ struct LayoutInfo {
   /// Whether the `packet` option applies: the SIMD layouts, and the binary ones, which take `isa` with
   /// it to pick their packet kernels' build (isa=auto's by default).
   bool has_packet = false;
-  /// Compiles `bvh` over `triangles` (which must outlive the result). Throws Error when the tree does
-  /// not suit the layout (e.g. arity too large) or the ISA is not available, naming both.
-  std::unique_ptr<CompiledLayout> (*compile)(const Bvh& bvh, std::span<const Triangle> triangles,
-                                             const LayoutSpec& spec);
 };
 
 std::span<const LayoutInfo> layouts();
@@ -104,10 +100,17 @@ LayoutSpec parse_layout_spec(std::string_view text);
 /// skips such a layout, as it skips Embree's packets the CPU lacks. `widest` caps what the CPU is taken
 /// to have (kAuto: no cap), so that a test can ask what a CPU without AVX-512 would do.
 std::optional<std::string> layout_unavailable(const LayoutSpec& spec, KernelIsa widest = KernelIsa::kAuto);
+/// The instruction set the kernels of `spec` run with (the SIMD layouts', and the binary layouts'
+/// packet kernels'): `spec.isa`, or for kAuto the preferred one (preferred_kernel_isa), capped at
+/// `widest` as for layout_unavailable.
+KernelIsa layout_kernel_isa(const LayoutSpec& spec, KernelIsa widest = KernelIsa::kAuto);
 /// Whether some CPU may lack what `spec` needs: packets, or an instruction set above scalar. Every CPU
 /// runs the others (`isa=auto` falls back to what the CPU has).
 bool layout_depends_on_cpu(const LayoutSpec& spec);
-/// Compiles `bvh` with the layout `spec` names.
+/// Compiles `bvh` over `triangles` (which must outlive the result) with the layout `spec` names. Throws
+/// Error when the tree does not suit the layout (e.g. arity too large) or the ISA is not available,
+/// naming both. The registry and the functions above are in the library sahbench_layout_spec, which
+/// builds without the kernels; this one is in sahbench_traversal.
 std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,
                                                std::span<const Triangle> triangles);
 std::unique_ptr<CompiledLayout> compile_layout(std::string_view spec, const Bvh& bvh,

@@ -121,41 +121,11 @@ class WideLayout final : public CompiledLayout {
 
 }  // namespace
 
-namespace {
-
-// Whether kernels for `isa` run here, on a CPU capped at `widest` (kAuto: no cap).
-bool available_up_to(KernelIsa isa, KernelIsa widest) {
-  return kernel_isa_available(isa) &&
-         (widest == KernelIsa::kAuto || static_cast<int>(isa) <= static_cast<int>(widest));
-}
-
-}  // namespace
-
-KernelIsa wide_layout_isa(const LayoutSpec& spec, KernelIsa widest) {
-  if (spec.isa != KernelIsa::kAuto) return spec.isa;
-  const KernelIsa preferred = preferred_kernel_isa();
-  return available_up_to(preferred, widest) ? preferred : best_kernel_isa(widest);
-}
-
-std::optional<std::string> wide_layout_unavailable(const LayoutSpec& spec, KernelIsa widest) {
-  const KernelIsa isa = wide_layout_isa(spec, widest);
-  std::string why;
-  if (spec.packet == 16 && isa != KernelIsa::kAvx512)
-    why = "16-ray packets need AVX-512, which this CPU or build lacks";
-  else if (spec.packet == 8 && isa != KernelIsa::kAvx2 && isa != KernelIsa::kAvx512)
-    why = "8-ray packets need AVX2 or AVX-512, which this CPU or build lacks";
-  else if (!available_up_to(isa, widest))
-    why = "isa " + std::string(to_string(isa)) + " is not available on this CPU or build";
-  else
-    return std::nullopt;
-  return why + " (auto would pick " + std::string(to_string(wide_layout_isa({}, widest))) + ")";
-}
-
 std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh,
                                                     std::span<const Triangle> triangles,
                                                     const LayoutSpec& spec) {
-  if (const auto why = wide_layout_unavailable(spec)) throw Error("layout '" + spec.text() + "': " + *why);
-  const KernelIsa isa = wide_layout_isa(spec);
+  if (const auto why = layout_unavailable(spec)) throw Error("layout '" + spec.text() + "': " + *why);
+  const KernelIsa isa = layout_kernel_isa(spec);
   const AnyHitOrder any_hit_order = resolve_any_hit_order(bvh, spec.variant.any_hit);
   const BlockForm form = block_form_for(spec.variant.triangle);
   if (width == 4)

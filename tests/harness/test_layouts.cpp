@@ -810,7 +810,7 @@ TEST(Layouts, BinaryLayoutsNameTheInstructionSetOfTheirKernels) {
     EXPECT_EQ(compile_layout(name, bvh, tris)->isa(), "scalar");
     if (skips.have_isa(KernelIsa::kAvx2)) {
       EXPECT_EQ(compile_layout(name + ":packet=8", bvh, tris)->isa(),
-                to_string(wide_layout_isa(parse_layout_spec(name + ":packet=8"))));
+                to_string(layout_kernel_isa(parse_layout_spec(name + ":packet=8"))));
       EXPECT_EQ(compile_layout(name + ":packet=8,isa=avx2", bvh, tris)->isa(), "avx2");
     }
     if (skips.have_isa(KernelIsa::kAvx512)) {

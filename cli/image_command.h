@@ -1,7 +1,7 @@
 #pragma once
 // `sahbench image`: per-pixel maps of one builder and layout on a scene's primary rays (the primary ray
-// set of harness/run/ray_sets.h: the scene's camera or the automatic framing, pixel (x, y) is ray
-// y * width + x, row 0 at the top):
+// set of harness/run/ray_sets.h: the scene's camera or the automatic framing, its rays in the tile order
+// of primary_pixel_order, each written back at its pixel (x, y), y * width + x, row 0 at the top):
 //
 //   PREFIX_nodes.{png,exr}    nodes visited by the closest-hit counting kernel (EXR: raw counts, Y)
 //   PREFIX_prims.{png,exr}    ray/primitive tests (EXR: raw counts, Y)

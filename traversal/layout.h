@@ -109,8 +109,8 @@ KernelIsa layout_kernel_isa(const LayoutSpec& spec, KernelIsa widest = KernelIsa
 bool layout_depends_on_cpu(const LayoutSpec& spec);
 /// Compiles `bvh` over `triangles` (which must outlive the result) with the layout `spec` names. Throws
 /// Error when the tree does not suit the layout (e.g. arity too large) or the ISA is not available,
-/// naming both. The registry and the functions above are in the library sahbench_layout_spec, which
-/// builds without the kernels; this one is in sahbench_traversal.
+/// naming both. The free functions above (the registry, the spec syntax, what this CPU runs) are in the
+/// library sahbench_layout_spec, which builds without the kernels; compile_layout is in sahbench_traversal.
 std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh& bvh,
                                                std::span<const Triangle> triangles);
 std::unique_ptr<CompiledLayout> compile_layout(std::string_view spec, const Bvh& bvh,

@@ -1,7 +1,5 @@
 // The binary layouts, and compile_layout for every layout of the registry (layout_spec.cpp).
 
-#include <algorithm>
-
 #include "core/error.h"
 #include "core/refit.h"
 #include "traversal/bvh2_traversal.h"

@@ -8,7 +8,6 @@
 #include "traversal/ray_chunks.h"
 #include "traversal/variant_dispatch.h"
 #include "traversal/wide_kernels_isa.h"
-#include "traversal/wide_layout.h"
 
 namespace sahbench {
 

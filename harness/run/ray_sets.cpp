@@ -117,7 +117,8 @@ std::vector<Ray> primary_rays(const Scene& scene, const RaySetConfig& cfg, const
   return rays;
 }
 
-// Traces the primary rays on a reference tree and keeps the hit points, in pixel order.
+// Traces the primary rays on a reference tree and keeps the hit points, in ray order (the primary set's
+// tiles), misses left out.
 std::vector<Hitpoint> primary_hits(const Scene& scene, std::span<const Ray> rays) {
   const BuildInput input = BuildInput::from_triangles(scene.triangles);
   const Bvh bvh = build_binned_sah(input, {});

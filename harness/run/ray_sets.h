@@ -42,8 +42,9 @@ GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetCon
 
 /// The pixel (y * width + x) of each primary ray, in the order the rays are made: tiles of 4 x 4 pixels,
 /// tile rows top to bottom and tiles left to right along a row, each tile's pixels row by row (the part
-/// of a tile that the image has, at its right and bottom edges). So the rays of a 16-ray packet are one
-/// tile and those of an 8-ray packet half of one (4 x 2), as renderers feed Embree's rtcIntersect8/16
+/// of a tile that the image has, at its right and bottom edges). Where the width and height are multiples
+/// of 4, the rays of a 16-ray packet are one tile and those of an 8-ray packet half of one (4 x 2); elsewhere
+/// packets past the first partial tile straddle two tiles. So renderers feed Embree's rtcIntersect8/16
 /// (its tutorials trace 4 x 4 and 4 x 2 blocks of a tile); the secondary sets follow, ray by ray.
 std::vector<uint32_t> primary_pixel_order(uint32_t width, uint32_t height);
 

@@ -30,7 +30,6 @@
 #include "traversal/triangle_tests.h"
 #include "traversal/variant_dispatch.h"
 #include "traversal/wide_bvh.h"
-#include "traversal/wide_layout.h"
 
 namespace sahbench {
 namespace {

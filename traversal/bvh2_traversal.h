@@ -16,6 +16,7 @@
 #include "traversal/kernel_variant.h"
 #include "traversal/ray_box.h"
 #include "traversal/triangle_tests.h"
+#include "traversal/walks_in_flight.h"
 
 namespace sahbench {
 
@@ -91,8 +92,8 @@ struct StackEntry {
 // It visits the nodes that the general loop below visits, in the same order (on equal entry distances
 // the second child first, as that loop's insertion sort), so results and counters are the same.
 //
-// One step at a time: a step is one inner node, or one leaf and the pops after it, so that two walks can
-// be stepped in turn (trace_binary_pair below). The walk starts with the root's box test and counts the
+// One step at a time: a step is one inner node, or one leaf and the pops after it, so that several walks
+// can be stepped in turn (trace_walks below). The walk starts with the root's box test and counts the
 // ray, as the general loop does.
 template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
 class BinaryWalk {
@@ -316,39 +317,35 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
   return best;
 }
 
-// Two walks (BinaryWalk, PackedWalk) stepped in turn until one ends, then the other alone: a walk is one
-// chain of dependent loads, tests and branches, and two independent chains let the core overlap one
-// ray's latency with the other's work (the software counterpart of a GPU's warps hiding memory latency;
-// Aila and Laine 2009).
-template <class Walk>
-[[gnu::always_inline]] inline void step_in_turn(Walk& a, Walk& b) {
-  bool more_a = a.active(), more_b = b.active();
-  while (more_a && more_b) {
-    more_a = a.step();
-    more_b = b.step();
-  }
-  while (more_a) more_a = a.step();
-  while (more_b) more_b = b.step();
-}
+// Single rays of the binary layouts go down the tree eight at a time, their walks stepped in turn
+// (walks_in_flight.h): against two walks in turn, bvh2 and bvh2_packed traced the primary and shadow
+// rays of configs/tune.toml's scenes 1 to 23% faster (the 1M terrain's shadow rays most), and 0 to 5%
+// faster than four walks in turn but on one cell of twelve.
+inline constexpr std::size_t kBinaryWalks = 8;
 
-// Two rays through a binary tree, their walks stepped in turn (step_in_turn). Each ray's answer is the
-// one traverse gives it.
-template <class TriangleTest, class BoxTest, bool kAnyHit>
-void trace_binary_pair(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray_a,
-                       const Ray& ray_b, AnyHitOrder order, Hit& hit_a, Hit& hit_b) {
-  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
-    if (!FmaRayBox::takes(ray_a) || !FmaRayBox::takes(ray_b)) [[unlikely]] {
-      hit_a = traverse<TriangleTest, BoxTest, kAnyHit, false>(bvh, triangles, ray_a, nullptr, order);
-      hit_b = traverse<TriangleTest, BoxTest, kAnyHit, false>(bvh, triangles, ray_b, nullptr, order);
-      return;
-    }
-  }
-  const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
-  BinaryWalk<TriangleTest, BoxTest, kAnyHit, false> a(bvh, triangles.data(), ray_a, nullptr, any_order);
-  BinaryWalk<TriangleTest, BoxTest, kAnyHit, false> b(bvh, triangles.data(), ray_b, nullptr, any_order);
-  step_in_turn(a, b);
-  hit_a = a.hit();
-  hit_b = b.hit();
+// Rays rays[index(j)], j in [0, n), with kBinaryWalks walks in flight (step_interleaved); `put(i, hit)`
+// takes ray i's answer. `emplace(slot, ray)` starts a ray's walk (BinaryWalk, PackedWalk) in `slot`;
+// box=fma's rays outside that test's domain (FmaRayBox::takes) go alone, `hit = alone(ray)`, on the
+// robust box test.
+template <class Walk, class BoxTest, class Index, class Emplace, class Alone, class Put>
+void trace_walks(std::span<const Ray> rays, std::size_t n, Index&& index, Emplace&& emplace, Alone&& alone,
+                 Put&& put) {
+  step_interleaved<Walk, kBinaryWalks>(
+      n,
+      [&](std::optional<Walk>& walk, std::size_t j) {
+        const std::size_t i = index(j);
+        if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
+          if (!FmaRayBox::takes(rays[i])) [[unlikely]] {
+            put(i, alone(rays[i]));
+            return false;
+          }
+        }
+        emplace(walk, rays[i]);
+        if (walk->active()) return true;
+        put(i, walk->hit());
+        return false;
+      },
+      [&](std::size_t j, const Walk& walk) { put(index(j), walk.hit()); });
 }
 
 // The octant of a ray's direction: bit i set for a negative component i.
@@ -369,12 +366,12 @@ bool pair_packable(const Ray& r) {
 
 // Rays [begin, end) of a binary layout in packets of `width` rays (8 or 16): a packet's rays that can
 // (pair_packable) go down the tree together, `packet(rays, n, mask, hits, occluded)` with those lanes
-// among the packet's n rays, where two or more can; the others two at a time, `pair(ray_a, ray_b, hit_a,
-// hit_b)`, and the last one alone, `hit = one(ray)`. With `packets` false (a tree that is one leaf or
-// none) every ray goes in pairs. Closest hits go into `hits`, occlusion into `occluded`.
-template <class BoxTest, bool kAnyHit, class Packet, class Pair, class One>
+// among the packet's n rays, where two or more can; the others one at a time, `walks(m, index, put)` with
+// rays index(0) ... index(m - 1) (trace_walks). With `packets` false (a tree that is one leaf or none)
+// every ray goes alone. Closest hits go into `hits`, occlusion into `occluded`.
+template <class BoxTest, bool kAnyHit, class Packet, class Walks>
 void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, uint32_t width,
-                      bool packets, Hit* hits, uint8_t* occluded, Packet&& packet, Pair&& pair, One&& one) {
+                      bool packets, Hit* hits, uint8_t* occluded, Packet&& packet, Walks&& walks) {
   auto put = [&](std::size_t i, const Hit& hit) {
     if constexpr (kAnyHit)
       occluded[i] = hit.found();
@@ -392,20 +389,13 @@ void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t 
              kAnyHit ? occluded + first : nullptr);
     else
       alone |= together;
-    while (alone != 0) {
-      const auto a = static_cast<uint32_t>(std::countr_zero(alone));
-      alone &= alone - 1;
-      if (alone == 0) {
-        put(first + a, one(rays[first + a]));
-        break;
-      }
-      const auto b = static_cast<uint32_t>(std::countr_zero(alone));
-      alone &= alone - 1;
-      Hit hit_a, hit_b;
-      pair(rays[first + a], rays[first + b], hit_a, hit_b);
-      put(first + a, hit_a);
-      put(first + b, hit_b);
-    }
+    std::size_t index[16];
+    std::size_t m = 0;
+    for (; alone != 0; alone &= alone - 1)
+      index[m++] = first + static_cast<uint32_t>(std::countr_zero(alone));
+    if (m != 0)
+      walks(
+          m, [&](std::size_t j) { return index[j]; }, put);
   }
 }
 

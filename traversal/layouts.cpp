@@ -63,7 +63,7 @@ class Bvh2Layout final : public CompiledLayout {
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
       if (packet_ == 1)
-        trace_in_pairs<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
+        trace_range<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
       else
         trace_in_packets<false>(rays, b, e, hits.data(), nullptr);
     });
@@ -71,7 +71,7 @@ class Bvh2Layout final : public CompiledLayout {
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
       if (packet_ == 1)
-        trace_in_pairs<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
+        trace_range<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
       else
         trace_in_packets<true>(rays, b, e, nullptr, occluded.data());
     });
@@ -104,19 +104,27 @@ class Bvh2Layout final : public CompiledLayout {
   std::string isa() const override { return std::string(to_string(isa_)); }
 
  private:
-  // Rays [begin, end) two at a time (detail::trace_binary_pair), the last one alone; `put(i, hit)` takes
-  // each answer. Any hit visits children in order_.
+  // Rays rays[index(j)], j in [0, n), one at a time with several walks in flight (detail::trace_walks);
+  // `put(i, hit)` takes ray i's answer. Any hit visits children in order_.
+  template <bool kAnyHit, class Index, class Put>
+  void trace_alone(std::span<const Ray> rays, std::size_t n, Index&& index, Put&& put) const {
+    using Walk = detail::BinaryWalk<Tri, Box, kAnyHit, false>;
+    const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(*bvh_, order_) : AnyHitOrder::kNearest;
+    detail::trace_walks<Walk, Box>(
+        rays, n, index,
+        [&](std::optional<Walk>& walk, const Ray& ray) {
+          walk.emplace(*bvh_, triangles_.data(), ray, nullptr, any_order);
+        },
+        [&](const Ray& ray) {
+          return detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, ray, nullptr, order_);
+        },
+        put);
+  }
+  // Rays [begin, end), as trace_alone.
   template <bool kAnyHit, class Put>
-  void trace_in_pairs(std::span<const Ray> rays, std::size_t begin, std::size_t end, Put&& put) const {
-    std::size_t i = begin;
-    for (; i + 1 < end; i += 2) {
-      Hit a, b;
-      detail::trace_binary_pair<Tri, Box, kAnyHit>(*bvh_, triangles_, rays[i], rays[i + 1], order_, a, b);
-      put(i, a);
-      put(i + 1, b);
-    }
-    if (i < end)
-      put(i, detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, rays[i], nullptr, order_));
+  void trace_range(std::span<const Ray> rays, std::size_t begin, std::size_t end, Put&& put) const {
+    trace_alone<kAnyHit>(
+        rays, end - begin, [&](std::size_t j) { return begin + j; }, put);
   }
 
   // Rays [begin, end) in packets of packet_ rays (detail::trace_in_packets).
@@ -130,12 +138,7 @@ class Bvh2Layout final : public CompiledLayout {
         [&](const Ray* packet, uint32_t n, uint32_t mask, Hit* h, uint8_t* o) {
           kernel(*bvh_, triangles_.data(), packet, n, mask, order, h, o);
         },
-        [&](const Ray& a, const Ray& b, Hit& hit_a, Hit& hit_b) {
-          detail::trace_binary_pair<Tri, Box, kAnyHit>(*bvh_, triangles_, a, b, order_, hit_a, hit_b);
-        },
-        [&](const Ray& a) {
-          return detail::traverse<Tri, Box, kAnyHit, false>(*bvh_, triangles_, a, nullptr, order_);
-        });
+        [&](std::size_t n, auto&& index, auto&& put) { trace_alone<kAnyHit>(rays, n, index, put); });
   }
 
   const Bvh* bvh_ = nullptr;

@@ -117,7 +117,7 @@ class PackedBvh2Layout final : public CompiledLayout {
   void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
       if (packet_ == 1)
-        trace_in_pairs<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
+        trace_range<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
       else
         trace_in_packets<false>(rays, b, e, hits.data(), nullptr);
       for (std::size_t i = b; i != e; ++i)
@@ -127,7 +127,7 @@ class PackedBvh2Layout final : public CompiledLayout {
   void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
     for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
       if (packet_ == 1)
-        trace_in_pairs<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
+        trace_range<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
       else
         trace_in_packets<true>(rays, b, e, nullptr, occluded.data());
     });
@@ -156,18 +156,24 @@ class PackedBvh2Layout final : public CompiledLayout {
     });
   }
 
-  // Rays [begin, end) two at a time (detail::trace_pair), the last one alone; `put(i, hit)` takes each
-  // answer.
+  // Rays rays[index(j)], j in [0, n), one at a time with several walks in flight (detail::trace_walks);
+  // `put(i, hit)` takes ray i's answer.
+  template <bool kAnyHit, class Index, class Put>
+  void trace_alone(std::span<const Ray> rays, std::size_t n, Index&& index, Put&& put) const {
+    using Walk = detail::PackedWalk<Tri, Box, kAnyHit, false>;
+    detail::trace_walks<Walk, Box>(
+        rays, n, index,
+        [&](std::optional<Walk>& walk, const Ray& ray) { walk.emplace(tree_, ray, nullptr, order_); },
+        [&](const Ray& ray) {
+          return detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, ray, nullptr, order_);
+        },
+        put);
+  }
+  // Rays [begin, end), as trace_alone.
   template <bool kAnyHit, class Put>
-  void trace_in_pairs(std::span<const Ray> rays, std::size_t begin, std::size_t end, Put&& put) const {
-    std::size_t i = begin;
-    for (; i + 1 < end; i += 2) {
-      Hit a, b;
-      detail::trace_pair<Tri, Box, kAnyHit>(tree_, rays[i], rays[i + 1], order_, a, b);
-      put(i, a);
-      put(i + 1, b);
-    }
-    if (i < end) put(i, detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, rays[i], nullptr, order_));
+  void trace_range(std::span<const Ray> rays, std::size_t begin, std::size_t end, Put&& put) const {
+    trace_alone<kAnyHit>(
+        rays, end - begin, [&](std::size_t j) { return begin + j; }, put);
   }
 
   // Rays [begin, end) in packets of packet_ rays (detail::trace_in_packets). A chunk
@@ -181,12 +187,7 @@ class PackedBvh2Layout final : public CompiledLayout {
         [&](const Ray* packet, uint32_t n, uint32_t mask, Hit* h, uint8_t* o) {
           kernel(tree_, packet, n, mask, order_, h, o);
         },
-        [&](const Ray& a, const Ray& b, Hit& hit_a, Hit& hit_b) {
-          detail::trace_pair<Tri, Box, kAnyHit>(tree_, a, b, order_, hit_a, hit_b);
-        },
-        [&](const Ray& a) {
-          return detail::traverse_packed<Tri, Box, kAnyHit, false>(tree_, a, nullptr, order_);
-        });
+        [&](std::size_t n, auto&& index, auto&& put) { trace_alone<kAnyHit>(rays, n, index, put); });
   }
 
   PackedBvh2 tree_;

@@ -165,8 +165,8 @@ class PairSlabs {
 
 // The while-while loop of BinaryWalk (bvh2_traversal.h) on PairNodes, one step at a time: the same
 // visits in the same order, with a child's box read from its parent's line and a leaf's triangles reached
-// without a node. A step is one inner node, or one leaf and the pops after it, so that two walks can be
-// stepped in turn (trace_pair below).
+// without a node. A step is one inner node, or one leaf and the pops after it, so that several walks can
+// be stepped in turn (trace_walks, bvh2_traversal.h).
 template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount>
 class PackedWalk {
  public:
@@ -287,25 +287,6 @@ Hit traverse_packed(const PackedBvh2& tree, const Ray& ray, TraversalCounters* c
   PackedWalk<TriangleTest, BoxTest, kAnyHit, kCount> walk(tree, ray, counters, any_order);
   while (walk.active()) walk.step();
   return walk.hit();
-}
-
-// Two rays, their walks stepped in turn (step_in_turn, bvh2_traversal.h). Each ray's answer is the one
-// traverse_packed gives it.
-template <class TriangleTest, class BoxTest, bool kAnyHit>
-void trace_pair(const PackedBvh2& tree, const Ray& ray_a, const Ray& ray_b, AnyHitOrder any_order, Hit& hit_a,
-                Hit& hit_b) {
-  if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
-    if (!FmaRayBox::takes(ray_a) || !FmaRayBox::takes(ray_b)) [[unlikely]] {
-      hit_a = traverse_packed<TriangleTest, BoxTest, kAnyHit, false>(tree, ray_a, nullptr, any_order);
-      hit_b = traverse_packed<TriangleTest, BoxTest, kAnyHit, false>(tree, ray_b, nullptr, any_order);
-      return;
-    }
-  }
-  PackedWalk<TriangleTest, BoxTest, kAnyHit, false> a(tree, ray_a, nullptr, any_order);
-  PackedWalk<TriangleTest, BoxTest, kAnyHit, false> b(tree, ray_b, nullptr, any_order);
-  step_in_turn(a, b);
-  hit_a = a.hit();
-  hit_b = b.hit();
 }
 
 }  // namespace detail

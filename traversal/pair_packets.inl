@@ -10,10 +10,10 @@
 //
 // Packets are the batch's rays K at a time, in the ray set's own order, as for the wide packet kernels.
 // A packet's rays go down the tree together whatever their directions (box=fma: those in that test's
-// domain; the others are traced two at a time by the single-ray kernel). Where they agree on the sign of
-// each direction component, one near and one far plane per axis serve all K; where they do not (shadow
-// rays to several lights, diffuse and AO rays), each lane picks its planes by its own signs, a blend
-// before the same arithmetic (Embree's packet node test takes the min and max of both planes' distances
+// domain; the others are traced by the single-ray kernel, eight walks in turn (trace_walks)). Where they
+// agree on the sign of each direction component, one near and one far plane per axis serve all K; where they
+// do not (shadow rays to several lights, diffuse and AO rays), each lane picks its planes by its own signs, a
+// blend before the same arithmetic (Embree's packet node test takes the min and max of both planes' distances
 // per lane, to the same end), rather than the packet being split by octant into fragments of two or
 // three rays. Each lane computes the single-ray kernel's slab
 // test (PairSlabs: the same products, the far distances scaled the same way, the same NaN rule) and every

@@ -8,9 +8,9 @@
 // Neighbouring rays visit mostly the same nodes, and stepped in lock-step the later ones find in the
 // cache the lines the first one asked for. Refilling a slot with the next ray as soon as its walk ended
 // (asynchronous memory access chaining, Kocberber, Falsafi and Grot 2015) keeps every slot busy but lets
-// the walks drift apart, and traced the primary and shadow rays of Sponza's atrium on bvh2_packed 35
-// to 41% slower than two walks in turn (scripts/ab.py on configs/tune.toml's scenes), the terrain's 2 to
-// 17% faster.
+// the walks drift apart, and with four walks traced the primary and shadow rays of Sponza's atrium on
+// bvh2_packed 35 to 41% slower than two walks in turn (scripts/ab.py on configs/tune.toml's scenes),
+// the terrain's 2 to 17% faster.
 
 #include <cstddef>
 #include <optional>

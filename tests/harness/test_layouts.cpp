@@ -151,8 +151,8 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
     for (const Ray& r : test::diverging_rays(scene.triangles, 400, 8, kMaxWidePacket)) rays.push_back(r);
     for (const Ray& r : test::interleaved_rays(scene.triangles, 6 * 4 * kMaxWidePacket, 9, kMaxWidePacket, 4))
       rays.push_back(r);
-    // An odd count: the binary layouts trace rays in pairs and the last one alone; and the packet
-    // layouts' last packet holds 7 rays, its other lanes unused.
+    // An odd count: the binary layouts trace rays in groups of eight walks, the last group partial; and the
+    // packet layouts' last packet holds 7 rays, its other lanes unused.
     for (const Ray& r : test::coherent_rays(scene.triangles, 7, 7, 7)) rays.push_back(r);
     ASSERT_EQ(rays.size() % kMaxWidePacket, 7u);
     std::vector<Hit> reference(rays.size());
@@ -488,7 +488,7 @@ TEST(Layouts, RefitMovesATreeThatIsOneLeaf) {
     t = {t.v0 + Vec3{40.0f, -25.0f, 7.0f}, t.v1 + Vec3{40.0f, -25.0f, 7.0f},
          t.v2 + Vec3{40.0f, -25.0f, 7.0f}};
   std::vector<std::string> specs{"bvh4", "bvh8", "bvh8:isa=scalar"};
-  // A packet layout over a tree that is one leaf traces its rays in pairs.
+  // A packet layout over a tree that is one leaf traces its rays one at a time, eight walks in turn.
   if (kernel_isa_available(KernelIsa::kAvx2)) {
     specs.push_back("bvh2:packet=8");
     specs.push_back("bvh2_packed:packet=8");

@@ -319,8 +319,8 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
 
 // Single rays of the binary layouts go down the tree eight at a time, their walks stepped in turn
 // (walks_in_flight.h): against two walks in turn, bvh2 and bvh2_packed traced the primary and shadow
-// rays of configs/tune.toml's scenes 1 to 23% faster (the 1M terrain's shadow rays most), and 0 to 5%
-// faster than four walks in turn but on one cell of twelve.
+// rays of configs/tune.toml's scenes 2 to 23% faster (the 1M terrain's shadow rays most); against four
+// walks, shadow rays 1 to 7% faster and primary rays 6% slower to 1% faster (medians of one run).
 inline constexpr std::size_t kBinaryWalks = 8;
 
 // Rays rays[index(j)], j in [0, n), with kBinaryWalks walks in flight (step_interleaved); `put(i, hit)`

@@ -10,7 +10,7 @@
 // (asynchronous memory access chaining, Kocberber, Falsafi and Grot 2015) keeps every slot busy but lets
 // the walks drift apart, and with four walks traced the primary and shadow rays of Sponza's atrium on
 // bvh2_packed 35 to 41% slower than two walks in turn (scripts/ab.py on configs/tune.toml's scenes),
-// the terrain's 2 to 17% faster.
+// the terrain's 7 to 17% faster.
 
 #include <cstddef>
 #include <optional>

@@ -4,10 +4,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -218,23 +214,6 @@ class Emitter {
   bool gather_refs_;
 };
 
-// Resizes a vector whose elements are then all overwritten. Value-initialising a large vector touches
-// every page of a fresh allocation, one page fault per 4 KiB; advised as huge pages first (see
-// core/huge_pages.h), the range faults 2 MiB at a time (on the 1M-triangle terrain the output's 37 MB
-// took 8 ms instead of 18).
-template <class T>
-void resize_on_huge_pages(std::vector<T>& v, std::size_t n) {
-  v.reserve(n);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
-  const std::uintptr_t first = (begin + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
-  const std::uintptr_t last = (begin + n * sizeof(T)) / kHugePageBytes * kHugePageBytes;
-  // A hint: where it fails, nothing changes.
-  if (last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
-#endif
-  v.resize(n);
-}
-
 }  // namespace
 
 HugePageArray<Aabb> bounds_in_order(std::span<const Aabb> prim_bounds, std::span<const uint32_t> order) {
@@ -255,8 +234,8 @@ Bvh finish_cluster_tree(const ClusterTree& tree, const LeafCollapse& rule) {
   if (too_deep) DepthBound(tree, rule).run();
   const bool refs_in_order = tree.leaves_in_order && !too_deep;
   const SubtreeCost root = rule.of(tree, tree.root);
-  resize_on_huge_pages(bvh.nodes, root.out_nodes);
-  resize_on_huge_pages(bvh.prim_refs, root.prims);
+  bvh.nodes.resize(root.out_nodes);
+  bvh.prim_refs.resize(root.prims);
   bvh.nodes[0].bounds = tag_bounds(tree, tree.root);
   if (refs_in_order)
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tree.order.size(), std::size_t{1} << 16),

@@ -57,7 +57,8 @@ class Refitter {
 
 }  // namespace
 
-LinkedTree::LinkedTree(const Bvh& bvh, std::string_view pass) : refs_(bvh.prim_refs) {
+LinkedTree::LinkedTree(const Bvh& bvh, std::string_view pass)
+    : refs_(bvh.prim_refs.begin(), bvh.prim_refs.end()) {
   if (bvh.arity != 2)
     throw Error(std::string(pass) + ": the source tree has arity " + std::to_string(bvh.arity) +
                 "; this pass rewrites binary trees (a source of arity 2)");

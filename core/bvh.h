@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/aabb.h"
+#include "core/huge_pages.h"
 
 namespace sahbench {
 
@@ -23,10 +24,12 @@ struct Node {
 };
 static_assert(sizeof(Node) == 32, "the common node format is 32 bytes");
 
+/// A tree in the common format. Its arrays are on huge pages from 2 MiB (core/huge_pages.h): the bvh2
+/// layout traces this very tree, reading nodes all over it, as Embree's and the other layouts' trees are.
 struct Bvh {
-  std::vector<Node> nodes;          ///< nodes[0] is the root
-  std::vector<uint32_t> prim_refs;  ///< scene triangle indices; may repeat (spatial splits)
-  uint32_t arity = 2;               ///< the most children any node may have: 2, 4 or 8
+  std::vector<Node, HugePageAllocator<Node>> nodes;              ///< nodes[0] is the root
+  std::vector<uint32_t, HugePageAllocator<uint32_t>> prim_refs;  ///< scene indices; may repeat (splits)
+  uint32_t arity = 2;  ///< the most children any node may have: 2, 4 or 8
 
   const Node& root() const { return nodes.front(); }
 

@@ -19,6 +19,7 @@
 
 #include "core/aabb.h"
 #include "core/bvh.h"
+#include "core/huge_pages.h"
 #include "core/ray.h"
 #include "core/triangle.h"
 #include "traversal/bvh2_traversal.h"
@@ -56,9 +57,11 @@ static_assert(sizeof(PairNode) == 64, "a PairNode is one cache line");
 
 /// A binary tree in PairNodes, its triangles copied into leaf order.
 struct PackedBvh2 {
-  std::vector<PairNode> nodes;      ///< depth first: a node's inner children come after it
-  std::vector<Triangle> triangles;  ///< in leaf order
-  std::vector<uint32_t> ids;        ///< scene index of each packed triangle
+  // On huge pages from 2 MiB (core/huge_pages.h), as the wide layouts' arena and Embree's trees: a walk
+  // reads lines all over these arrays, and on small pages the large scenes' walks miss the TLB.
+  std::vector<PairNode, HugePageAllocator<PairNode>> nodes;      ///< depth first: inner children after it
+  std::vector<Triangle, HugePageAllocator<Triangle>> triangles;  ///< in leaf order
+  std::vector<uint32_t, HugePageAllocator<uint32_t>> ids;        ///< scene index of each packed triangle
   Aabb root_box;
   uint32_t root = 0;        ///< the root: a PairNode index, or (a tree that is one leaf) its first triangle
   uint32_t root_count = 0;  ///< 0 when the root is an inner node, else its triangle count

@@ -23,6 +23,7 @@
 #include "scenes/wave.h"
 #include "tests/support/config_error.h"
 #include "tests/support/hit_check.h"
+#include "tests/support/process_temp_dir.h"
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
 
@@ -108,9 +109,7 @@ TEST(HarnessAnimationEmbree, RefitSceneTracesTheMovedTriangles) {
 // A run
 
 std::filesystem::path temp_dir() {
-  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_animation_run";
-  std::filesystem::create_directories(dir);
-  return dir;
+  return test::process_temp_dir("animation_run");
 }
 
 std::filesystem::path write_config(const std::string& name) {

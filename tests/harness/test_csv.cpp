@@ -6,13 +6,13 @@
 #include "core/error.h"
 #include "harness/run/csv.h"
 #include "harness/run/result_row.h"
+#include "tests/support/process_temp_dir.h"
 
 namespace sahbench {
 namespace {
 
 std::filesystem::path temp_file(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_csv";
-  std::filesystem::create_directories(dir);
+  const auto dir = test::process_temp_dir("csv");
   const auto path = dir / name;
   std::filesystem::remove(path);
   return path;

@@ -17,6 +17,7 @@
 #include "harness/report/table_fit.h"
 #include "harness/run/csv.h"
 #include "tests/support/error_of.h"
+#include "tests/support/process_temp_dir.h"
 
 namespace sahbench {
 namespace {
@@ -24,8 +25,7 @@ namespace {
 using test::error_of;
 
 std::filesystem::path temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_paper_tables";
-  std::filesystem::create_directories(dir);
+  const auto dir = test::process_temp_dir("paper_tables");
   const auto path = dir / name;
   std::filesystem::remove_all(path);
   return path;

@@ -15,13 +15,13 @@
 #include "harness/report/result_cells.h"
 #include "harness/run/csv.h"
 #include "tests/support/error_of.h"
+#include "tests/support/process_temp_dir.h"
 
 namespace sahbench {
 namespace {
 
 std::filesystem::path temp_csv(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_ratio_stats";
-  std::filesystem::create_directories(dir);
+  const auto dir = test::process_temp_dir("ratio_stats");
   return dir / name;
 }
 

@@ -19,13 +19,13 @@
 #include "harness/report/report_table.h"
 #include "harness/run/csv.h"
 #include "tests/support/error_of.h"
+#include "tests/support/process_temp_dir.h"
 
 namespace sahbench {
 namespace {
 
 std::filesystem::path temp_csv(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_report";
-  std::filesystem::create_directories(dir);
+  const auto dir = test::process_temp_dir("report");
   const auto path = dir / name;
   std::filesystem::remove(path);
   return path;

@@ -27,6 +27,7 @@
 #include "scenes/ray_file.h"
 #include "tests/support/error_of.h"
 #include "tests/support/hit_check.h"
+#include "tests/support/process_temp_dir.h"
 #include "tests/support/test_scenes.h"
 #include "traversal/brute_force.h"
 #include "traversal/kernel_variant.h"
@@ -35,9 +36,7 @@ namespace sahbench {
 namespace {
 
 std::filesystem::path temp_dir() {
-  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_run";
-  std::filesystem::create_directories(dir);
-  return dir;
+  return test::process_temp_dir("run");
 }
 
 std::filesystem::path write_config(const std::string& name, const std::string& extra_builders) {

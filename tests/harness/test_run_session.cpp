@@ -20,14 +20,13 @@
 #include "harness/run/run_session.h"
 #include "harness/run/runner.h"
 #include "harness/run/timing.h"
+#include "tests/support/process_temp_dir.h"
 
 namespace sahbench {
 namespace {
 
 std::filesystem::path temp_dir() {
-  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_run_session";
-  std::filesystem::create_directories(dir);
-  return dir;
+  return test::process_temp_dir("run_session");
 }
 
 // A config of 2 scenes x 2 builder runs (+ `extra`) x 2 layouts x 2 thread counts x 2 ray sets.

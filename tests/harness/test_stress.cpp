@@ -27,6 +27,7 @@
 #include "harness/run/stress_runner.h"
 #include "scenes/stress_cases.h"
 #include "tests/support/error_of.h"
+#include "tests/support/process_temp_dir.h"
 #include "traversal/exact_reference.h"
 #include "traversal/layout.h"
 
@@ -232,7 +233,7 @@ TEST(HarnessStress, SkipsLayoutsTheCpuCannotRun) {
   ASSERT_FALSE(cfg.builders.empty());
   cfg.layouts = {parse_layout_spec("bvh8"), parse_layout_spec("bvh8:packet=16")};
   cfg.cases.push_back(StressCaseSpec{"sphere", "sphere", 1, 80, 120});
-  const auto csv = std::filesystem::temp_directory_path() / "sahbench_test_stress_skip.csv";
+  const auto csv = test::process_temp_dir("stress") / "skip.csv";
   std::filesystem::remove(csv);
   std::ostringstream log;
   const StressSummary summary = run_stress(cfg, {"", csv, ""}, log);
@@ -279,7 +280,7 @@ TEST(HarnessStress, ReducedSuiteKeepsItsGuarantees) {
   add("needles", "needles", 200, 100);
   add("surface_origin", "surface_origin", 80, 120);
   add("empty_interval", "empty_interval", 48, 120);
-  const auto csv = std::filesystem::temp_directory_path() / "sahbench_test_stress.csv";
+  const auto csv = test::process_temp_dir("stress") / "stress.csv";
   std::filesystem::remove(csv);
   std::ostringstream log;
   const StressSummary summary = run_stress(cfg, {"", csv, ""}, log);

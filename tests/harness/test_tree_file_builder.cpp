@@ -24,6 +24,7 @@
 #include "scenes/load.h"
 #include "scenes/tree_file.h"
 #include "tests/support/error_of.h"
+#include "tests/support/process_temp_dir.h"
 
 namespace sahbench {
 namespace {
@@ -34,7 +35,7 @@ constexpr const char* kScene = "proc:sphere:tris=3000";
 
 // A fresh folder per test, with a trees/ subfolder.
 std::filesystem::path fresh_dir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "sahbench_test_tree_file_builder" / name;
+  const auto dir = test::process_temp_dir("tree_file_builder") / name;
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "trees");
   return dir;

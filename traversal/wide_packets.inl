@@ -386,6 +386,10 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
                                      ? N - 1 - static_cast<uint32_t>(keys[j])
                                      : static_cast<uint32_t>(keys[j]);
               stack[size++] = entered[i];
+              // Closest hit fetches the children it pushes, as the single-ray kernel does (descend, in
+              // wide_kernels.inl), and any hit does not, for the same reason: a shadow packet often ends
+              // before it pops them.
+              if constexpr (!kAnyHit) prefetch_slot<N>(arena, entered[i].child, entered[i].count);
             }
           }
           const uint32_t i = (!kAnyHit || kOrder == AnyHitOrder::kNearest)

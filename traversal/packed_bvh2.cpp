@@ -205,9 +205,6 @@ std::unique_ptr<CompiledLayout> compile_packed_bvh2(const Bvh& bvh, std::span<co
   if (bvh.arity != 2)
     throw Error("layout 'bvh2_packed' needs a binary tree, the builder gave arity " +
                 std::to_string(bvh.arity));
-  if (spec.packet != 1) {
-    if (const auto why = layout_unavailable(spec)) throw Error("layout '" + spec.text() + "': " + *why);
-  }
   const KernelIsa isa = spec.packet == 1 ? KernelIsa::kScalar : layout_kernel_isa(spec);
   return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
     return std::make_unique<PackedBvh2Layout<Tri, Box>>(bvh, triangles, spec.variant, spec.packet, isa);

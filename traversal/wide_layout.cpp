@@ -124,7 +124,6 @@ class WideLayout final : public CompiledLayout {
 std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh,
                                                     std::span<const Triangle> triangles,
                                                     const LayoutSpec& spec) {
-  if (const auto why = layout_unavailable(spec)) throw Error("layout '" + spec.text() + "': " + *why);
   const KernelIsa isa = layout_kernel_isa(spec);
   const AnyHitOrder any_hit_order = resolve_any_hit_order(bvh, spec.variant.any_hit);
   const BlockForm form = block_form_for(spec.variant.triangle);

@@ -9,7 +9,8 @@
 namespace sahbench {
 
 /// Compiles `bvh` into a `width`-wide layout (4 or 8) whose kernels use `spec`'s variant and ISA
-/// (kAuto: the widest available). Throws Error when the ISA is not available here, naming it.
+/// (kAuto: the widest available), which must be available here (compile_layout refuses a spec whose
+/// kernels this CPU or build lacks, naming them).
 std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& bvh,
                                                     std::span<const Triangle> triangles,
                                                     const LayoutSpec& spec);

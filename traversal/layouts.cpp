@@ -2,6 +2,7 @@
 
 #include "core/error.h"
 #include "core/refit.h"
+#include "traversal/binary_layout.h"
 #include "traversal/bvh2_traversal.h"
 #include "traversal/layout.h"
 #include "traversal/packed_bvh2.h"
@@ -13,13 +14,10 @@
 namespace sahbench {
 namespace {
 
-// Rays handed to one task: enough to amortise scheduling, few enough to balance incoherent rays.
-constexpr std::size_t kRayChunk = 256;
-
-// The counters of `trace(i, counters)` summed over rays [0, count), in chunks of kRayChunk.
+// The counters of `trace(i, counters)` summed over rays [0, count), in the binary layouts' chunks.
 template <class Trace>
 TraceCounts count_rays(std::size_t count, Trace trace) {
-  return sum_over_ray_chunks(count, kRayChunk, [&](std::size_t begin, std::size_t end) {
+  return sum_over_ray_chunks(count, detail::kBinaryRayChunk, [&](std::size_t begin, std::size_t end) {
     TraversalCounters counters;
     for (std::size_t i = begin; i != end; ++i) trace(i, counters);
     return TraceCounts{end - begin, counters.nodes_visited(), counters.prim_tests, counters.leaf_visits};
@@ -41,17 +39,16 @@ BinaryPacketKernel find_binary_packet_kernel([[maybe_unused]] KernelIsa isa,
 /// A binary tree in the common format as built, traversed by the traversal/ kernels, its triangles reached
 /// through the references. The triangle and box tests are template parameters (variant_dispatch.h).
 template <class Tri, class Box>
-class Bvh2Layout final : public CompiledLayout {
+class Bvh2Layout final : public detail::BinaryLayout<Bvh2Layout<Tri, Box>, Box> {
+  using Base = detail::BinaryLayout<Bvh2Layout<Tri, Box>, Box>;
+  friend Base;
+
  public:
   /// `bvh` and `triangles` must outlive the layout. Any hit visits children in `variant.any_hit`;
   /// `packet` 1: the single-ray kernel; 8 or 16: the packet kernels of `isa`.
   Bvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, const KernelVariant& variant,
              uint32_t packet, KernelIsa isa)
-      : bvh_(&bvh),
-        triangles_(triangles),
-        order_(variant.any_hit),
-        packet_(packet),
-        isa_(packet == 1 ? KernelIsa::kScalar : isa) {
+      : Base(packet, isa), bvh_(&bvh), triangles_(triangles), order_(variant.any_hit) {
     if (packet == 1) return;
     closest_packet_ = find_binary_packet_kernel(isa, variant, false, packet);
     any_packet_ = find_binary_packet_kernel(isa, variant, true, packet);
@@ -60,22 +57,6 @@ class Bvh2Layout final : public CompiledLayout {
                   "-ray packet kernels compiled in");
   }
 
-  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
-    for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      if (packet_ == 1)
-        trace_range<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
-      else
-        trace_in_packets<false>(rays, b, e, hits.data(), nullptr);
-    });
-  }
-  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
-    for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      if (packet_ == 1)
-        trace_range<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
-      else
-        trace_in_packets<true>(rays, b, e, nullptr, occluded.data());
-    });
-  }
   TraceCounts count_closest(std::span<const Ray> rays) const override {
     return count_rays(rays.size(), [&](std::size_t i, TraversalCounters& c) {
       closest_hit_counted<Tri, Box>(*bvh_, triangles_, rays[i], c);
@@ -101,11 +82,9 @@ class Bvh2Layout final : public CompiledLayout {
   }
 
   std::size_t bytes() const override { return bvh_->bytes(); }
-  std::string isa() const override { return std::string(to_string(isa_)); }
 
  private:
-  // Rays rays[index(j)], j in [0, n), one at a time with several walks in flight (detail::trace_walks);
-  // `put(i, hit)` takes ray i's answer. Any hit visits children in order_.
+  // What detail::BinaryLayout asks of a binary layout.
   template <bool kAnyHit, class Index, class Put>
   void trace_alone(std::span<const Ray> rays, std::size_t n, Index&& index, Put&& put) const {
     using Walk = detail::BinaryWalk<Tri, Box, kAnyHit, false>;
@@ -120,45 +99,23 @@ class Bvh2Layout final : public CompiledLayout {
         },
         put);
   }
-  // Rays [begin, end), as trace_alone.
-  template <bool kAnyHit, class Put>
-  void trace_range(std::span<const Ray> rays, std::size_t begin, std::size_t end, Put&& put) const {
-    trace_alone<kAnyHit>(
-        rays, end - begin, [&](std::size_t j) { return begin + j; }, put);
-  }
-
-  // Rays [begin, end) in packets of packet_ rays (detail::trace_in_packets).
   template <bool kAnyHit>
-  void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,
-                        uint8_t* occluded) const {
-    const BinaryPacketKernel kernel = kAnyHit ? any_packet_ : closest_packet_;
-    const AnyHitOrder order = resolve_any_hit_order(*bvh_, order_);
-    detail::trace_in_packets<Box, kAnyHit>(
-        rays, begin, end, packet_, !bvh_->nodes.empty() && !bvh_->root().is_leaf(), hits, occluded,
-        [&](const Ray* packet, uint32_t n, uint32_t mask, Hit* h, uint8_t* o) {
-          kernel(*bvh_, triangles_.data(), packet, n, mask, order, h, o);
-        },
-        [&](std::size_t n, auto&& index, auto&& put) { trace_alone<kAnyHit>(rays, n, index, put); });
+  void trace_packet(const Ray* packet, uint32_t n, uint32_t mask, Hit* hits, uint8_t* occluded) const {
+    (kAnyHit ? any_packet_ : closest_packet_)(*bvh_, triangles_.data(), packet, n, mask,
+                                              resolve_any_hit_order(*bvh_, order_), hits, occluded);
   }
+  bool root_is_inner() const { return !bvh_->nodes.empty() && !bvh_->root().is_leaf(); }
+  void finish_closest(std::span<Hit>) const {}  // the hits are the scene's triangles already
 
   const Bvh* bvh_ = nullptr;
   std::span<const Triangle> triangles_;
   Bvh owned_;  // once refitted
   AnyHitOrder order_ = AnyHitOrder::kAuto;
-  uint32_t packet_ = 1;
-  KernelIsa isa_ = KernelIsa::kScalar;  // of the packet kernels; scalar for the single-ray kernel
   BinaryPacketKernel closest_packet_ = nullptr, any_packet_ = nullptr;
 };
 
-void require_binary(const Bvh& bvh, const char* layout) {
-  if (bvh.arity != 2)
-    throw Error(std::string("layout '") + layout + "' needs a binary tree, the builder gave arity " +
-                std::to_string(bvh.arity));
-}
-
 std::unique_ptr<CompiledLayout> compile_bvh2(const Bvh& bvh, std::span<const Triangle> tris,
                                              const LayoutSpec& spec) {
-  require_binary(bvh, "bvh2");
   const KernelIsa isa = spec.packet == 1 ? KernelIsa::kScalar : layout_kernel_isa(spec);
   return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
     return std::make_unique<Bvh2Layout<Tri, Box>>(bvh, tris, spec.variant, spec.packet, isa);
@@ -192,7 +149,12 @@ std::unique_ptr<CompiledLayout> compile_layout(const LayoutSpec& spec, const Bvh
                                                std::span<const Triangle> triangles) {
   // Kernels this CPU or build lacks (a packet width, an ISA): refused here, for every layout.
   if (const auto why = layout_unavailable(spec)) throw Error("layout '" + spec.text() + "': " + *why);
-  return compiler(find_layout(spec.name).name)(bvh, triangles, spec);
+  // A tree wider than the layout's nodes: refused here, for every layout (narrower trees compile).
+  const LayoutInfo& info = find_layout(spec.name);
+  if (bvh.arity > info.arity)
+    throw Error("layout '" + spec.text() + "' takes trees of arity " + std::to_string(info.arity) +
+                " or less; the builder gave arity " + std::to_string(bvh.arity));
+  return compiler(info.name)(bvh, triangles, spec);
 }
 
 std::unique_ptr<CompiledLayout> compile_layout(std::string_view spec, const Bvh& bvh,

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "core/error.h"
+#include "traversal/binary_layout.h"
 #include "traversal/ray_chunks.h"
 #include "traversal/variant_dispatch.h"
 #include "traversal/wide_kernels_isa.h"
@@ -81,9 +82,6 @@ void PackedBvh2::refit(std::span<const Triangle> scene_triangles) {
 
 namespace {
 
-// Rays handed to one task, as the other layouts.
-constexpr std::size_t kRayChunk = 256;
-
 // The packet kernels of `isa` (AVX2 or AVX-512) for `variant`; nullptr where none are compiled in.
 PairPacketKernel find_pair_packet_kernel([[maybe_unused]] KernelIsa isa,
                                          [[maybe_unused]] const KernelVariant& variant,
@@ -96,16 +94,18 @@ PairPacketKernel find_pair_packet_kernel([[maybe_unused]] KernelIsa isa,
 }
 
 template <class Tri, class Box>
-class PackedBvh2Layout final : public CompiledLayout {
+class PackedBvh2Layout final : public detail::BinaryLayout<PackedBvh2Layout<Tri, Box>, Box> {
+  using Base = detail::BinaryLayout<PackedBvh2Layout<Tri, Box>, Box>;
+  friend Base;
+
  public:
   /// `packet` 1: the single-ray kernel; 8 or 16: the packet kernels of `isa`.
   PackedBvh2Layout(const Bvh& bvh, std::span<const Triangle> triangles, const KernelVariant& variant,
                    uint32_t packet, KernelIsa isa)
-      : tree_(PackedBvh2::compile(bvh, triangles)),
+      : Base(packet, isa),
+        tree_(PackedBvh2::compile(bvh, triangles)),
         scene_triangles_(triangles.size()),
-        order_(resolve_any_hit_order(bvh, variant.any_hit)),
-        packet_(packet),
-        isa_(packet == 1 ? KernelIsa::kScalar : isa) {
+        order_(resolve_any_hit_order(bvh, variant.any_hit)) {
     if (packet == 1) return;
     closest_packet_ = find_pair_packet_kernel(isa, variant, false, packet);
     any_packet_ = find_pair_packet_kernel(isa, variant, true, packet);
@@ -114,24 +114,6 @@ class PackedBvh2Layout final : public CompiledLayout {
                   "-ray packet kernels compiled in");
   }
 
-  void trace_closest(std::span<const Ray> rays, std::span<Hit> hits) const override {
-    for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      if (packet_ == 1)
-        trace_range<false>(rays, b, e, [&](std::size_t i, const Hit& hit) { hits[i] = hit; });
-      else
-        trace_in_packets<false>(rays, b, e, hits.data(), nullptr);
-      for (std::size_t i = b; i != e; ++i)
-        if (hits[i].found()) hits[i].prim = tree_.ids[hits[i].prim];
-    });
-  }
-  void trace_any(std::span<const Ray> rays, std::span<uint8_t> occluded) const override {
-    for_each_ray_chunk(rays.size(), kRayChunk, [&](std::size_t b, std::size_t e) {
-      if (packet_ == 1)
-        trace_range<true>(rays, b, e, [&](std::size_t i, const Hit& hit) { occluded[i] = hit.found(); });
-      else
-        trace_in_packets<true>(rays, b, e, nullptr, occluded.data());
-    });
-  }
   TraceCounts count_closest(std::span<const Ray> rays) const override { return count<false>(rays); }
   TraceCounts count_any(std::span<const Ray> rays) const override { return count<true>(rays); }
 
@@ -143,12 +125,11 @@ class PackedBvh2Layout final : public CompiledLayout {
   }
 
   std::size_t bytes() const override { return tree_.bytes(); }
-  std::string isa() const override { return std::string(to_string(isa_)); }
 
  private:
   template <bool kAnyHit>
   TraceCounts count(std::span<const Ray> rays) const {
-    return sum_over_ray_chunks(rays.size(), kRayChunk, [&](std::size_t begin, std::size_t end) {
+    return sum_over_ray_chunks(rays.size(), detail::kBinaryRayChunk, [&](std::size_t begin, std::size_t end) {
       TraversalCounters counters;
       for (std::size_t i = begin; i != end; ++i)
         detail::traverse_packed<Tri, Box, kAnyHit, true>(tree_, rays[i], &counters, order_);
@@ -156,8 +137,7 @@ class PackedBvh2Layout final : public CompiledLayout {
     });
   }
 
-  // Rays rays[index(j)], j in [0, n), one at a time with several walks in flight (detail::trace_walks);
-  // `put(i, hit)` takes ray i's answer.
+  // What detail::BinaryLayout asks of a binary layout.
   template <bool kAnyHit, class Index, class Put>
   void trace_alone(std::span<const Ray> rays, std::size_t n, Index&& index, Put&& put) const {
     using Walk = detail::PackedWalk<Tri, Box, kAnyHit, false>;
@@ -169,32 +149,20 @@ class PackedBvh2Layout final : public CompiledLayout {
         },
         put);
   }
-  // Rays [begin, end), as trace_alone.
-  template <bool kAnyHit, class Put>
-  void trace_range(std::span<const Ray> rays, std::size_t begin, std::size_t end, Put&& put) const {
-    trace_alone<kAnyHit>(
-        rays, end - begin, [&](std::size_t j) { return begin + j; }, put);
-  }
-
-  // Rays [begin, end) in packets of packet_ rays (detail::trace_in_packets). A chunk
-  // starts at a multiple of kRayChunk, so packets are cut at the same rays whatever the thread count.
   template <bool kAnyHit>
-  void trace_in_packets(std::span<const Ray> rays, std::size_t begin, std::size_t end, Hit* hits,
-                        uint8_t* occluded) const {
-    const PairPacketKernel kernel = kAnyHit ? any_packet_ : closest_packet_;
-    detail::trace_in_packets<Box, kAnyHit>(
-        rays, begin, end, packet_, !tree_.empty && tree_.root_count == 0, hits, occluded,
-        [&](const Ray* packet, uint32_t n, uint32_t mask, Hit* h, uint8_t* o) {
-          kernel(tree_, packet, n, mask, order_, h, o);
-        },
-        [&](std::size_t n, auto&& index, auto&& put) { trace_alone<kAnyHit>(rays, n, index, put); });
+  void trace_packet(const Ray* packet, uint32_t n, uint32_t mask, Hit* hits, uint8_t* occluded) const {
+    (kAnyHit ? any_packet_ : closest_packet_)(tree_, packet, n, mask, order_, hits, occluded);
+  }
+  bool root_is_inner() const { return !tree_.empty && tree_.root_count == 0; }
+  // The kernels answer with packed triangle indices.
+  void finish_closest(std::span<Hit> hits) const {
+    for (Hit& hit : hits)
+      if (hit.found()) hit.prim = tree_.ids[hit.prim];
   }
 
   PackedBvh2 tree_;
   std::size_t scene_triangles_;  // for refit's check
   AnyHitOrder order_;
-  uint32_t packet_;
-  KernelIsa isa_;  // of the packet kernels; scalar for the single-ray kernel
   PairPacketKernel closest_packet_ = nullptr, any_packet_ = nullptr;
 };
 
@@ -202,9 +170,6 @@ class PackedBvh2Layout final : public CompiledLayout {
 
 std::unique_ptr<CompiledLayout> compile_packed_bvh2(const Bvh& bvh, std::span<const Triangle> triangles,
                                                     const LayoutSpec& spec) {
-  if (bvh.arity != 2)
-    throw Error("layout 'bvh2_packed' needs a binary tree, the builder gave arity " +
-                std::to_string(bvh.arity));
   const KernelIsa isa = spec.packet == 1 ? KernelIsa::kScalar : layout_kernel_isa(spec);
   return with_test_types(spec.variant, [&]<class Tri, class Box>() -> std::unique_ptr<CompiledLayout> {
     return std::make_unique<PackedBvh2Layout<Tri, Box>>(bvh, triangles, spec.variant, spec.packet, isa);

@@ -20,6 +20,13 @@ time per ray is threads / rays per second, per core. bound / measured is the sha
 1 would be a kernel that waits on nothing but its arithmetic; what is missing is memory latency, branch
 mispredictions and the loop around the tests.
 
+Where the run has Embree medium one ray at a time (embree_1) on the same scene, thread count and ray set,
+in the mode `sahbench report` compares the row with (robust for our exact kernels: the watertight
+triangle test and the robust box test; its default mode for the others), the last columns are Embree's
+measured time per ray and the ceiling: Embree's time over our bound, the ratio to Embree 1-ray that the
+row would reach at its bound. A ceiling below a target says that no better loop reaches it: the target
+needs fewer tests per ray (another tree) or cheaper tests.
+
 A CSV that holds several runs (a resumed or repeated `sahbench run`) gives the rows of its latest run,
 as `sahbench report` does, or of `--run`. A builder whose rows differ in parameters is labelled with those
 that differ (binned_sah bins=8, binned_sah bins=32).
@@ -150,9 +157,18 @@ def main():
     elif args.run:
         fail(f"{args.results}: no run_id column to choose --run {args.run} by")
 
+    # Embree medium's one-ray rows by (scene, threads, ray set, robust).
+    embree = {}
+    for row in rows:
+        if row.get("builder") == "embree" and row["layout"] == "embree_1" and row["trace_mrays_median"]:
+            params = split_params(row.get("builder_params", ""))
+            if params.get("quality", "medium") == "medium":
+                key = (row["scene"], row["threads"], row["ray_set"], params.get("robust", "0") == "1")
+                embree[key] = 1000.0 * int(row["threads"]) / float(row["trace_mrays_median"])
+
     print("| scene | builder | layout | threads | ray set | inner + leaves | prims | bound ns | measured ns | "
-          "bound / measured |")
-    print("| --- | --- | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: |")
+          "bound / measured | Embree 1-ray ns | ceiling |")
+    print("| --- | --- | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     missing_bench = set()
     for row, label in zip(rows, labels(rows)):
         if args.threads and int(row["threads"]) != args.threads:
@@ -169,9 +185,13 @@ def main():
         prims = float(row["prims_per_ray"])
         bound = (nodes - leaves) * ns_per_item[names[0]] + prims * ns_per_item[names[1]]
         measured = 1000.0 * int(row["threads"]) / float(row["trace_mrays_median"])
+        _, options = parse_layout(row["layout"])
+        exact = options.get("tri", "watertight") == "watertight" and options.get("box", "robust") == "robust"
+        anchor = embree.get((row["scene"], row["threads"], row["ray_set"], exact))
+        versus = f"{anchor:.0f} | {anchor / bound:.2f}" if anchor else "- | -"
         print(f"| {row['scene']} | {label} | {row['layout']} | {row['threads']} | {row['ray_set']} | "
               f"{nodes - leaves:.1f} + {leaves:.1f} | {prims:.1f} | {bound:.0f} | {measured:.0f} | "
-              f"{bound / measured:.2f} |")
+              f"{bound / measured:.2f} | {versus} |")
     if missing_bench:
         print(f"\nNo figure in {args.bench} for: {', '.join(sorted(missing_bench))} (their rows are left out).")
 

@@ -63,6 +63,28 @@ BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreTest>)->Name("ray_triangle/scalar/m
 BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNoEpsilonTest>)->Name("ray_triangle/scalar/mt0");
 BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNormalTest>)->Name("ray_triangle/scalar/mtn");
 
+#if defined(__SSE4_1__)
+// The watertight test four consecutive triangles at a time, as bvh2_packed's walks test a leaf
+// (WatertightLanes, closest hit: hits refined). Items are triangles.
+void BM_WatertightLanes(benchmark::State& state) {
+  const auto& tris = soup(kPrims);
+  const auto& rs = rays(kRays);
+  for (auto _ : state) {
+    uint32_t hits = 0;
+    for (const Ray& ray : rs) {
+      const WatertightLanes test(ray);
+      alignas(16) float t[4], u[4], v[4];
+      for (std::size_t i = 0; i < tris.size(); i += 4)
+        hits += static_cast<uint32_t>(
+            std::popcount(test.intersect<true>(&tris[i], 4, ray.tmin, ray.tmax, t, u, v)));
+    }
+    benchmark::DoNotOptimize(hits);
+  }
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * kRays * tris.size()));
+}
+BENCHMARK(BM_WatertightLanes)->Name("ray_triangle/lanes4/watertight");
+#endif
+
 // The wide kernels' node test (N boxes at once, one node visit) and block test (4 triangles at once),
 // per instruction set available here. Items are node visits, or triangles.
 template <uint32_t N>

@@ -10,6 +10,8 @@
 // the same NaN rule, so the kernel visits the nodes the common-format kernel visits, in the same order,
 // and counts the same work (the layout tests hold it to that).
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -166,6 +168,19 @@ class PairSlabs {
 #endif
 };
 
+// Whether a walk tests a leaf's triangles four at a time: the watertight test, where SSE 4.1 is there.
+#if defined(__SSE4_1__)
+template <class TriangleTest>
+inline constexpr bool kTestsInLanes = std::is_same_v<TriangleTest, WatertightTriangleTest>;
+template <class TriangleTest>
+using LeafTestOf = std::conditional_t<kTestsInLanes<TriangleTest>, WatertightLanes, TriangleTest>;
+#else
+template <class TriangleTest>
+inline constexpr bool kTestsInLanes = false;
+template <class TriangleTest>
+using LeafTestOf = TriangleTest;
+#endif
+
 // The while-while loop of BinaryWalk (bvh2_traversal.h) on PairNodes, one step at a time: the same
 // visits in the same order, with a child's box read from its parent's line and a leaf's triangles reached
 // without a node. A step is one inner node, or one leaf and the pops after it, so that several walks can
@@ -176,7 +191,7 @@ class PackedWalk {
   PackedWalk(const PackedBvh2& tree, const Ray& ray, [[maybe_unused]] TraversalCounters* counters,
              AnyHitOrder any_order)
       : slabs_(ray),
-        triangle_test_(ray),
+        leaf_test_(ray),
         nodes_(tree.nodes.data()),
         triangles_(tree.triangles.data()),
         ids_(tree.ids.data()),
@@ -233,21 +248,7 @@ class PackedWalk {
         ++counters_->leaf_visits;
         counters_->prim_tests += count_;
       }
-      const uint32_t end = current_ + count_;
-      for (uint32_t prim = current_; prim < end; ++prim) {
-        float t, u, v;
-        const bool hit = kAnyHit ? intersect_any(triangle_test_, triangles_[prim], tmin_, best_t_, t, u, v)
-                                 : triangle_test_.intersect(triangles_[prim], tmin_, best_t_, t, u, v);
-        if (!hit) continue;
-        if constexpr (kAnyHit) {
-          best_ = {prim, t, u, v};
-          return active_ = false;
-        } else if (t < best_t_ || !best_.found() || ids_[prim] < ids_[best_.prim]) {
-          // On a tie the lowest scene index wins, as in the common-format kernel.
-          best_ = {prim, t, u, v};
-          best_t_ = t;
-        }
-      }
+      if (test_leaf(current_, current_ + count_)) return active_ = false;  // an any-hit query's hit
     }
     do {
       if (size_ == 0) return active_ = false;
@@ -264,8 +265,51 @@ class PackedWalk {
     float t_entry;
   };
 
+  // The leaf's triangles [first, end); true when an any-hit query found its hit.
+  [[gnu::always_inline]] bool test_leaf(uint32_t first, uint32_t end) {
+    if constexpr (kTestsInLanes<TriangleTest>) {
+      // Four at a time, each four against the closest hit before them: of a tie at one t, the lowest
+      // scene index wins, as the scalar loop's rule says, unless the scalar loop, having lowered tmax to
+      // that t, would have rounded the second hit out (WatertightLanes).
+      for (; first < end; first += 4) {
+        alignas(16) float t[4], u[4], v[4];
+        const uint32_t n = std::min<uint32_t>(4, end - first);
+        unsigned mask =
+            leaf_test_.template intersect<!kAnyHit>(&triangles_[first], n, tmin_, best_t_, t, u, v);
+        for (; mask != 0; mask &= mask - 1) {
+          const auto i = static_cast<unsigned>(std::countr_zero(mask));
+          const uint32_t prim = first + i;
+          if constexpr (kAnyHit) {
+            best_ = {prim, t[i], u[i], v[i]};
+            return true;
+          } else if (t[i] < best_t_ ||
+                     (t[i] == best_t_ && (!best_.found() || ids_[prim] < ids_[best_.prim]))) {
+            best_ = {prim, t[i], u[i], v[i]};
+            best_t_ = t[i];
+          }
+        }
+      }
+    } else {
+      for (uint32_t prim = first; prim < end; ++prim) {
+        float t, u, v;
+        const bool hit = kAnyHit ? intersect_any(leaf_test_, triangles_[prim], tmin_, best_t_, t, u, v)
+                                 : leaf_test_.intersect(triangles_[prim], tmin_, best_t_, t, u, v);
+        if (!hit) continue;
+        if constexpr (kAnyHit) {
+          best_ = {prim, t, u, v};
+          return true;
+        } else if (t < best_t_ || !best_.found() || ids_[prim] < ids_[best_.prim]) {
+          // On a tie the lowest scene index wins, as in the common-format kernel.
+          best_ = {prim, t, u, v};
+          best_t_ = t;
+        }
+      }
+    }
+    return false;
+  }
+
   PairSlabs<BoxTest> slabs_;
-  TriangleTest triangle_test_;
+  LeafTestOf<TriangleTest> leaf_test_;
   const PairNode* nodes_;
   const Triangle* triangles_;
   const uint32_t* ids_;

@@ -38,6 +38,8 @@ ROWS = [
     # bvh2_packed with the fast box test and Möller-Trumbore: 30 * 4 + 5 * 3 = 135 ns against 250 ns.
     ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "4", "bins=32",
      "r2"],
+    # bvh2_packed's watertight leaves are priced by the four-lane test: 10 * 5 + 4 * 1 = 54 ns.
+    ["s", "binned_sah", "bvh2_packed", "scalar", "1", "primary", "12", "2", "4", "10", "bins=32", "r2"],
     # The same builder with other parameters: each row names the parameter that differs.
     ["s", "binned_sah", "bvh2_packed:tri=mt,box=fast", "scalar", "1", "shadow", "40", "10", "5", "5", "bins=8", "r2"],
     # Embree medium one ray at a time: its default mode (30 and 10 Mrays/s) is the anchor of the fast
@@ -57,6 +59,8 @@ BENCH = {"benchmarks": [
     {"name": "ray_triangle/block4/avx2/watertight", "items_per_second": 1e9},
     {"name": "node_visit/bvh2_packed/scalar/fast", "items_per_second": 2.5e8},
     {"name": "ray_triangle/scalar/mt", "items_per_second": 1e9 / 3},
+    {"name": "node_visit/bvh2_packed/scalar/robust", "items_per_second": 2e8},
+    {"name": "ray_triangle/lanes4/watertight", "items_per_second": 1e9},
 ]}
 
 
@@ -77,6 +81,8 @@ def main():
               "40 | 1.43 |" in text, text)
         # A fast variant against Embree's default mode: 100 ns over 135.
         check("| 135 | 250 | 0.54 | 100 | 0.74 |" in text, text)
+        check("| s | binned_sah bins=32 | bvh2_packed | 1 | primary | 10.0 + 2.0 | 4.0 | 54 | 100 | 0.54 | 40 | 0.74 |"
+              in text, text)
         # No Embree row of that thread count: no ceiling.
         check("| 28 | 100 | 0.28 | - | - |" in text, text)
         check("| s | wide_collapse[source=reinsert] source=reinsert(source=binned_sah(bins=32)) | bvh8 | 2 | primary | "

@@ -9,8 +9,9 @@
 // The box tests are the ones of ray_box.h, lane by lane: the same IEEE operations on the same planes and
 // the same NaN rule, so the kernel visits the nodes the common-format kernel visits, in the same order,
 // and counts the same work (the layout tests hold it to that). A leaf's watertight triangles are tested
-// four at a time (WatertightLanes), so of two hits at exactly one t it may keep another than the
-// common-format kernel, which lowers tmax after each hit; anywhere else the hits are the same.
+// four at a time (WatertightLanes) against the closest hit before them, where the common-format kernel
+// lowers tmax after each hit: where two of the four hit, the answer may be another hit, never a farther
+// one (test_leaf).
 
 #include <algorithm>
 #include <bit>
@@ -270,9 +271,10 @@ class PackedWalk {
   // The leaf's triangles [first, end); true when an any-hit query found its hit.
   [[gnu::always_inline]] bool test_leaf(uint32_t first, uint32_t end) {
     if constexpr (kTestsInLanes<TriangleTest>) {
-      // Four at a time, each four against the closest hit before them: of a tie at one t, the lowest
-      // scene index wins, as the scalar loop's rule says, unless the scalar loop, having lowered tmax to
-      // that t, would have rounded the second hit out (WatertightLanes).
+      // Four at a time, each four against the closest hit before them. The scalar loop tests each
+      // triangle against the refined distance of the hit before it, and its range test is on the float
+      // distance: a second hit of the four whose float distance lies beyond the first's refined one,
+      // and whose refined distance does not (or ties it), is kept here and dropped there.
       for (; first < end; first += 4) {
         alignas(16) float t[4], u[4], v[4];
         const uint32_t n = std::min<uint32_t>(4, end - first);

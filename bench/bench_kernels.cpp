@@ -3,6 +3,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <bit>
 #include <string>
 #include <vector>
@@ -63,7 +64,7 @@ BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreTest>)->Name("ray_triangle/scalar/m
 BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNoEpsilonTest>)->Name("ray_triangle/scalar/mt0");
 BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNormalTest>)->Name("ray_triangle/scalar/mtn");
 
-#if defined(__SSE4_1__)
+#if defined(__SSE2__)
 // The watertight test four consecutive triangles at a time, as bvh2_packed's walks test a leaf
 // (WatertightLanes, closest hit: hits refined). Items are triangles.
 void BM_WatertightLanes(benchmark::State& state) {
@@ -74,9 +75,11 @@ void BM_WatertightLanes(benchmark::State& state) {
     for (const Ray& ray : rs) {
       const WatertightLanes test(ray);
       alignas(16) float t[4], u[4], v[4];
-      for (std::size_t i = 0; i < tris.size(); i += 4)
+      for (std::size_t i = 0; i < tris.size(); i += 4) {
+        const auto n = static_cast<uint32_t>(std::min<std::size_t>(4, tris.size() - i));
         hits += static_cast<uint32_t>(
-            std::popcount(test.intersect<true>(&tris[i], 4, ray.tmin, ray.tmax, t, u, v)));
+            std::popcount(test.intersect<true>(&tris[i], n, ray.tmin, ray.tmax, t, u, v)));
+      }
     }
     benchmark::DoNotOptimize(hits);
   }

@@ -9,9 +9,7 @@
 // The box tests are the ones of ray_box.h, lane by lane: the same IEEE operations on the same planes and
 // the same NaN rule, so the kernel visits the nodes the common-format kernel visits, in the same order,
 // and counts the same work (the layout tests hold it to that). A leaf's watertight triangles are tested
-// four at a time (WatertightLanes) against the closest hit before them, where the common-format kernel
-// lowers tmax after each hit: where two of the four hit, the answer may be another hit, never a farther
-// one (test_leaf).
+// four at a time (WatertightLanes), with the same answers as one at a time (test_leaf).
 
 #include <algorithm>
 #include <bit>
@@ -171,8 +169,8 @@ class PairSlabs {
 #endif
 };
 
-// Whether a walk tests a leaf's triangles four at a time: the watertight test, where SSE 4.1 is there.
-#if defined(__SSE4_1__)
+// Whether a walk tests a leaf's triangles four at a time: the watertight test, on x86-64 (SSE2).
+#if defined(__SSE2__)
 template <class TriangleTest>
 inline constexpr bool kTestsInLanes = std::is_same_v<TriangleTest, WatertightTriangleTest>;
 template <class TriangleTest>
@@ -271,25 +269,26 @@ class PackedWalk {
   // The leaf's triangles [first, end); true when an any-hit query found its hit.
   [[gnu::always_inline]] bool test_leaf(uint32_t first, uint32_t end) {
     if constexpr (kTestsInLanes<TriangleTest>) {
-      // Four at a time, each four against the closest hit before them. The scalar loop tests each
-      // triangle against the refined distance of the hit before it, and its range test is on the float
-      // distance: a second hit of the four whose float distance lies beyond the first's refined one,
-      // and whose refined distance does not (or ties it), is kept here and dropped there.
+      // Four at a time against the closest hit before them. The scalar loop tests each triangle against
+      // the distance of the last hit it took; so where a hit of the four lowered that distance, the
+      // hits after it are tested again, one by one, against the lowered one: the answers are the
+      // scalar loop's, hit for hit (a miss at the higher distance is a miss at the lower one).
       for (; first < end; first += 4) {
         alignas(16) float t[4], u[4], v[4];
         const uint32_t n = std::min<uint32_t>(4, end - first);
-        unsigned mask =
-            leaf_test_.template intersect<!kAnyHit>(&triangles_[first], n, tmin_, best_t_, t, u, v);
+        const float tmax = best_t_;
+        unsigned mask = leaf_test_.template intersect<!kAnyHit>(&triangles_[first], n, tmin_, tmax, t, u, v);
         for (; mask != 0; mask &= mask - 1) {
           const auto i = static_cast<unsigned>(std::countr_zero(mask));
           const uint32_t prim = first + i;
           if constexpr (kAnyHit) {
             best_ = {prim, t[i], u[i], v[i]};
             return true;
-          } else if (t[i] < best_t_ ||
-                     (t[i] == best_t_ && (!best_.found() || ids_[prim] < ids_[best_.prim]))) {
-            best_ = {prim, t[i], u[i], v[i]};
-            best_t_ = t[i];
+          } else {
+            if (best_t_ < tmax &&
+                !leaf_test_.one().intersect(triangles_[prim], tmin_, best_t_, t[i], u[i], v[i]))
+              continue;
+            take_closer(prim, t[i], u[i], v[i]);
           }
         }
       }
@@ -302,14 +301,21 @@ class PackedWalk {
         if constexpr (kAnyHit) {
           best_ = {prim, t, u, v};
           return true;
-        } else if (t < best_t_ || !best_.found() || ids_[prim] < ids_[best_.prim]) {
-          // On a tie the lowest scene index wins, as in the common-format kernel.
-          best_ = {prim, t, u, v};
-          best_t_ = t;
+        } else {
+          take_closer(prim, t, u, v);
         }
       }
     }
     return false;
+  }
+
+  // A hit within [tmin, best_t_]: it becomes the answer if it is closer, or on a tie if its scene index
+  // is lower, as in the common-format kernel.
+  [[gnu::always_inline]] void take_closer(uint32_t prim, float t, float u, float v) {
+    if (t < best_t_ || !best_.found() || ids_[prim] < ids_[best_.prim]) {
+      best_ = {prim, t, u, v};
+      best_t_ = t;
+    }
   }
 
   PairSlabs<BoxTest> slabs_;

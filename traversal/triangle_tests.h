@@ -11,12 +11,13 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <utility>
 
-#if defined(__SSE4_1__)
+#if defined(__SSE2__)
 #include <immintrin.h>
 #endif
 
@@ -161,6 +162,10 @@ class WatertightTriangleTest {
            refine_watertight_t(tri.v0, tri.v1, tri.v2, org_, dir_, tmin, tmax, t);
   }
 
+  const Vec3& org() const { return org_; }
+  const Vec3& dir() const { return dir_; }
+  const WatertightShear& shear() const { return shear_; }
+
   /// The watertight decision with the float distance of Woop et al.: what any-hit queries run, which
   /// report no distance (a shadow ray pays no double-precision distance; its decision against [tmin,
   /// tmax] is made on the float t, as Embree's is).
@@ -211,7 +216,7 @@ class WatertightTriangleTest {
   WatertightShear shear_;
 };
 
-#if defined(__SSE4_1__)
+#if defined(__SSE2__)
 /// WatertightTriangleTest on up to four consecutive triangles of a leaf at once, in the four lanes of an
 /// SSE register: lane by lane the same float operations in the same order (so the same decisions, and
 /// the same double-precision finish for a lane whose float edge functions or determinant cannot be
@@ -220,14 +225,18 @@ class WatertightTriangleTest {
 /// then decided by one branch per four instead of a chain of data-dependent branches per triangle.
 class WatertightLanes {
  public:
-  explicit WatertightLanes(const Ray& ray)
-      : org_(ray.org), dir_(ray.dir), shear_(watertight_shear(ray.dir)) {}
+  explicit WatertightLanes(const Ray& ray) : one_(ray) {}
+
+  /// The same test on one triangle: WatertightTriangleTest, set up once for both.
+  const WatertightTriangleTest& one() const { return one_; }
 
   /// Bit i set: tris[i] (i < n, n in [1, 4]) is hit within [tmin, tmax], at t[i] with u[i], v[i];
   /// kRefine: t[i] refined as WatertightTriangleTest::intersect refines it.
   template <bool kRefine>
   unsigned intersect(const Triangle* tris, uint32_t n, float tmin, float tmax, float* t, float* u,
                      float* v) const {
+    assert(n >= 1 && n <= 4);
+    static_assert(sizeof(Triangle) == 9 * sizeof(float), "a Triangle is its three vertices' nine floats");
     // Rows of each triangle's nine floats: (v0 x y z, v1 x), (v1 y z, v2 x y), v2 z. Lanes past n
     // repeat the last triangle and are masked off.
     __m128 r0[4], r1[4], r2[4];
@@ -242,10 +251,10 @@ class WatertightLanes {
     const __m128 v2z = _mm_movelh_ps(_mm_unpacklo_ps(r2[0], r2[1]), _mm_unpacklo_ps(r2[2], r2[3]));
     // [vertex][axis], then taken in the ray's permuted axes.
     const __m128 vert[3][3] = {{r0[0], r0[1], r0[2]}, {r0[3], r1[0], r1[1]}, {r1[2], r1[3], v2z}};
-    const auto [kx, ky, kz, sx_, sy_, sz_] = shear_;
-    const detail::Components o = detail::components(org_);
+    const auto [kx, ky, kz, shear_x, shear_y, shear_z] = one_.shear();
+    const detail::Components o = detail::components(one_.org());
     const __m128 ox = _mm_set1_ps(o[kx]), oy = _mm_set1_ps(o[ky]), oz = _mm_set1_ps(o[kz]);
-    const __m128 sx = _mm_set1_ps(sx_), sy = _mm_set1_ps(sy_), sz = _mm_set1_ps(sz_);
+    const __m128 sx = _mm_set1_ps(shear_x), sy = _mm_set1_ps(shear_y), sz = _mm_set1_ps(shear_z);
     __m128 px[3], py[3], pz[3];  // sheared x, y and z of each vertex
     for (int k = 0; k < 3; ++k) {
       const __m128 rx = _mm_sub_ps(vert[k][kx], ox), ry = _mm_sub_ps(vert[k][ky], oy),
@@ -311,17 +320,16 @@ class WatertightLanes {
     }
     if constexpr (kRefine)
       for (unsigned m = mask; m != 0; m &= m - 1) {
-        const unsigned i = static_cast<unsigned>(__builtin_ctz(m));
-        if (!refine_watertight_t(tris[i].v0, tris[i].v1, tris[i].v2, org_, dir_, tmin, tmax, t[i]))
+        const auto i = static_cast<unsigned>(std::countr_zero(m));
+        if (!refine_watertight_t(tris[i].v0, tris[i].v1, tris[i].v2, one_.org(), one_.dir(), tmin, tmax,
+                                 t[i]))
           mask &= ~(1u << i);
       }
     return mask;
   }
 
  private:
-  Vec3 org_;
-  Vec3 dir_;
-  WatertightShear shear_;
+  WatertightTriangleTest one_;
 };
 #endif
 

@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <limits>
 #include <random>
@@ -355,6 +357,67 @@ TEST(TravTriangleMollerTrumboreNormal, RejectsEdgeOnAndHitsTinyTrianglesInDouble
   EXPECT_TRUE(WatertightTriangleTest(at_speck).intersect(speck, 0.0f, kInf, t, u, v));
   EXPECT_FLOAT_EQ(t, 1.0f);
 }
+
+#if defined(__SSE2__)
+// WatertightLanes decides each of its four lanes as WatertightTriangleTest decides that triangle alone:
+// the same bits of t, u and v on every hit, and the same misses, for rays exactly through edges and
+// vertices (edge functions of 0, finished in double), +-0 direction components, scales that overflow
+// or underflow the float path, hits at exactly tmin or tmax, and leaves of one to four triangles.
+TEST(TravTriangleWatertightLanes, EveryLaneAsTheScalarTest) {
+  std::mt19937 rng(29);
+  std::uniform_int_distribution<int> sixteenths(-32, 32);
+  auto dyadic = [&] {
+    return Vec3{sixteenths(rng) / 16.0f, sixteenths(rng) / 16.0f, sixteenths(rng) / 16.0f};
+  };
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  const float scales[] = {1.0f, 0x1p66f, 0x1p-70f};
+  int hits = 0, lanes = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const float scale = scales[i % 3];
+    Triangle tris[4];
+    for (Triangle& tri : tris) tri = {dyadic() * scale, dyadic() * scale, dyadic() * scale};
+    const Triangle& aim = tris[static_cast<std::size_t>(i % 4)];
+    // At a vertex, an edge's dyadic point, or anywhere; from a dyadic direction (often with zero
+    // components, some of them -0) or a random one.
+    const Vec3 target = i % 5 == 0 ? aim.v1 : (i % 5 == 1 ? (aim.v0 + aim.v2) * 0.5f : dyadic() * scale);
+    Vec3 dir = i % 2 ? dyadic() : Vec3{unit(rng), unit(rng), unit(rng)};
+    if (i % 7 == 0) dir.y = -0.0f;
+    if (dir.x == 0.0f && dir.y == 0.0f && dir.z == 0.0f) continue;
+    const Vec3 org = target - dir * scale;
+    // tmax exactly at the aimed triangle's distance some of the time, so that the closed interval counts.
+    float tmin = 0.0f, tmax = kInf;
+    {
+      float t, u, v;
+      if (i % 4 == 3 && WatertightTriangleTest(make_ray(org, dir)).intersect(aim, 0.0f, kInf, t, u, v))
+        (i % 8 == 3 ? tmax : tmin) = t;
+    }
+    const Ray ray = make_ray(org, dir, tmin, tmax);
+    const uint32_t n = 1 + static_cast<uint32_t>(i / 4 % 4);
+    const WatertightLanes four(ray);
+    const WatertightTriangleTest one(ray);
+    for (bool refine : {true, false}) {
+      alignas(16) float t[4], u[4], v[4];
+      const unsigned mask = refine ? four.intersect<true>(tris, n, tmin, tmax, t, u, v)
+                                   : four.intersect<false>(tris, n, tmin, tmax, t, u, v);
+      EXPECT_EQ(mask >> n, 0u);
+      for (uint32_t k = 0; k < n; ++k) {
+        SCOPED_TRACE(testing::Message() << "case " << i << " lane " << k << " refine " << refine);
+        float tk, uk, vk;
+        const bool hit = refine ? one.intersect(tris[k], tmin, tmax, tk, uk, vk)
+                                : one.intersect_float(tris[k], tmin, tmax, tk, uk, vk);
+        ++lanes;
+        ASSERT_EQ((mask >> k & 1u) != 0, hit);
+        if (!hit) continue;
+        ++hits;
+        EXPECT_EQ(std::bit_cast<uint32_t>(t[k]), std::bit_cast<uint32_t>(tk));
+        EXPECT_EQ(std::bit_cast<uint32_t>(u[k]), std::bit_cast<uint32_t>(uk));
+        EXPECT_EQ(std::bit_cast<uint32_t>(v[k]), std::bit_cast<uint32_t>(vk));
+      }
+    }
+  }
+  EXPECT_GT(hits, lanes / 20);
+}
+#endif
 
 }  // namespace
 }  // namespace sahbench

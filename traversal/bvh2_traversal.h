@@ -85,6 +85,61 @@ struct StackEntry {
 /// Throws sahbench::Error naming the node: a tree deeper than kMaxDepth (the builders guarantee it).
 [[noreturn]] void throw_stack_overflow(uint32_t node, uint32_t child_count);
 
+/// A binary walk's leaf: its triangles `leaf.triangle(k)`, k < `leaf.size`, tested in order against
+/// the closest hit so far (`best`, at `best_t`); `leaf.prim(k)` is what a hit names and
+/// `leaf.scene_index(prim)` that hit's index in the scene, which breaks ties (the lowest wins, as in the
+/// general loop below). Returns true when an any-hit query found its hit.
+///
+/// The watertight test takes the triangles four at a time (`leaf.four`, WatertightLanes) against the
+/// closest hit before them; where one of them lowered it, the hits after that one are tested again by
+/// the scalar test against the lowered distance, as the one-at-a-time loop would have tested them (a
+/// triangle missed at the higher distance is missed at the lower one too): the answers are the same, hit
+/// for hit.
+template <bool kAnyHit, class TriangleTest, class Leaf>
+[[gnu::always_inline]] inline bool test_leaf(const LeafTestOf<TriangleTest>& test, const Leaf& leaf,
+                                             float tmin, float& best_t, Hit& best) {
+  auto take = [&](uint32_t prim, float t, float u, float v) {
+    if (t < best_t || !best.found() || leaf.scene_index(prim) < leaf.scene_index(best.prim)) {
+      best = {prim, t, u, v};
+      best_t = t;
+    }
+  };
+  if constexpr (kTestsInLanes<TriangleTest>) {
+    for (uint32_t first = 0; first < leaf.size; first += 4) {
+      alignas(16) float t[4], u[4], v[4];
+      const uint32_t n = std::min<uint32_t>(4, leaf.size - first);
+      const float tmax = best_t;
+      for (unsigned mask = leaf.template four<!kAnyHit>(test, first, n, tmin, tmax, t, u, v); mask != 0;
+           mask &= mask - 1) {
+        const uint32_t k = first + static_cast<uint32_t>(std::countr_zero(mask));
+        const uint32_t i = k - first;
+        if constexpr (kAnyHit) {
+          best = {leaf.prim(k), t[i], u[i], v[i]};
+          return true;
+        } else {
+          if (best_t < tmax && !test.one().intersect(leaf.triangle(k), tmin, best_t, t[i], u[i], v[i]))
+            continue;
+          take(leaf.prim(k), t[i], u[i], v[i]);
+        }
+      }
+    }
+  } else {
+    for (uint32_t k = 0; k < leaf.size; ++k) {
+      float t, u, v;
+      const bool hit = kAnyHit ? intersect_any(test, leaf.triangle(k), tmin, best_t, t, u, v)
+                               : test.intersect(leaf.triangle(k), tmin, best_t, t, u, v);
+      if (!hit) continue;
+      if constexpr (kAnyHit) {
+        best = {leaf.prim(k), t, u, v};
+        return true;
+      } else {
+        take(leaf.prim(k), t, u, v);
+      }
+    }
+  }
+  return false;
+}
+
 // The loop for binary trees (every inner node of a valid arity-2 tree has two children), the shape of
 // Aila and Laine 2009's "while-while" kernel and of tinybvh's BVH::Intersect: both children are tested
 // where their parent is visited, the ray goes on to the nearer one without a trip through the stack and
@@ -156,21 +211,10 @@ class BinaryWalk {
         ++counters_->leaf_visits;
         counters_->prim_tests += node.prim_count;
       }
-      const uint32_t end = node.first + node.prim_count;
-      for (uint32_t r = node.first; r < end; ++r) {
-        const uint32_t prim = refs_[r];
-        float t, u, v;
-        const bool hit = kAnyHit ? intersect_any(triangle_test_, triangles_[prim], tmin_, best_t_, t, u, v)
-                                 : triangle_test_.intersect(triangles_[prim], tmin_, best_t_, t, u, v);
-        if (!hit) continue;
-        if constexpr (kAnyHit) {
-          best_ = {prim, t, u, v};
-          return active_ = false;
-        } else if (t < best_t_ || prim < best_.prim) {
-          best_ = {prim, t, u, v};
-          best_t_ = t;
-        }
-      }
+      if (test_leaf<kAnyHit, TriangleTest>(triangle_test_,
+                                           RefLeaf{refs_ + node.first, triangles_, node.prim_count}, tmin_,
+                                           best_t_, best_))
+        return active_ = false;  // an any-hit query's hit
     }
     // Next: the top of the stack, skipping nodes entered beyond the closest hit (equal is kept for the
     // tie rule).
@@ -183,8 +227,25 @@ class BinaryWalk {
   }
 
  private:
+  // A leaf of the common format: its references into the scene's triangles.
+  struct RefLeaf {
+    const uint32_t* refs;
+    const Triangle* triangles;
+    uint32_t size;
+    const Triangle& triangle(uint32_t k) const { return triangles[refs[k]]; }
+    uint32_t prim(uint32_t k) const { return refs[k]; }
+    static uint32_t scene_index(uint32_t prim) { return prim; }
+#if defined(__SSE2__)
+    template <bool kRefine>
+    unsigned four(const WatertightLanes& test, uint32_t k, uint32_t n, float tmin, float tmax, float* t,
+                  float* u, float* v) const {
+      return test.intersect<kRefine>(triangles, refs + k, n, tmin, tmax, t, u, v);
+    }
+#endif
+  };
+
   BoxTest box_test_;
-  TriangleTest triangle_test_;
+  LeafTestOf<TriangleTest> triangle_test_;
   const Node* nodes_;
   const uint32_t* refs_;
   const Triangle* triangles_;

@@ -169,19 +169,6 @@ class PairSlabs {
 #endif
 };
 
-// Whether a walk tests a leaf's triangles four at a time: the watertight test, on x86-64 (SSE2).
-#if defined(__SSE2__)
-template <class TriangleTest>
-inline constexpr bool kTestsInLanes = std::is_same_v<TriangleTest, WatertightTriangleTest>;
-template <class TriangleTest>
-using LeafTestOf = std::conditional_t<kTestsInLanes<TriangleTest>, WatertightLanes, TriangleTest>;
-#else
-template <class TriangleTest>
-inline constexpr bool kTestsInLanes = false;
-template <class TriangleTest>
-using LeafTestOf = TriangleTest;
-#endif
-
 // The while-while loop of BinaryWalk (bvh2_traversal.h) on PairNodes, one step at a time: the same
 // visits in the same order, with a child's box read from its parent's line and a leaf's triangles reached
 // without a node. A step is one inner node, or one leaf and the pops after it, so that several walks can
@@ -249,7 +236,9 @@ class PackedWalk {
         ++counters_->leaf_visits;
         counters_->prim_tests += count_;
       }
-      if (test_leaf(current_, current_ + count_)) return active_ = false;  // an any-hit query's hit
+      if (test_leaf<kAnyHit, TriangleTest>(leaf_test_, PackedLeaf{triangles_, ids_, current_, count_}, tmin_,
+                                           best_t_, best_))
+        return active_ = false;  // an any-hit query's hit
     }
     do {
       if (size_ == 0) return active_ = false;
@@ -266,57 +255,22 @@ class PackedWalk {
     float t_entry;
   };
 
-  // The leaf's triangles [first, end); true when an any-hit query found its hit.
-  [[gnu::always_inline]] bool test_leaf(uint32_t first, uint32_t end) {
-    if constexpr (kTestsInLanes<TriangleTest>) {
-      // Four at a time against the closest hit before them. The scalar loop tests each triangle against
-      // the distance of the last hit it took; so where a hit of the four lowered that distance, the
-      // hits after it are tested again, one by one, against the lowered one: the answers are the
-      // scalar loop's, hit for hit (a miss at the higher distance is a miss at the lower one).
-      for (; first < end; first += 4) {
-        alignas(16) float t[4], u[4], v[4];
-        const uint32_t n = std::min<uint32_t>(4, end - first);
-        const float tmax = best_t_;
-        unsigned mask = leaf_test_.template intersect<!kAnyHit>(&triangles_[first], n, tmin_, tmax, t, u, v);
-        for (; mask != 0; mask &= mask - 1) {
-          const auto i = static_cast<unsigned>(std::countr_zero(mask));
-          const uint32_t prim = first + i;
-          if constexpr (kAnyHit) {
-            best_ = {prim, t[i], u[i], v[i]};
-            return true;
-          } else {
-            if (best_t_ < tmax &&
-                !leaf_test_.one().intersect(triangles_[prim], tmin_, best_t_, t[i], u[i], v[i]))
-              continue;
-            take_closer(prim, t[i], u[i], v[i]);
-          }
-        }
-      }
-    } else {
-      for (uint32_t prim = first; prim < end; ++prim) {
-        float t, u, v;
-        const bool hit = kAnyHit ? intersect_any(leaf_test_, triangles_[prim], tmin_, best_t_, t, u, v)
-                                 : leaf_test_.intersect(triangles_[prim], tmin_, best_t_, t, u, v);
-        if (!hit) continue;
-        if constexpr (kAnyHit) {
-          best_ = {prim, t, u, v};
-          return true;
-        } else {
-          take_closer(prim, t, u, v);
-        }
-      }
+  // A leaf of bvh2_packed: its triangles, copied in leaf order, and their scene indices.
+  struct PackedLeaf {
+    const Triangle* triangles;
+    const uint32_t* ids;
+    uint32_t first, size;
+    const Triangle& triangle(uint32_t k) const { return triangles[first + k]; }
+    uint32_t prim(uint32_t k) const { return first + k; }
+    uint32_t scene_index(uint32_t prim) const { return ids[prim]; }
+#if defined(__SSE2__)
+    template <bool kRefine>
+    unsigned four(const WatertightLanes& test, uint32_t k, uint32_t n, float tmin, float tmax, float* t,
+                  float* u, float* v) const {
+      return test.intersect<kRefine>(triangles + first + k, n, tmin, tmax, t, u, v);
     }
-    return false;
-  }
-
-  // A hit within [tmin, best_t_]: it becomes the answer if it is closer, or on a tie if its scene index
-  // is lower, as in the common-format kernel.
-  [[gnu::always_inline]] void take_closer(uint32_t prim, float t, float u, float v) {
-    if (t < best_t_ || !best_.found() || ids_[prim] < ids_[best_.prim]) {
-      best_ = {prim, t, u, v};
-      best_t_ = t;
-    }
-  }
+#endif
+  };
 
   PairSlabs<BoxTest> slabs_;
   LeafTestOf<TriangleTest> leaf_test_;

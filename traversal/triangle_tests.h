@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <type_traits>
 #include <utility>
 
 #if defined(__SSE2__)
@@ -235,13 +236,31 @@ class WatertightLanes {
   template <bool kRefine>
   unsigned intersect(const Triangle* tris, uint32_t n, float tmin, float tmax, float* t, float* u,
                      float* v) const {
+    return intersect_at<kRefine>([tris](uint32_t i) -> const Triangle& { return tris[i]; }, n, tmin, tmax, t,
+                                 u, v);
+  }
+
+  /// The same on the triangles triangles[refs[i]], i < n.
+  template <bool kRefine>
+  unsigned intersect(const Triangle* triangles, const uint32_t* refs, uint32_t n, float tmin, float tmax,
+                     float* t, float* u, float* v) const {
+    return intersect_at<kRefine>(
+        [triangles, refs](uint32_t i) -> const Triangle& { return triangles[refs[i]]; }, n, tmin, tmax, t, u,
+        v);
+  }
+
+ private:
+  // at(i) is the i-th triangle, i < n.
+  template <bool kRefine, class TriangleAt>
+  unsigned intersect_at(TriangleAt at, uint32_t n, float tmin, float tmax, float* t, float* u,
+                        float* v) const {
     assert(n >= 1 && n <= 4);
     static_assert(sizeof(Triangle) == 9 * sizeof(float), "a Triangle is its three vertices' nine floats");
     // Rows of each triangle's nine floats: (v0 x y z, v1 x), (v1 y z, v2 x y), v2 z. Lanes past n
     // repeat the last triangle and are masked off.
     __m128 r0[4], r1[4], r2[4];
     for (uint32_t i = 0; i < 4; ++i) {
-      const float* p = reinterpret_cast<const float*>(&tris[i < n ? i : n - 1]);
+      const float* p = reinterpret_cast<const float*>(&at(i < n ? i : n - 1));
       r0[i] = _mm_loadu_ps(p);
       r1[i] = _mm_loadu_ps(p + 4);
       r2[i] = _mm_load_ss(p + 8);
@@ -321,16 +340,28 @@ class WatertightLanes {
     if constexpr (kRefine)
       for (unsigned m = mask; m != 0; m &= m - 1) {
         const auto i = static_cast<unsigned>(std::countr_zero(m));
-        if (!refine_watertight_t(tris[i].v0, tris[i].v1, tris[i].v2, one_.org(), one_.dir(), tmin, tmax,
-                                 t[i]))
+        const Triangle& tri = at(i);
+        if (!refine_watertight_t(tri.v0, tri.v1, tri.v2, one_.org(), one_.dir(), tmin, tmax, t[i]))
           mask &= ~(1u << i);
       }
     return mask;
   }
 
- private:
   WatertightTriangleTest one_;
 };
+#endif
+
+// Whether the binary walks test a leaf's triangles four at a time: the watertight test, on x86-64.
+#if defined(__SSE2__)
+template <class TriangleTest>
+inline constexpr bool kTestsInLanes = std::is_same_v<TriangleTest, WatertightTriangleTest>;
+template <class TriangleTest>
+using LeafTestOf = std::conditional_t<kTestsInLanes<TriangleTest>, WatertightLanes, TriangleTest>;
+#else
+template <class TriangleTest>
+inline constexpr bool kTestsInLanes = false;
+template <class TriangleTest>
+using LeafTestOf = TriangleTest;
 #endif
 
 /// The triangle test as an any-hit query runs it: the watertight test without its refined distance

@@ -104,14 +104,12 @@ def benchmark_names(row):
         return None
     box = options.get("box", "robust")
     tri = options.get("tri", "watertight")
-    if name == "bvh2":
-        # The common-format node visit is benchmarked with the robust box test only; other box tests'
-        # rows are named as missing rather than priced with it.
-        return f"node_visit/bvh2/scalar/{box}", f"ray_triangle/scalar/{tri}"
-    if name == "bvh2_packed":
-        # Its walks test a leaf's watertight triangles four at a time (WatertightLanes).
+    if name in ("bvh2", "bvh2_packed"):
+        # Both binary walks test a leaf's watertight triangles four at a time (WatertightLanes), the
+        # others one at a time. The common-format node visit is benchmarked with the robust box test
+        # only; other box tests' rows are named as missing rather than priced with it.
         test = "lanes4/watertight" if tri == "watertight" else f"scalar/{tri}"
-        return f"node_visit/bvh2_packed/scalar/{box}", f"ray_triangle/{test}"
+        return f"node_visit/{name}/scalar/{box}", f"ray_triangle/{test}"
     if name in ("bvh4", "bvh8"):
         isa = row["isa"]
         return f"node_visit/{name}/{isa}/{box}", f"ray_triangle/block4/{isa}/{tri}"

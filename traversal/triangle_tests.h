@@ -218,10 +218,14 @@ class WatertightTriangleTest {
 };
 
 #if defined(__SSE2__)
-/// WatertightTriangleTest on up to four consecutive triangles of a leaf at once, in the four lanes of an
-/// SSE register: lane by lane the same float operations in the same order (so the same decisions, and
-/// the same double-precision finish for a lane whose float edge functions or determinant cannot be
-/// trusted), as the wide layouts' block test computes them (wide_kernels.inl), but over the triangles
+namespace detail {
+#include "traversal/watertight_lanes.inl"
+}  // namespace detail
+
+/// WatertightTriangleTest on up to four triangles of a leaf at once, in the four lanes of an SSE
+/// register: lane by lane the same float operations in the same order (so the same decisions, and the
+/// same double-precision finish for a lane whose float edge functions or determinant cannot be
+/// trusted), by the code of the wide layouts' block test (watertight_lanes.inl), but over the triangles
 /// as they are stored, one after the other, transposed into lanes on the way in. A leaf's triangles are
 /// then decided by one branch per four instead of a chain of data-dependent branches per triangle.
 class WatertightLanes {
@@ -268,75 +272,19 @@ class WatertightLanes {
     _MM_TRANSPOSE4_PS(r0[0], r0[1], r0[2], r0[3]);
     _MM_TRANSPOSE4_PS(r1[0], r1[1], r1[2], r1[3]);
     const __m128 v2z = _mm_movelh_ps(_mm_unpacklo_ps(r2[0], r2[1]), _mm_unpacklo_ps(r2[2], r2[3]));
-    // [vertex][axis], then taken in the ray's permuted axes.
-    const __m128 vert[3][3] = {{r0[0], r0[1], r0[2]}, {r0[3], r1[0], r1[1]}, {r1[2], r1[3], v2z}};
-    const auto [kx, ky, kz, shear_x, shear_y, shear_z] = one_.shear();
+    const __m128 vert[3][3] = {
+        {r0[0], r0[1], r0[2]}, {r0[3], r1[0], r1[1]}, {r1[2], r1[3], v2z}};  // [k][axis]
+    const auto [kx, ky, kz, sx, sy, sz] = one_.shear();
+    const __m128 permuted[3][3] = {{vert[0][kx], vert[0][ky], vert[0][kz]},
+                                   {vert[1][kx], vert[1][ky], vert[1][kz]},
+                                   {vert[2][kx], vert[2][ky], vert[2][kz]}};
     const detail::Components o = detail::components(one_.org());
-    const __m128 ox = _mm_set1_ps(o[kx]), oy = _mm_set1_ps(o[ky]), oz = _mm_set1_ps(o[kz]);
-    const __m128 sx = _mm_set1_ps(shear_x), sy = _mm_set1_ps(shear_y), sz = _mm_set1_ps(shear_z);
-    __m128 px[3], py[3], pz[3];  // sheared x, y and z of each vertex
-    for (int k = 0; k < 3; ++k) {
-      const __m128 rx = _mm_sub_ps(vert[k][kx], ox), ry = _mm_sub_ps(vert[k][ky], oy),
-                   rz = _mm_sub_ps(vert[k][kz], oz);
-      px[k] = _mm_sub_ps(rx, _mm_mul_ps(sx, rz));
-      py[k] = _mm_sub_ps(ry, _mm_mul_ps(sy, rz));
-      pz[k] = _mm_mul_ps(sz, rz);
-    }
-    const __m128 e0 = _mm_sub_ps(_mm_mul_ps(px[2], py[1]), _mm_mul_ps(py[2], px[1]));
-    const __m128 e1 = _mm_sub_ps(_mm_mul_ps(px[0], py[2]), _mm_mul_ps(py[0], px[2]));
-    const __m128 e2 = _mm_sub_ps(_mm_mul_ps(px[1], py[0]), _mm_mul_ps(py[1], px[0]));
-
-    const __m128 zero = _mm_setzero_ps(), sign = _mm_set1_ps(-0.0f);
-    const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
-    auto finite = [&](__m128 x) { return _mm_cmplt_ps(_mm_andnot_ps(sign, x), inf); };
-    const unsigned valid = (1u << n) - 1u;
-    // watertight_float_ok, lane by lane; the lanes that fail it are finished in double.
-    const __m128 float_ok = _mm_and_ps(
-        _mm_and_ps(_mm_and_ps(finite(e0), finite(e1)), finite(e2)),
-        _mm_and_ps(_mm_and_ps(_mm_cmpneq_ps(e0, zero), _mm_cmpneq_ps(e1, zero)), _mm_cmpneq_ps(e2, zero)));
-    unsigned in_double = ~static_cast<unsigned>(_mm_movemask_ps(float_ok)) & valid;
-    const __m128 some_negative =
-        _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
-    const __m128 some_positive =
-        _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
-    __m128 hit = _mm_andnot_ps(_mm_and_ps(some_negative, some_positive), float_ok);
-    const __m128 det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-    const __m128 scaled_t =
-        _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, pz[0]), _mm_mul_ps(e1, pz[1])), _mm_mul_ps(e2, pz[2]));
-    // watertight_det_ok: a lane whose determinant or scaled distance fails it is finished in double.
-    const __m128 abs_det = _mm_andnot_ps(sign, det);
-    const __m128 det_ok =
-        _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(abs_det, _mm_set1_ps(std::numeric_limits<float>::min())),
-                              _mm_cmplt_ps(abs_det, inf)),
-                   finite(scaled_t));
-    in_double |= static_cast<unsigned>(_mm_movemask_ps(_mm_andnot_ps(det_ok, hit))) & valid;
-    hit = _mm_and_ps(hit, det_ok);
-    unsigned mask = 0;
-    if (static_cast<unsigned>(_mm_movemask_ps(hit)) & valid) {
-      const __m128 signed_t = _mm_xor_ps(scaled_t, _mm_and_ps(det, sign));
-      const __m128 lo = _mm_set1_ps(tmin), hi = _mm_set1_ps(tmax);
-      hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(signed_t, _mm_mul_ps(lo, abs_det)),
-                                       _mm_cmple_ps(signed_t, _mm_mul_ps(hi, abs_det))));
-      if (static_cast<unsigned>(_mm_movemask_ps(hit)) & valid) {
-        const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
-        const __m128 tt = _mm_mul_ps(scaled_t, inv_det);
-        hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(tt, lo), _mm_cmple_ps(tt, hi)));
-        _mm_storeu_ps(t, tt);
-        _mm_storeu_ps(u, _mm_mul_ps(e1, inv_det));
-        _mm_storeu_ps(v, _mm_mul_ps(e2, inv_det));
-        mask = static_cast<unsigned>(_mm_movemask_ps(hit)) & valid;
-      }
-    }
-    if (in_double) [[unlikely]] {
-      alignas(16) float lane[9][4];
-      const __m128 regs[9] = {px[0], py[0], pz[0], px[1], py[1], pz[1], px[2], py[2], pz[2]};
-      for (int k = 0; k < 9; ++k) _mm_store_ps(lane[k], regs[k]);
-      for (unsigned i = 0; i < 4; ++i)
-        if (in_double & (1u << i) &&
-            watertight_in_double(lane[0][i], lane[1][i], lane[2][i], lane[3][i], lane[4][i], lane[5][i],
-                                 lane[6][i], lane[7][i], lane[8][i], tmin, tmax, t[i], u[i], v[i]))
-          mask |= 1u << i;
-    }
+    const __m128 org[3] = {_mm_set1_ps(o[kx]), _mm_set1_ps(o[ky]), _mm_set1_ps(o[kz])};
+    const __m128 shear[3] = {_mm_set1_ps(sx), _mm_set1_ps(sy), _mm_set1_ps(sz)};
+    const __m128 valid =
+        _mm_castsi128_ps(_mm_cmplt_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(static_cast<int>(n))));
+    unsigned mask =
+        detail::watertight_lanes(permuted, org, shear, valid, tmin, tmax, t, u, v, watertight_in_double);
     if constexpr (kRefine)
       for (unsigned m = mask; m != 0; m &= m - 1) {
         const auto i = static_cast<unsigned>(std::countr_zero(m));

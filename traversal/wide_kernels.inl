@@ -521,6 +521,8 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const
 
 #else
 
+#include "traversal/watertight_lanes.inl"
+
 SAHBENCH_KERNEL_INLINE __m128 lanes_valid(const TriangleBlock& b) {
   const __m128i prim = _mm_load_si128(reinterpret_cast<const __m128i*>(b.prim));
   const __m128i invalid = _mm_cmpeq_epi32(prim, _mm_set1_epi32(-1));
@@ -533,76 +535,13 @@ template <bool kRefine>
 inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
                                            float* t_out, float* u_out, float* v_out) {
   const __m128 valid = lanes_valid(b);
-  const __m128 ox = _mm_set1_ps(r.org[r.kx]), oy = _mm_set1_ps(r.org[r.ky]), oz = _mm_set1_ps(r.org[r.kz]);
-  const __m128 sx = _mm_set1_ps(r.sx), sy = _mm_set1_ps(r.sy), sz = _mm_set1_ps(r.sz);
-  // Vertices relative to the origin, in the ray's permuted axes, then sheared.
-  const __m128 a_x = _mm_sub_ps(_mm_load_ps(b.v0[r.kx]), ox), a_y = _mm_sub_ps(_mm_load_ps(b.v0[r.ky]), oy),
-               a_z = _mm_sub_ps(_mm_load_ps(b.v0[r.kz]), oz);
-  const __m128 b_x = _mm_sub_ps(_mm_load_ps(b.v1[r.kx]), ox), b_y = _mm_sub_ps(_mm_load_ps(b.v1[r.ky]), oy),
-               b_z = _mm_sub_ps(_mm_load_ps(b.v1[r.kz]), oz);
-  const __m128 c_x = _mm_sub_ps(_mm_load_ps(b.v2[r.kx]), ox), c_y = _mm_sub_ps(_mm_load_ps(b.v2[r.ky]), oy),
-               c_z = _mm_sub_ps(_mm_load_ps(b.v2[r.kz]), oz);
-  const __m128 ax = _mm_sub_ps(a_x, _mm_mul_ps(sx, a_z)), ay = _mm_sub_ps(a_y, _mm_mul_ps(sy, a_z));
-  const __m128 bx = _mm_sub_ps(b_x, _mm_mul_ps(sx, b_z)), by = _mm_sub_ps(b_y, _mm_mul_ps(sy, b_z));
-  const __m128 cx = _mm_sub_ps(c_x, _mm_mul_ps(sx, c_z)), cy = _mm_sub_ps(c_y, _mm_mul_ps(sy, c_z));
-  const __m128 az = _mm_mul_ps(sz, a_z), bz = _mm_mul_ps(sz, b_z), cz = _mm_mul_ps(sz, c_z);
-  const __m128 e0 = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
-  const __m128 e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
-  const __m128 e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
-
-  const __m128 zero = _mm_setzero_ps();
-  const __m128 sign = _mm_set1_ps(-0.0f);
-  const __m128 inf = _mm_set1_ps(__builtin_inff());
-  auto finite = [&](__m128 x) { return _mm_cmplt_ps(_mm_andnot_ps(sign, x), inf); };
-  // Lanes the float path cannot decide (lane_float_ok): finished in double below.
-  const __m128 float_ok = _mm_and_ps(
-      _mm_and_ps(_mm_and_ps(finite(e0), finite(e1)), finite(e2)),
-      _mm_and_ps(_mm_and_ps(_mm_cmpneq_ps(e0, zero), _mm_cmpneq_ps(e1, zero)), _mm_cmpneq_ps(e2, zero)));
-  int in_double = _mm_movemask_ps(_mm_andnot_ps(float_ok, valid));
-  // Inside when no edge function has the wrong sign.
-  const __m128 some_negative =
-      _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
-  const __m128 some_positive =
-      _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
-  __m128 hit = _mm_andnot_ps(_mm_and_ps(some_negative, some_positive), _mm_and_ps(valid, float_ok));
-  const __m128 det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-  const __m128 scaled_t = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, az), _mm_mul_ps(e1, bz)), _mm_mul_ps(e2, cz));
-  // lane_det_ok: det normal and the scaled distance finite, else the lane is finished in double.
-  const __m128 abs_det = _mm_andnot_ps(sign, det);
-  const __m128 det_ok =
-      _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(abs_det, _mm_set1_ps(__FLT_MIN__)), _mm_cmplt_ps(abs_det, inf)),
-                 finite(scaled_t));
-  in_double |= _mm_movemask_ps(_mm_andnot_ps(det_ok, hit));
-  hit = _mm_and_ps(hit, det_ok);
-
-  uint32_t mask = 0;
-  if (_mm_movemask_ps(hit)) {
-    // Scaled distance T = t * det, compared with [tmin, tmax] * |det| before dividing (section 3).
-    const __m128 signed_t = _mm_xor_ps(scaled_t, _mm_and_ps(det, sign));
-    const __m128 lo = _mm_set1_ps(tmin), hi = _mm_set1_ps(tmax);
-    hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(signed_t, _mm_mul_ps(lo, abs_det)),
-                                     _mm_cmple_ps(signed_t, _mm_mul_ps(hi, abs_det))));
-    if (_mm_movemask_ps(hit)) {
-      const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
-      const __m128 t = _mm_mul_ps(scaled_t, inv_det);
-      hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(t, lo), _mm_cmple_ps(t, hi)));
-      _mm_storeu_ps(t_out, t);
-      _mm_storeu_ps(u_out, _mm_mul_ps(e1, inv_det));
-      _mm_storeu_ps(v_out, _mm_mul_ps(e2, inv_det));
-      mask = static_cast<uint32_t>(_mm_movemask_ps(hit));
-    }
-  }
-  if (in_double) [[unlikely]] {
-    alignas(16) float lanes[9][4];
-    const __m128 regs[9] = {ax, ay, az, bx, by, bz, cx, cy, cz};
-    for (int k = 0; k < 9; ++k) _mm_store_ps(lanes[k], regs[k]);
-    for (int i = 0; i < 4; ++i) {
-      if (!(in_double & (1 << i))) continue;
-      if (lane_in_double(lanes[0][i], lanes[1][i], lanes[2][i], lanes[3][i], lanes[4][i], lanes[5][i],
-                         lanes[6][i], lanes[7][i], lanes[8][i], tmin, tmax, t_out[i], u_out[i], v_out[i]))
-        mask |= 1u << i;
-    }
-  }
+  const __m128 vertex[3][3] = {{_mm_load_ps(b.v0[r.kx]), _mm_load_ps(b.v0[r.ky]), _mm_load_ps(b.v0[r.kz])},
+                               {_mm_load_ps(b.v1[r.kx]), _mm_load_ps(b.v1[r.ky]), _mm_load_ps(b.v1[r.kz])},
+                               {_mm_load_ps(b.v2[r.kx]), _mm_load_ps(b.v2[r.ky]), _mm_load_ps(b.v2[r.kz])}};
+  const __m128 org[3] = {_mm_set1_ps(r.org[r.kx]), _mm_set1_ps(r.org[r.ky]), _mm_set1_ps(r.org[r.kz])};
+  const __m128 shear[3] = {_mm_set1_ps(r.sx), _mm_set1_ps(r.sy), _mm_set1_ps(r.sz)};
+  const uint32_t mask =
+      watertight_lanes(vertex, org, shear, valid, tmin, tmax, t_out, u_out, v_out, lane_in_double);
   return kRefine && mask ? refine_lanes(b, r, tmin, tmax, mask, t_out) : mask;
 }
 

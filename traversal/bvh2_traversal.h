@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <concepts>
 #include <cstdint>
 #include <span>
 #include <type_traits>
@@ -95,7 +96,15 @@ struct StackEntry {
 /// the scalar test against the lowered distance, as the one-at-a-time loop would have tested them (a
 /// triangle missed at the higher distance is missed at the lower one too): the answers are the same, hit
 /// for hit.
-template <bool kAnyHit, class TriangleTest, class Leaf>
+template <class L>
+concept BinaryLeaf = requires(const L& leaf, uint32_t k) {
+  { leaf.size } -> std::convertible_to<uint32_t>;
+  { leaf.triangle(k) } -> std::same_as<const Triangle&>;
+  { leaf.prim(k) } -> std::same_as<uint32_t>;
+  { leaf.scene_index(k) } -> std::same_as<uint32_t>;
+};
+
+template <bool kAnyHit, class TriangleTest, BinaryLeaf Leaf>
 [[gnu::always_inline]] inline bool test_leaf(const LeafTestOf<TriangleTest>& test, const Leaf& leaf,
                                              float tmin, float& best_t, Hit& best) {
   auto take = [&](uint32_t prim, float t, float u, float v) {

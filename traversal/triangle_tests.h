@@ -283,8 +283,11 @@ class WatertightLanes {
     const __m128 shear[3] = {_mm_set1_ps(sx), _mm_set1_ps(sy), _mm_set1_ps(sz)};
     const __m128 valid =
         _mm_castsi128_ps(_mm_cmplt_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(static_cast<int>(n))));
-    unsigned mask =
-        detail::watertight_lanes(permuted, org, shear, valid, tmin, tmax, t, u, v, watertight_in_double);
+    const auto in_double = [](float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
+                              float cz, float lo, float hi, float& t_out, float& u_out, float& v_out) {
+      return watertight_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, lo, hi, t_out, u_out, v_out);
+    };
+    unsigned mask = detail::watertight_lanes(permuted, org, shear, valid, tmin, tmax, t, u, v, in_double);
     if constexpr (kRefine)
       for (unsigned m = mask; m != 0; m &= m - 1) {
         const auto i = static_cast<unsigned>(std::countr_zero(m));

@@ -3,8 +3,14 @@
 // float operations in the same order as the scalar test, lane by lane, so the same decisions. Shared by
 // WatertightLanes (triangle_tests.h, the binary layouts' leaves) and the wide layouts' block test
 // (wide_kernels.inl). It is included inside a namespace by each (wide_kernels.inl's once per instruction
-// set), so it includes nothing and calls only intrinsics and builtins: the including file includes
-// <immintrin.h> first.
+// set), so it includes nothing and calls only intrinsics, builtins and the double-precision finish its
+// caller passes (triangle_tests.h's watertight_in_double, or wide_kernels.inl's own copy, lane_in_double):
+// the including file includes <immintrin.h> first.
+
+// All ones where x is finite.
+[[gnu::always_inline]] inline __m128 watertight_lanes_finite(__m128 x) {
+  return _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), x), _mm_set1_ps(__builtin_inff()));
+}
 
 // vertex[k]: the x, y and z of the triangles' vertex k (v0, v1, v2) in the ray's permuted axes (kx, ky,
 // kz of WatertightShear); org: the ray's origin in those axes, shear: (sx, sy, sz), each broadcast;
@@ -37,10 +43,10 @@ template <class InDouble>
   const __m128 zero = _mm_setzero_ps();
   const __m128 sign = _mm_set1_ps(-0.0f);
   const __m128 inf = _mm_set1_ps(__builtin_inff());
-  auto finite = [&](__m128 x) { return _mm_cmplt_ps(_mm_andnot_ps(sign, x), inf); };
   // watertight_float_ok, lane by lane: the lanes that fail it are finished in double.
   const __m128 float_ok = _mm_and_ps(
-      _mm_and_ps(_mm_and_ps(finite(e0), finite(e1)), finite(e2)),
+      _mm_and_ps(_mm_and_ps(watertight_lanes_finite(e0), watertight_lanes_finite(e1)),
+                 watertight_lanes_finite(e2)),
       _mm_and_ps(_mm_and_ps(_mm_cmpneq_ps(e0, zero), _mm_cmpneq_ps(e1, zero)), _mm_cmpneq_ps(e2, zero)));
   unsigned doubtful = static_cast<unsigned>(_mm_movemask_ps(_mm_andnot_ps(float_ok, valid)));
   // Inside when no edge function has the wrong sign.
@@ -55,7 +61,7 @@ template <class InDouble>
   const __m128 abs_det = _mm_andnot_ps(sign, det);
   const __m128 det_ok =
       _mm_and_ps(_mm_and_ps(_mm_cmpge_ps(abs_det, _mm_set1_ps(__FLT_MIN__)), _mm_cmplt_ps(abs_det, inf)),
-                 finite(scaled_t));
+                 watertight_lanes_finite(scaled_t));
   doubtful |= static_cast<unsigned>(_mm_movemask_ps(_mm_andnot_ps(det_ok, hit)));
   hit = _mm_and_ps(hit, det_ok);
 

@@ -540,8 +540,13 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
                                {_mm_load_ps(b.v2[r.kx]), _mm_load_ps(b.v2[r.ky]), _mm_load_ps(b.v2[r.kz])}};
   const __m128 org[3] = {_mm_set1_ps(r.org[r.kx]), _mm_set1_ps(r.org[r.ky]), _mm_set1_ps(r.org[r.kz])};
   const __m128 shear[3] = {_mm_set1_ps(r.sx), _mm_set1_ps(r.sy), _mm_set1_ps(r.sz)};
+  // The double finish as a lambda, so that it is part of the instantiation's type, not a pointer to fold.
+  const auto in_double = [](float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
+                            float cz, float lo, float hi, float& t, float& u, float& v) {
+    return lane_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, lo, hi, t, u, v);
+  };
   const uint32_t mask =
-      watertight_lanes(vertex, org, shear, valid, tmin, tmax, t_out, u_out, v_out, lane_in_double);
+      watertight_lanes(vertex, org, shear, valid, tmin, tmax, t_out, u_out, v_out, in_double);
   return kRefine && mask ? refine_lanes(b, r, tmin, tmax, mask, t_out) : mask;
 }
 

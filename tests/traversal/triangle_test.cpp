@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -359,10 +360,28 @@ TEST(TravTriangleMollerTrumboreNormal, RejectsEdgeOnAndHitsTinyTrianglesInDouble
 }
 
 #if defined(__SSE2__)
+// Whether WatertightTriangleTest finishes `tri` in double for `ray`: its float edge functions or
+// determinant cannot be trusted (the same operations as the test, to count how often the lanes' double
+// finish is exercised below).
+bool decided_in_double(const Ray& ray, const Triangle& tri) {
+  const WatertightShear s = watertight_shear(ray.dir);
+  auto sheared = [&](Vec3 p) {
+    const auto r = std::bit_cast<std::array<float, 3>>(p - ray.org);
+    return std::array<float, 3>{r[s.kx] - s.sx * r[s.kz], r[s.ky] - s.sy * r[s.kz], s.sz * r[s.kz]};
+  };
+  const auto a = sheared(tri.v0), b = sheared(tri.v1), c = sheared(tri.v2);
+  const float e0 = c[0] * b[1] - c[1] * b[0], e1 = a[0] * c[1] - a[1] * c[0], e2 = b[0] * a[1] - b[1] * a[0];
+  if (!watertight_float_ok(e0, e1, e2)) return true;
+  if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) return false;
+  return !watertight_det_ok(e0 + e1 + e2, e0 * a[2] + e1 * b[2] + e2 * c[2]);
+}
+
 // WatertightLanes decides each of its four lanes as WatertightTriangleTest decides that triangle alone:
 // the same bits of t, u and v on every hit, and the same misses, for rays exactly through edges and
 // vertices (edge functions of 0, finished in double), +-0 direction components, scales that overflow
-// or underflow the float path, hits at exactly tmin or tmax, and leaves of one to four triangles.
+// or underflow the float path, hits at exactly tmin or tmax, tmax = FLT_MAX, and leaves of one to four
+// triangles, stored one after the other (bvh2_packed) or reached through references (bvh2). The
+// triangles are in buffers of exactly n, so that a read past them is caught by the sanitizers.
 TEST(TravTriangleWatertightLanes, EveryLaneAsTheScalarTest) {
   std::mt19937 rng(29);
   std::uniform_int_distribution<int> sixteenths(-32, 32);
@@ -371,12 +390,13 @@ TEST(TravTriangleWatertightLanes, EveryLaneAsTheScalarTest) {
   };
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   const float scales[] = {1.0f, 0x1p66f, 0x1p-70f};
-  int hits = 0, lanes = 0;
+  int hits = 0, lanes = 0, in_double = 0, at_tmin = 0, at_tmax = 0;
   for (int i = 0; i < 20000; ++i) {
     const float scale = scales[i % 3];
-    Triangle tris[4];
-    for (Triangle& tri : tris) tri = {dyadic() * scale, dyadic() * scale, dyadic() * scale};
-    const Triangle& aim = tris[static_cast<std::size_t>(i % 4)];
+    const auto n = static_cast<uint32_t>(1 + i / 4 % 4);
+    std::vector<Triangle> leaf(n);
+    for (Triangle& tri : leaf) tri = {dyadic() * scale, dyadic() * scale, dyadic() * scale};
+    const Triangle& aim = leaf[std::min<std::size_t>(static_cast<std::size_t>(i % 4), n - 1)];
     // At a vertex, an edge's dyadic point, or anywhere; from a dyadic direction (often with zero
     // components, some of them -0) or a random one.
     const Vec3 target = i % 5 == 0 ? aim.v1 : (i % 5 == 1 ? (aim.v0 + aim.v2) * 0.5f : dyadic() * scale);
@@ -384,31 +404,45 @@ TEST(TravTriangleWatertightLanes, EveryLaneAsTheScalarTest) {
     if (i % 7 == 0) dir.y = -0.0f;
     if (dir.x == 0.0f && dir.y == 0.0f && dir.z == 0.0f) continue;
     const Vec3 org = target - dir * scale;
-    // tmax exactly at the aimed triangle's distance some of the time, so that the closed interval counts.
-    float tmin = 0.0f, tmax = kInf;
+    // tmin or tmax exactly at the aimed triangle's distance some of the time, so that the closed
+    // interval counts; the walks' far limit FLT_MAX some of the time.
+    float tmin = 0.0f, tmax = i % 6 == 5 ? std::numeric_limits<float>::max() : kInf;
     {
       float t, u, v;
       if (i % 4 == 3 && WatertightTriangleTest(make_ray(org, dir)).intersect(aim, 0.0f, kInf, t, u, v))
         (i % 8 == 3 ? tmax : tmin) = t;
     }
     const Ray ray = make_ray(org, dir, tmin, tmax);
-    const uint32_t n = 1 + static_cast<uint32_t>(i / 4 % 4);
+    // The same triangles among others, reached through shuffled references.
+    std::vector<Triangle> pool(8, Triangle{dyadic(), dyadic(), dyadic()});
+    std::vector<uint32_t> refs(n);
+    for (uint32_t k = 0; k < n; ++k) {
+      refs[k] = 7 - 2 * k;
+      pool[refs[k]] = leaf[k];
+    }
     const WatertightLanes four(ray);
     const WatertightTriangleTest one(ray);
-    for (bool refine : {true, false}) {
+    for (int form = 0; form < 4; ++form) {
+      const bool refine = form % 2 == 0, gathered = form >= 2;
       alignas(16) float t[4], u[4], v[4];
-      const unsigned mask = refine ? four.intersect<true>(tris, n, tmin, tmax, t, u, v)
-                                   : four.intersect<false>(tris, n, tmin, tmax, t, u, v);
+      const unsigned mask =
+          gathered ? (refine ? four.intersect<true>(pool.data(), refs.data(), n, tmin, tmax, t, u, v)
+                             : four.intersect<false>(pool.data(), refs.data(), n, tmin, tmax, t, u, v))
+                   : (refine ? four.intersect<true>(leaf.data(), n, tmin, tmax, t, u, v)
+                             : four.intersect<false>(leaf.data(), n, tmin, tmax, t, u, v));
       EXPECT_EQ(mask >> n, 0u);
       for (uint32_t k = 0; k < n; ++k) {
-        SCOPED_TRACE(testing::Message() << "case " << i << " lane " << k << " refine " << refine);
+        SCOPED_TRACE(testing::Message() << "case " << i << " lane " << k << " form " << form);
         float tk, uk, vk;
-        const bool hit = refine ? one.intersect(tris[k], tmin, tmax, tk, uk, vk)
-                                : one.intersect_float(tris[k], tmin, tmax, tk, uk, vk);
+        const bool hit = refine ? one.intersect(leaf[k], tmin, tmax, tk, uk, vk)
+                                : one.intersect_float(leaf[k], tmin, tmax, tk, uk, vk);
         ++lanes;
+        in_double += decided_in_double(ray, leaf[k]) ? 1 : 0;
         ASSERT_EQ((mask >> k & 1u) != 0, hit);
         if (!hit) continue;
         ++hits;
+        at_tmin += tk == tmin ? 1 : 0;
+        at_tmax += tk == tmax ? 1 : 0;
         EXPECT_EQ(std::bit_cast<uint32_t>(t[k]), std::bit_cast<uint32_t>(tk));
         EXPECT_EQ(std::bit_cast<uint32_t>(u[k]), std::bit_cast<uint32_t>(uk));
         EXPECT_EQ(std::bit_cast<uint32_t>(v[k]), std::bit_cast<uint32_t>(vk));
@@ -416,6 +450,10 @@ TEST(TravTriangleWatertightLanes, EveryLaneAsTheScalarTest) {
     }
   }
   EXPECT_GT(hits, lanes / 20);
+  // Every path was taken: lanes finished in double, and hits at exactly tmin and at exactly tmax.
+  EXPECT_GT(in_double, lanes / 100);
+  EXPECT_GT(at_tmin, 100);
+  EXPECT_GT(at_tmax, 100);
 }
 #endif
 

@@ -12,6 +12,7 @@
 #include "builders/collapse.h"
 #include "traversal/packed_bvh2.h"
 #include "traversal/ray_box.h"
+#include "traversal/triangle_lanes.h"
 #include "traversal/triangle_tests.h"
 #include "traversal/wide_bvh.h"
 
@@ -65,27 +66,33 @@ BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNoEpsilonTest>)->Name("ray_triangle
 BENCHMARK(BM_ScalarRayTriangle<MollerTrumboreNormalTest>)->Name("ray_triangle/scalar/mtn");
 
 #if defined(__SSE2__)
-// The watertight test four consecutive triangles at a time, as bvh2_packed's walks test a leaf
-// (WatertightLanes, closest hit: hits refined). Items are triangles.
-void BM_WatertightLanes(benchmark::State& state) {
+// A triangle test four consecutive triangles at a time, as bvh2_packed's walks test a leaf
+// (triangle_lanes.h; closest hit: watertight hits refined). Items are triangles.
+template <class TriangleTest>
+void BM_TriangleLanes(benchmark::State& state) {
   const auto& tris = soup(kPrims);
   const auto& rs = rays(kRays);
   for (auto _ : state) {
     uint32_t hits = 0;
     for (const Ray& ray : rs) {
-      const WatertightLanes test(ray);
+      const LeafTestOf<TriangleTest> test(ray);
       alignas(16) float t[4], u[4], v[4];
       for (std::size_t i = 0; i < tris.size(); i += 4) {
         const auto n = static_cast<uint32_t>(std::min<std::size_t>(4, tris.size() - i));
         hits += static_cast<uint32_t>(
-            std::popcount(test.intersect<true>(&tris[i], n, ray.tmin, ray.tmax, t, u, v)));
+            std::popcount(test.template intersect<true>(&tris[i], n, ray.tmin, ray.tmax, t, u, v)));
       }
     }
     benchmark::DoNotOptimize(hits);
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * kRays * tris.size()));
 }
-BENCHMARK(BM_WatertightLanes)->Name("ray_triangle/lanes4/watertight");
+BENCHMARK(BM_TriangleLanes<WatertightTriangleTest>)->Name("ray_triangle/lanes4/watertight");
+BENCHMARK(BM_TriangleLanes<MollerTrumboreTest>)->Name("ray_triangle/lanes4/mt");
+BENCHMARK(BM_TriangleLanes<MollerTrumboreNoEpsilonTest>)->Name("ray_triangle/lanes4/mt0");
+#if defined(__FMA__)
+BENCHMARK(BM_TriangleLanes<MollerTrumboreNormalTest>)->Name("ray_triangle/lanes4/mtn");
+#endif
 #endif
 
 // The wide kernels' node test (N boxes at once, one node visit) and block test (4 triangles at once),

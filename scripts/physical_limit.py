@@ -105,13 +105,14 @@ def benchmark_names(row):
     box = options.get("box", "robust")
     tri = options.get("tri", "watertight")
     if name in ("bvh2", "bvh2_packed"):
-        # Both binary walks test a leaf's watertight triangles four at a time (WatertightLanes, on x86-64),
-        # the others one at a time. The benchmark reads the four one after the other and refines the
-        # hits' distances: bvh2 gathers them through references, and any-hit rows refine nothing, so
-        # their bound is a little low and high respectively. The common-format node visit is
+        # Both binary walks test a leaf's triangles four at a time (traversal/triangle_lanes.h, on
+        # x86-64; mtn only where the CPU has FMA, and a bench built without it names its lanes as
+        # missing). The benchmark reads the four one after the other and refines watertight hits'
+        # distances: bvh2 gathers them through references, and watertight any-hit rows refine nothing,
+        # so their bound is a little low and high respectively. The common-format node visit is
         # benchmarked with the robust box test only; other box tests' rows are named as missing rather
         # than priced with it.
-        test = "lanes4/watertight" if tri == "watertight" else f"scalar/{tri}"
+        test = f"lanes4/{tri}"
         return f"node_visit/{name}/scalar/{box}", f"ray_triangle/{test}"
     if name in ("bvh4", "bvh8"):
         isa = row["isa"]

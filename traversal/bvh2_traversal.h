@@ -16,6 +16,7 @@
 #include "core/triangle.h"
 #include "traversal/kernel_variant.h"
 #include "traversal/ray_box.h"
+#include "traversal/triangle_lanes.h"
 #include "traversal/triangle_tests.h"
 #include "traversal/walks_in_flight.h"
 
@@ -91,11 +92,11 @@ struct StackEntry {
 /// `leaf.scene_index(prim)` that hit's index in the scene, which breaks ties (the lowest wins, as in the
 /// general loop below). Returns true when an any-hit query found its hit.
 ///
-/// The watertight test takes the triangles four at a time (`leaf.four`, WatertightLanes) against the
-/// closest hit before them; where one of them lowered it, the hits after that one are tested again by
-/// the scalar test against the lowered distance, as the one-at-a-time loop would have tested them (a
-/// triangle missed at the higher distance is missed at the lower one too): the answers are the same, hit
-/// for hit.
+/// Where the test has a four-lane form (triangle_lanes.h) the triangles are taken four at a time
+/// (`leaf.four`) against the closest hit before them; where one of them lowered it, the hits after that one
+/// are tested again by the scalar test against the lowered distance, as the one-at-a-time loop would have
+/// tested them (a triangle missed at the higher distance is missed at the lower one too): the answers are the
+/// same, hit for hit.
 template <class L>
 concept BinaryLeaf = requires(const L& leaf, uint32_t k) {
   { leaf.size } -> std::convertible_to<uint32_t>;
@@ -245,10 +246,10 @@ class BinaryWalk {
     uint32_t prim(uint32_t k) const { return refs[k]; }
     static uint32_t scene_index(uint32_t prim) { return prim; }
 #if defined(__SSE2__)
-    template <bool kRefine>
-    unsigned four(const WatertightLanes& test, uint32_t k, uint32_t n, float tmin, float tmax, float* t,
-                  float* u, float* v) const {
-      return test.intersect<kRefine>(triangles, refs + k, n, tmin, tmax, t, u, v);
+    template <bool kRefine, class Lanes>
+    unsigned four(const Lanes& test, uint32_t k, uint32_t n, float tmin, float tmax, float* t, float* u,
+                  float* v) const {
+      return test.template intersect<kRefine>(triangles, refs + k, n, tmin, tmax, t, u, v);
     }
 #endif
   };

@@ -8,8 +8,8 @@
 //
 // The box tests are the ones of ray_box.h, lane by lane: the same IEEE operations on the same planes and
 // the same NaN rule, so the kernel visits the nodes the common-format kernel visits, in the same order,
-// and counts the same work (the layout tests hold it to that). A leaf's watertight triangles are tested
-// four at a time (WatertightLanes), with the same answers as one at a time (test_leaf).
+// and counts the same work (the layout tests hold it to that). A leaf's triangles are tested four at a
+// time (triangle_lanes.h), with the same answers as one at a time (test_leaf).
 
 #include <algorithm>
 #include <bit>
@@ -28,6 +28,7 @@
 #include "traversal/bvh2_traversal.h"
 #include "traversal/layout.h"
 #include "traversal/ray_box.h"
+#include "traversal/triangle_lanes.h"
 #include "traversal/triangle_tests.h"
 
 #if defined(__SSE4_1__)
@@ -264,10 +265,10 @@ class PackedWalk {
     uint32_t prim(uint32_t k) const { return first + k; }
     uint32_t scene_index(uint32_t prim) const { return ids[prim]; }
 #if defined(__SSE2__)
-    template <bool kRefine>
-    unsigned four(const WatertightLanes& test, uint32_t k, uint32_t n, float tmin, float tmax, float* t,
-                  float* u, float* v) const {
-      return test.intersect<kRefine>(triangles + first + k, n, tmin, tmax, t, u, v);
+    template <bool kRefine, class Lanes>
+    unsigned four(const Lanes& test, uint32_t k, uint32_t n, float tmin, float tmax, float* t, float* u,
+                  float* v) const {
+      return test.template intersect<kRefine>(triangles + first + k, n, tmin, tmax, t, u, v);
     }
 #endif
   };

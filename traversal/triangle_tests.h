@@ -11,16 +11,10 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cassert>
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <type_traits>
 #include <utility>
-
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
 
 #include "core/ray.h"
 #include "core/triangle.h"
@@ -217,104 +211,6 @@ class WatertightTriangleTest {
   WatertightShear shear_;
 };
 
-#if defined(__SSE2__)
-namespace detail {
-#include "traversal/watertight_lanes.inl"
-}  // namespace detail
-
-/// WatertightTriangleTest on up to four triangles of a leaf at once, in the four lanes of an SSE
-/// register: lane by lane the same float operations in the same order (so the same decisions, and the
-/// same double-precision finish for a lane whose float edge functions or determinant cannot be
-/// trusted), by the code of the wide layouts' block test (watertight_lanes.inl), but over the triangles
-/// as they are stored, one after the other, transposed into lanes on the way in. A leaf's triangles are
-/// then decided by one branch per four instead of a chain of data-dependent branches per triangle.
-class WatertightLanes {
- public:
-  explicit WatertightLanes(const Ray& ray) : one_(ray) {}
-
-  /// The same test on one triangle: WatertightTriangleTest, set up once for both.
-  const WatertightTriangleTest& one() const { return one_; }
-
-  /// Bit i set: tris[i] (i < n, n in [1, 4]) is hit within [tmin, tmax], at t[i] with u[i], v[i];
-  /// kRefine: t[i] refined as WatertightTriangleTest::intersect refines it.
-  template <bool kRefine>
-  unsigned intersect(const Triangle* tris, uint32_t n, float tmin, float tmax, float* t, float* u,
-                     float* v) const {
-    return intersect_at<kRefine>([tris](uint32_t i) -> const Triangle& { return tris[i]; }, n, tmin, tmax, t,
-                                 u, v);
-  }
-
-  /// The same on the triangles triangles[refs[i]], i < n.
-  template <bool kRefine>
-  unsigned intersect(const Triangle* triangles, const uint32_t* refs, uint32_t n, float tmin, float tmax,
-                     float* t, float* u, float* v) const {
-    return intersect_at<kRefine>(
-        [triangles, refs](uint32_t i) -> const Triangle& { return triangles[refs[i]]; }, n, tmin, tmax, t, u,
-        v);
-  }
-
- private:
-  // at(i) is the i-th triangle, i < n.
-  template <bool kRefine, class TriangleAt>
-  unsigned intersect_at(TriangleAt at, uint32_t n, float tmin, float tmax, float* t, float* u,
-                        float* v) const {
-    assert(n >= 1 && n <= 4);
-    static_assert(sizeof(Triangle) == 9 * sizeof(float), "a Triangle is its three vertices' nine floats");
-    // Rows of each triangle's nine floats: (v0 x y z, v1 x), (v1 y z, v2 x y), v2 z. Lanes past n
-    // repeat the last triangle and are masked off.
-    __m128 r0[4], r1[4], r2[4];
-    for (uint32_t i = 0; i < 4; ++i) {
-      const float* p = reinterpret_cast<const float*>(&at(i < n ? i : n - 1));
-      r0[i] = _mm_loadu_ps(p);
-      r1[i] = _mm_loadu_ps(p + 4);
-      r2[i] = _mm_load_ss(p + 8);
-    }
-    _MM_TRANSPOSE4_PS(r0[0], r0[1], r0[2], r0[3]);
-    _MM_TRANSPOSE4_PS(r1[0], r1[1], r1[2], r1[3]);
-    const __m128 v2z = _mm_movelh_ps(_mm_unpacklo_ps(r2[0], r2[1]), _mm_unpacklo_ps(r2[2], r2[3]));
-    const __m128 vert[3][3] = {
-        {r0[0], r0[1], r0[2]}, {r0[3], r1[0], r1[1]}, {r1[2], r1[3], v2z}};  // [k][axis]
-    const auto [kx, ky, kz, sx, sy, sz] = one_.shear();
-    const __m128 permuted[3][3] = {{vert[0][kx], vert[0][ky], vert[0][kz]},
-                                   {vert[1][kx], vert[1][ky], vert[1][kz]},
-                                   {vert[2][kx], vert[2][ky], vert[2][kz]}};
-    const detail::Components o = detail::components(one_.org());
-    const __m128 org[3] = {_mm_set1_ps(o[kx]), _mm_set1_ps(o[ky]), _mm_set1_ps(o[kz])};
-    const __m128 shear[3] = {_mm_set1_ps(sx), _mm_set1_ps(sy), _mm_set1_ps(sz)};
-    const __m128 valid =
-        _mm_castsi128_ps(_mm_cmplt_epi32(_mm_setr_epi32(0, 1, 2, 3), _mm_set1_epi32(static_cast<int>(n))));
-    const auto in_double = [](float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
-                              float cz, float lo, float hi, float& t_out, float& u_out, float& v_out) {
-      return watertight_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, lo, hi, t_out, u_out, v_out);
-    };
-    unsigned mask = detail::watertight_lanes(permuted, org, shear, valid, tmin, tmax, t, u, v, in_double);
-    if constexpr (kRefine)
-      for (unsigned m = mask; m != 0; m &= m - 1) {
-        const auto i = static_cast<unsigned>(std::countr_zero(m));
-        const Triangle& tri = at(i);
-        if (!refine_watertight_t(tri.v0, tri.v1, tri.v2, one_.org(), one_.dir(), tmin, tmax, t[i]))
-          mask &= ~(1u << i);
-      }
-    return mask;
-  }
-
-  WatertightTriangleTest one_;
-};
-#endif
-
-// Whether the binary walks test a leaf's triangles four at a time: the watertight test, on x86-64.
-#if defined(__SSE2__)
-template <class TriangleTest>
-inline constexpr bool kTestsInLanes = std::is_same_v<TriangleTest, WatertightTriangleTest>;
-template <class TriangleTest>
-using LeafTestOf = std::conditional_t<kTestsInLanes<TriangleTest>, WatertightLanes, TriangleTest>;
-#else
-template <class TriangleTest>
-inline constexpr bool kTestsInLanes = false;
-template <class TriangleTest>
-using LeafTestOf = TriangleTest;
-#endif
-
 /// The triangle test as an any-hit query runs it: the watertight test without its refined distance
 /// (WatertightTriangleTest::intersect_float), the others as they are.
 template <class TriangleTest>
@@ -340,6 +236,10 @@ class MollerTrumboreTest {
  public:
   explicit MollerTrumboreTest(const Ray& ray, float det_epsilon = kMollerTrumboreEpsilon)
       : org_(ray.org), dir_(ray.dir), det_epsilon_(det_epsilon) {}
+
+  const Vec3& org() const { return org_; }
+  const Vec3& dir() const { return dir_; }
+  float det_epsilon() const { return det_epsilon_; }
 
   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
     const Vec3 edge1 = tri.v1 - tri.v0;
@@ -406,7 +306,7 @@ inline bool mtn_triangle_in_range(Vec3 v0, Vec3 e1, Vec3 e2, Vec3 n) {
         std::max({largest, std::abs(v0[axis]), std::abs(e1[axis]), std::abs(e2[axis]), std::abs(n[axis])});
     largest_normal = std::max(largest_normal, std::abs(n[axis]));
   }
-  // Written so that a NaN is out of range.
+  // std::max skips a NaN component; a triangle with one misses all the same (its determinant is NaN).
   return largest <= kMtnMaxMagnitude && largest_normal >= kMtnMinNormal;
 }
 
@@ -456,6 +356,12 @@ class MollerTrumboreNormalTest {
  public:
   explicit MollerTrumboreNormalTest(const Ray& ray)
       : org_(ray.org), dir_(ray.dir), ray_in_range_(mtn_ray_in_range(ray.org, ray.dir)) {}
+
+  const Vec3& org() const { return org_; }
+  const Vec3& dir() const { return dir_; }
+  /// Whether the ray is within the float test's range (mtn_ray_in_range); if not, every triangle is
+  /// tested in double.
+  bool ray_in_range() const { return ray_in_range_; }
 
   bool intersect(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
     // v0, the edges and the normal: what the wide layouts store.

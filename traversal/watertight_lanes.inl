@@ -1,7 +1,7 @@
 // The float part of the watertight test (Woop, Benthin and Wald 2013; triangle_tests.h's
 // WatertightTriangleTest) on four triangles at once, from their vertices to the hits: the same
 // float operations in the same order as the scalar test, lane by lane, so the same decisions. Shared by
-// WatertightLanes (triangle_tests.h, the binary layouts' leaves) and the wide layouts' block test
+// WatertightLanes (triangle_lanes.h, the binary layouts' leaves) and the wide layouts' block test
 // (wide_kernels.inl). It is included inside a namespace by each (wide_kernels.inl's once per instruction
 // set), so it includes nothing and calls only intrinsics, builtins and the double-precision finish its
 // caller passes (triangle_tests.h's watertight_in_double, or wide_kernels.inl's own copy, lane_in_double):

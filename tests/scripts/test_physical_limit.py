@@ -60,7 +60,7 @@ BENCH = {"benchmarks": [
     {"name": "node_visit/bvh8/avx2/robust", "items_per_second": 5e8},
     {"name": "ray_triangle/block4/avx2/watertight", "items_per_second": 1e9},
     {"name": "node_visit/bvh2_packed/scalar/fast", "items_per_second": 2.5e8},
-    {"name": "ray_triangle/scalar/mt", "items_per_second": 1e9 / 3},
+    {"name": "ray_triangle/lanes4/mt", "items_per_second": 1e9 / 3},
     {"name": "node_visit/bvh2_packed/scalar/robust", "items_per_second": 2e8},
     {"name": "ray_triangle/lanes4/watertight", "items_per_second": 1e9},
     {"name": "node_visit/bvh2/scalar/robust", "items_per_second": 1.25e8},

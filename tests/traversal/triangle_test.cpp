@@ -10,10 +10,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <random>
 #include <type_traits>
 #include <vector>
 
+#include "traversal/triangle_lanes.h"
 #include "traversal/triangle_tests.h"
 
 namespace sahbench {
@@ -31,6 +33,22 @@ Ray make_ray(Vec3 org, Vec3 dir, float tmin = 0.0f, float tmax = kInf) {
 
 // A unit right triangle in the plane z = 1.
 const Triangle kTri{{0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 1.0f}};
+
+// Points whose coordinates are multiples of 1/16 in [-2, 2]: sums and products of a few are exact.
+class DyadicPoints {
+ public:
+  explicit DyadicPoints(std::mt19937& rng) : rng_(rng) {}
+  Vec3 operator()() {
+    const float x = sixteenth(), y = sixteenth();
+    return {x, y, sixteenth()};
+  }
+  /// One coordinate.
+  float sixteenth() { return static_cast<float>(sixteenths_(rng_)) / 16.0f; }
+
+ private:
+  std::mt19937& rng_;
+  std::uniform_int_distribution<int> sixteenths_{-32, 32};
+};
 
 struct Result {
   bool hit = false;
@@ -225,17 +243,14 @@ TEST(TravTriangleWatertight, WindingDoesNotChangeTheAnswer) {
   // one product and not the other), so every ray, including those exactly through an edge or vertex,
   // gets the same hit, the same t and swapped barycentrics (up to the order of a sum).
   std::mt19937 rng(11);
-  std::uniform_int_distribution<int> sixteenths(-32, 32);
-  auto dyadic = [&] {
-    return Vec3{sixteenths(rng) / 16.0f, sixteenths(rng) / 16.0f, sixteenths(rng) / 16.0f};
-  };
+  DyadicPoints dyadic(rng);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   int hits = 0;
   for (int i = 0; i < 20000; ++i) {
     const Triangle tri{dyadic(), dyadic(), dyadic()};
     const Triangle reversed{tri.v0, tri.v2, tri.v1};
     // A point on an edge or a vertex, or a random point, seen from a random direction.
-    const float w = sixteenths(rng) / 64.0f + 0.5f;
+    const float w = dyadic.sixteenth() / 4.0f + 0.5f;
     const Vec3 target = i % 3 == 0 ? tri.v1 : (i % 3 == 1 ? tri.v0 * w + tri.v2 * (1.0f - w) : dyadic());
     const Vec3 dir = i % 2 ? dyadic() : Vec3{unit(rng), unit(rng), unit(rng)};
     if (dir == Vec3{}) continue;
@@ -376,84 +391,190 @@ bool decided_in_double(const Ray& ray, const Triangle& tri) {
   return !watertight_det_ok(e0 + e1 + e2, e0 * a[2] + e1 * b[2] + e2 * c[2]);
 }
 
-// WatertightLanes decides each of its four lanes as WatertightTriangleTest decides that triangle alone:
-// the same bits of t, u and v on every hit, and the same misses, for rays exactly through edges and
-// vertices (edge functions of 0, finished in double), +-0 direction components, scales that overflow
-// or underflow the float path, hits at exactly tmin or tmax, tmax = FLT_MAX, and leaves of one to four
-// triangles, stored one after the other (bvh2_packed) or reached through references (bvh2). The
-// triangles are in buffers of exactly n, so that a read past them is caught by the sanitizers.
-TEST(TravTriangleWatertightLanes, EveryLaneAsTheScalarTest) {
-  std::mt19937 rng(29);
-  std::uniform_int_distribution<int> sixteenths(-32, 32);
-  auto dyadic = [&] {
-    return Vec3{sixteenths(rng) / 16.0f, sixteenths(rng) / 16.0f, sixteenths(rng) / 16.0f};
-  };
+// One case of the four-lane tests below: a leaf of one to four triangles in a buffer of exactly that
+// many (a read past them is caught by the sanitizers), the same triangles among others reached through
+// shuffled references, and a ray aimed at a vertex, an edge's dyadic point or anywhere, from a dyadic
+// direction (often with zero components, some of them -0) or a random one, some of them tiny. Scales
+// 2^66 and 2^-70 overflow or underflow the float paths. tmin or tmax lies exactly at the aimed
+// triangle's distance by `Scalar` some of the time, so that the closed interval counts; the walks' far
+// limit FLT_MAX some of the time.
+struct LaneCase {
+  std::vector<Triangle> leaf, pool;
+  std::vector<uint32_t> refs;
+  Ray ray;
+};
+
+template <class Scalar>
+std::optional<LaneCase> lane_case(int i, std::mt19937& rng) {
+  DyadicPoints dyadic(rng);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
   const float scales[] = {1.0f, 0x1p66f, 0x1p-70f};
-  int hits = 0, lanes = 0, in_double = 0, at_tmin = 0, at_tmax = 0;
+  const float scale = scales[i % 3];
+  const auto n = static_cast<uint32_t>(1 + i / 4 % 4);
+  LaneCase c;
+  c.leaf.resize(n);
+  for (Triangle& tri : c.leaf) tri = {dyadic() * scale, dyadic() * scale, dyadic() * scale};
+  Triangle& aim = c.leaf[std::min<std::size_t>(static_cast<std::size_t>(i % 4), n - 1)];
+  // Some of the time the aimed triangle is 2^-70 times the others, and the ray meets it inside: lanes
+  // in and out of a test's float range in one call.
+  if (i % 10 == 4) aim = {aim.v0 * 0x1p-70f, aim.v1 * 0x1p-70f, aim.v2 * 0x1p-70f};
+  const Vec3 target = i % 5 == 0   ? aim.v1
+                      : i % 5 == 1 ? (aim.v0 + aim.v2) * 0.5f
+                      : i % 5 == 4 ? (aim.v0 + aim.v1 + aim.v2 * 2.0f) * 0.25f
+                                   : dyadic() * scale;
+  Vec3 dir = i % 2 ? dyadic() : Vec3{unit(rng), unit(rng), unit(rng)};
+  if (i % 7 == 0) dir.y = -0.0f;
+  if (dir.x == 0.0f && dir.y == 0.0f && dir.z == 0.0f) return std::nullopt;
+  const Vec3 org = target - dir * scale;
+  if (i % 13 == 0) dir = dir * 0x1p-45f;
+  float tmin = 0.0f, tmax = i % 6 == 5 ? std::numeric_limits<float>::max() : kInf;
+  float t, u, v;
+  if (i % 4 == 3 && Scalar(make_ray(org, dir)).intersect(aim, 0.0f, kInf, t, u, v))
+    (i % 8 == 3 ? tmax : tmin) = t;
+  c.ray = make_ray(org, dir, tmin, tmax);
+  c.pool.assign(8, Triangle{dyadic(), dyadic(), dyadic()});
+  c.refs.resize(n);
+  for (uint32_t k = 0; k < n; ++k) {
+    c.refs[k] = 7 - 2 * k;
+    c.pool[c.refs[k]] = c.leaf[k];
+  }
+  return c;
+}
+
+// What every four-lane test's cases reach, counted over lanes.
+struct LaneCounts {
+  int lanes = 0, hits = 0, in_double = 0, at_tmin = 0, at_tmax = 0;
+};
+
+// `mask`, t, u and v of a four-lane test on case `c` against `one`'s answer on each triangle alone: the
+// same hits and misses, and the same bits of t, u and v on every hit.
+template <class One>
+void expect_lanes_as_one(const LaneCase& c, unsigned mask, const float* t, const float* u, const float* v,
+                         One one, LaneCounts& counts) {
+  const auto n = static_cast<uint32_t>(c.leaf.size());
+  EXPECT_EQ(mask >> n, 0u);
+  for (uint32_t k = 0; k < n; ++k) {
+    SCOPED_TRACE(testing::Message() << "lane " << k);
+    float tk = 0.0f, uk = 0.0f, vk = 0.0f;
+    const bool hit = one(c.leaf[k], tk, uk, vk);
+    ++counts.lanes;
+    ASSERT_EQ((mask >> k & 1u) != 0, hit);
+    if (!hit) continue;
+    ++counts.hits;
+    counts.at_tmin += tk == c.ray.tmin ? 1 : 0;
+    counts.at_tmax += tk == c.ray.tmax ? 1 : 0;
+    EXPECT_EQ(std::bit_cast<uint32_t>(t[k]), std::bit_cast<uint32_t>(tk));
+    EXPECT_EQ(std::bit_cast<uint32_t>(u[k]), std::bit_cast<uint32_t>(uk));
+    EXPECT_EQ(std::bit_cast<uint32_t>(v[k]), std::bit_cast<uint32_t>(vk));
+  }
+}
+
+// Every path was taken: hits, and hits at exactly tmin and at exactly tmax.
+void expect_every_path(const LaneCounts& counts) {
+  EXPECT_GT(counts.hits, counts.lanes / 20);
+  EXPECT_GT(counts.at_tmin, 100);
+  EXPECT_GT(counts.at_tmax, 100);
+}
+
+// WatertightLanes decides each of its four lanes as WatertightTriangleTest decides that triangle alone,
+// with the refined distance and with the float one, on rays exactly through edges and vertices (edge
+// functions of 0, finished in double) among lane_case's others.
+TEST(TravTriangleWatertightLanes, EveryLaneAsTheScalarTest) {
+  std::mt19937 rng(29);
+  LaneCounts counts;
   for (int i = 0; i < 20000; ++i) {
-    const float scale = scales[i % 3];
-    const auto n = static_cast<uint32_t>(1 + i / 4 % 4);
-    std::vector<Triangle> leaf(n);
-    for (Triangle& tri : leaf) tri = {dyadic() * scale, dyadic() * scale, dyadic() * scale};
-    const Triangle& aim = leaf[std::min<std::size_t>(static_cast<std::size_t>(i % 4), n - 1)];
-    // At a vertex, an edge's dyadic point, or anywhere; from a dyadic direction (often with zero
-    // components, some of them -0) or a random one.
-    const Vec3 target = i % 5 == 0 ? aim.v1 : (i % 5 == 1 ? (aim.v0 + aim.v2) * 0.5f : dyadic() * scale);
-    Vec3 dir = i % 2 ? dyadic() : Vec3{unit(rng), unit(rng), unit(rng)};
-    if (i % 7 == 0) dir.y = -0.0f;
-    if (dir.x == 0.0f && dir.y == 0.0f && dir.z == 0.0f) continue;
-    const Vec3 org = target - dir * scale;
-    // tmin or tmax exactly at the aimed triangle's distance some of the time, so that the closed
-    // interval counts; the walks' far limit FLT_MAX some of the time.
-    float tmin = 0.0f, tmax = i % 6 == 5 ? std::numeric_limits<float>::max() : kInf;
-    {
-      float t, u, v;
-      if (i % 4 == 3 && WatertightTriangleTest(make_ray(org, dir)).intersect(aim, 0.0f, kInf, t, u, v))
-        (i % 8 == 3 ? tmax : tmin) = t;
-    }
-    const Ray ray = make_ray(org, dir, tmin, tmax);
-    // The same triangles among others, reached through shuffled references.
-    std::vector<Triangle> pool(8, Triangle{dyadic(), dyadic(), dyadic()});
-    std::vector<uint32_t> refs(n);
-    for (uint32_t k = 0; k < n; ++k) {
-      refs[k] = 7 - 2 * k;
-      pool[refs[k]] = leaf[k];
-    }
+    const std::optional<LaneCase> c = lane_case<WatertightTriangleTest>(i, rng);
+    if (!c) continue;
+    SCOPED_TRACE(testing::Message() << "case " << i);
+    const Ray& ray = c->ray;
+    const auto n = static_cast<uint32_t>(c->leaf.size());
     const WatertightLanes four(ray);
     const WatertightTriangleTest one(ray);
+    for (const Triangle& tri : c->leaf) counts.in_double += decided_in_double(ray, tri) ? 4 : 0;
     for (int form = 0; form < 4; ++form) {
+      SCOPED_TRACE(testing::Message() << "form " << form);
       const bool refine = form % 2 == 0, gathered = form >= 2;
       alignas(16) float t[4], u[4], v[4];
       const unsigned mask =
-          gathered ? (refine ? four.intersect<true>(pool.data(), refs.data(), n, tmin, tmax, t, u, v)
-                             : four.intersect<false>(pool.data(), refs.data(), n, tmin, tmax, t, u, v))
-                   : (refine ? four.intersect<true>(leaf.data(), n, tmin, tmax, t, u, v)
-                             : four.intersect<false>(leaf.data(), n, tmin, tmax, t, u, v));
-      EXPECT_EQ(mask >> n, 0u);
-      for (uint32_t k = 0; k < n; ++k) {
-        SCOPED_TRACE(testing::Message() << "case " << i << " lane " << k << " form " << form);
-        float tk, uk, vk;
-        const bool hit = refine ? one.intersect(leaf[k], tmin, tmax, tk, uk, vk)
-                                : one.intersect_float(leaf[k], tmin, tmax, tk, uk, vk);
-        ++lanes;
-        in_double += decided_in_double(ray, leaf[k]) ? 1 : 0;
-        ASSERT_EQ((mask >> k & 1u) != 0, hit);
-        if (!hit) continue;
-        ++hits;
-        at_tmin += tk == tmin ? 1 : 0;
-        at_tmax += tk == tmax ? 1 : 0;
-        EXPECT_EQ(std::bit_cast<uint32_t>(t[k]), std::bit_cast<uint32_t>(tk));
-        EXPECT_EQ(std::bit_cast<uint32_t>(u[k]), std::bit_cast<uint32_t>(uk));
-        EXPECT_EQ(std::bit_cast<uint32_t>(v[k]), std::bit_cast<uint32_t>(vk));
-      }
+          gathered
+              ? (refine
+                     ? four.intersect<true>(c->pool.data(), c->refs.data(), n, ray.tmin, ray.tmax, t, u, v)
+                     : four.intersect<false>(c->pool.data(), c->refs.data(), n, ray.tmin, ray.tmax, t, u, v))
+              : (refine ? four.intersect<true>(c->leaf.data(), n, ray.tmin, ray.tmax, t, u, v)
+                        : four.intersect<false>(c->leaf.data(), n, ray.tmin, ray.tmax, t, u, v));
+      expect_lanes_as_one(
+          *c, mask, t, u, v,
+          [&](const Triangle& tri, float& tk, float& uk, float& vk) {
+            return refine ? one.intersect(tri, ray.tmin, ray.tmax, tk, uk, vk)
+                          : one.intersect_float(tri, ray.tmin, ray.tmax, tk, uk, vk);
+          },
+          counts);
     }
   }
-  EXPECT_GT(hits, lanes / 20);
-  // Every path was taken: lanes finished in double, and hits at exactly tmin and at exactly tmax.
-  EXPECT_GT(in_double, lanes / 100);
-  EXPECT_GT(at_tmin, 100);
-  EXPECT_GT(at_tmax, 100);
+  expect_every_path(counts);
+  EXPECT_GT(counts.in_double, counts.lanes / 100);  // lanes finished in double
+}
+
+// The Möller-Trumbore tests' four-lane forms decide each lane as the scalar test decides that triangle
+// alone; mtn's lanes outside its float range (the 2^66 and 2^-70 scales, the tiny directions) are
+// finished in double.
+template <class Test>
+class TravTriangleMollerTrumboreLanes : public ::testing::Test {};
+using MollerTrumboreTests = ::testing::Types<MollerTrumboreTest, MollerTrumboreNoEpsilonTest
+#if defined(__FMA__)
+                                             ,
+                                             MollerTrumboreNormalTest
+#endif
+                                             >;
+TYPED_TEST_SUITE(TravTriangleMollerTrumboreLanes, MollerTrumboreTests);
+
+TYPED_TEST(TravTriangleMollerTrumboreLanes, EveryLaneAsTheScalarTest) {
+  static_assert(kTestsInLanes<TypeParam>);
+  std::mt19937 rng(31);
+  LaneCounts counts;
+  int mixed_double_hits = 0;  // mtn: hits finished in double beside lanes decided in float
+  for (int i = 0; i < 20000; ++i) {
+    const std::optional<LaneCase> c = lane_case<TypeParam>(i, rng);
+    if (!c) continue;
+    SCOPED_TRACE(testing::Message() << "case " << i);
+    const Ray& ray = c->ray;
+    const auto n = static_cast<uint32_t>(c->leaf.size());
+    const LeafTestOf<TypeParam> four(ray);
+    const TypeParam one(ray);
+    if constexpr (std::is_same_v<TypeParam, MollerTrumboreNormalTest>) {
+      int in_range = 0, double_hits = 0;
+      for (const Triangle& tri : c->leaf) {
+        const Vec3 e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+        float t, u, v;
+        if (mtn_ray_in_range(ray.org, ray.dir) &&
+            mtn_triangle_in_range(tri.v0, e1, e2, stored_normal(e1, e2)))
+          ++in_range;
+        else
+          double_hits += one.intersect(tri, ray.tmin, ray.tmax, t, u, v) ? 1 : 0;
+      }
+      counts.in_double += 2 * (static_cast<int>(n) - in_range);
+      mixed_double_hits += in_range > 0 ? double_hits : 0;
+    }
+    for (bool gathered : {false, true}) {
+      SCOPED_TRACE(testing::Message() << "gathered " << gathered);
+      alignas(16) float t[4], u[4], v[4];
+      const unsigned mask =
+          gathered
+              ? four.template intersect<false>(c->pool.data(), c->refs.data(), n, ray.tmin, ray.tmax, t, u, v)
+              : four.template intersect<false>(c->leaf.data(), n, ray.tmin, ray.tmax, t, u, v);
+      expect_lanes_as_one(
+          *c, mask, t, u, v,
+          [&](const Triangle& tri, float& tk, float& uk, float& vk) {
+            return one.intersect(tri, ray.tmin, ray.tmax, tk, uk, vk);
+          },
+          counts);
+    }
+  }
+  expect_every_path(counts);
+  if constexpr (std::is_same_v<TypeParam, MollerTrumboreNormalTest>) {
+    EXPECT_GT(counts.in_double, counts.lanes / 20);
+    EXPECT_GT(mixed_double_hits, 100);
+  }
 }
 #endif
 

@@ -25,6 +25,9 @@ namespace sahbench {
 #if defined(__SSE2__)
 namespace detail {
 #include "traversal/watertight_lanes.inl"
+#if defined(__FMA__)
+#include "traversal/mtn_lanes.inl"
+#endif
 
 // The vertices of triangles at(0), ..., at(n - 1) (n in [1, 4]) in the lanes of SSE registers,
 // vertex[k][axis]; lanes past n repeat the last triangle, and `valid` is all ones in the first n lanes.
@@ -200,8 +203,9 @@ class MollerTrumboreLanes : public FourLaneTest<MollerTrumboreLanes<Scalar>> {
 // the target: the binary walks that use it are compiled once, for the build's own target (the wide
 // kernels' per-instruction-set files include this header but instantiate no binary walk).
 #if defined(__FMA__)
-/// MollerTrumboreNormalTest on four lanes, with the scalar test's fused multiply-adds as FMA
-/// instructions (so only where the CPU has them); a lane outside the float test's range
+/// MollerTrumboreNormalTest on four lanes, by the code of the wide layouts' block test (mtn_lanes.inl),
+/// with the scalar test's fused multiply-adds as FMA instructions (so only where the CPU has them); a
+/// lane outside the float test's range
 /// (mtn_triangle_in_range), or every lane of a ray outside it, is decided in double by the scalar
 /// test's mtn_in_double.
 class MollerTrumboreNormalLanes : public FourLaneTest<MollerTrumboreNormalLanes> {
@@ -212,11 +216,6 @@ class MollerTrumboreNormalLanes : public FourLaneTest<MollerTrumboreNormalLanes>
 
  private:
   friend class FourLaneTest<MollerTrumboreNormalLanes>;
-
-  // a . b as the scalar test's dot_fma: fma(a.x, b.x, fma(a.y, b.y, a.z * b.z)).
-  [[gnu::always_inline]] static __m128 dot_fma(const __m128 (&a)[3], const __m128 (&b)[3]) {
-    return _mm_fmadd_ps(a[0], b[0], _mm_fmadd_ps(a[1], b[1], _mm_mul_ps(a[2], b[2])));
-  }
 
   // Lanes of `four.valid` whose triangle is outside the float test's range: mtn_triangle_in_range
   // lane by lane. A NaN component compares false here (out of range) where the scalar check skips it;
@@ -240,7 +239,7 @@ class MollerTrumboreNormalLanes : public FourLaneTest<MollerTrumboreNormalLanes>
   unsigned intersect_at(TriangleAt at, uint32_t n, float tmin, float tmax, float* t_out, float* u_out,
                         float* v_out) const {
     const detail::FourTriangles four = detail::four_triangles(at, n);
-    __m128 d[3], org[3], edge1[3], edge2[3], normal[3], c[3];
+    __m128 d[3], org[3], edge1[3], edge2[3], normal[3];
     detail::lanes_broadcast(one_.dir(), d);
     detail::lanes_broadcast(one_.org(), org);
     detail::lanes_sub(four.vertex[1], four.vertex[0], edge1);
@@ -248,35 +247,17 @@ class MollerTrumboreNormalLanes : public FourLaneTest<MollerTrumboreNormalLanes>
     detail::lanes_cross(edge1, edge2, normal);  // stored_normal
     const unsigned in_double = one_.ray_in_range() ? out_of_range(four, edge1, edge2, normal)
                                                    : static_cast<unsigned>(_mm_movemask_ps(four.valid));
-    detail::lanes_sub(four.vertex[0], org, c);
-    const __m128 r[3] = {_mm_fmsub_ps(d[1], c[2], _mm_mul_ps(d[2], c[1])),
-                         _mm_fmsub_ps(d[2], c[0], _mm_mul_ps(d[0], c[2])),
-                         _mm_fmsub_ps(d[0], c[1], _mm_mul_ps(d[1], c[0]))};
-    const __m128 det = dot_fma(d, normal);
-    // The sign of det moved onto u, v and t by flipping sign bits, as the scalar test does.
-    const __m128 sign_bit = _mm_set1_ps(-0.0f);
-    const __m128 sign = _mm_and_ps(det, sign_bit);
-    const __m128 abs_det = _mm_xor_ps(det, sign);
-    const __m128 su = _mm_xor_ps(dot_fma(edge2, r), _mm_xor_ps(sign, sign_bit));
-    const __m128 sv = _mm_xor_ps(dot_fma(edge1, r), sign);
-    const __m128 zero = _mm_setzero_ps();
-    __m128 hit = _mm_and_ps(four.valid,
-                            _mm_and_ps(_mm_cmpge_ps(abs_det, _mm_set1_ps(std::numeric_limits<float>::min())),
-                                       _mm_and_ps(_mm_cmpge_ps(su, zero), _mm_cmpge_ps(sv, zero))));
-    hit = _mm_and_ps(hit, _mm_cmple_ps(_mm_add_ps(su, sv), abs_det));
-    const __m128 st = _mm_xor_ps(dot_fma(c, normal), sign);
-    hit = _mm_and_ps(hit, _mm_and_ps(_mm_cmpge_ps(st, _mm_mul_ps(abs_det, _mm_set1_ps(tmin))),
-                                     _mm_cmple_ps(st, _mm_mul_ps(abs_det, _mm_set1_ps(tmax)))));
-    unsigned mask = static_cast<unsigned>(_mm_movemask_ps(hit)) & ~in_double;
-    if (mask != 0) {
-      const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), abs_det);
-      const __m128 t = _mm_mul_ps(st, inv_det);
-      mask &= static_cast<unsigned>(_mm_movemask_ps(
-          _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(tmin)), _mm_cmple_ps(t, _mm_set1_ps(tmax)))));
-      _mm_store_ps(t_out, t);
-      _mm_store_ps(u_out, _mm_mul_ps(su, inv_det));
-      _mm_store_ps(v_out, _mm_mul_ps(sv, inv_det));
-    }
+    const auto load = [&](int part, int axis) __attribute__((always_inline)) {
+      return part == 0   ? four.vertex[0][axis]
+             : part == 1 ? edge1[axis]
+             : part == 2 ? edge2[axis]
+                         : normal[axis];
+    };
+    const detail::RayLanes<detail::Ops128> ray{
+        {org[0], org[1], org[2]}, {d[0], d[1], d[2]}, _mm_set1_ps(tmin), _mm_set1_ps(tmax)};
+    unsigned mask =
+        detail::intersect_mtn_lanes<__m128, detail::Ops128>(four.valid, load, ray, t_out, u_out, v_out) &
+        ~in_double;
     for (unsigned m = in_double; m != 0; m &= m - 1) [[unlikely]] {
         const auto i = static_cast<unsigned>(std::countr_zero(m));
         const Triangle& tri = at(i);

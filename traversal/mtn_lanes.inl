@@ -7,7 +7,7 @@
 // Lanes the float test cannot take (outside mtn_triangle_in_range or mtn_ray_in_range) are the caller's
 // to finish in double.
 
-// A ray's origin, direction and interval in every lane (one ray against several triangles), or eight
+// A ray's origin, direction and interval in every lane (one ray against several triangles), or 8 or 16
 // rays' in theirs (a packet against one triangle, wide_packets.inl). Templated on the Ops (below) rather
 // than on their vector type, whose alignment attribute a template argument would drop.
 template <class Ops>
@@ -24,8 +24,8 @@ struct RayLanes {
 // waits for a lane to pass, so a ray that hits nothing in the block divides nothing; t is checked again
 // once divided.
 template <class V, class Ops, class Load>
-[[gnu::always_inline]] inline uint32_t intersect_mtn_lanes(V valid, Load load, const RayLanes<Ops>& r, float* t_out,
-                                                    float* u_out, float* v_out) {
+[[gnu::always_inline]] inline uint32_t intersect_mtn_lanes(V valid, Load load, const RayLanes<Ops>& r,
+                                                           float* t_out, float* u_out, float* v_out) {
   const V dx = r.dir[0], dy = r.dir[1], dz = r.dir[2];
   const V cx = Ops::sub(load(0, 0), r.org[0]), cy = Ops::sub(load(0, 1), r.org[1]),
           cz = Ops::sub(load(0, 2), r.org[2]);
@@ -73,4 +73,3 @@ struct Ops128 {
   [[gnu::always_inline]] static int movemask(__m128 a) { return _mm_movemask_ps(a); }
   [[gnu::always_inline]] static void store(float* p, __m128 a) { _mm_storeu_ps(p, a); }
 };
-

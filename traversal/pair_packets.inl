@@ -17,8 +17,9 @@
 // per lane, to the same end), rather than the packet being split by octant into fragments of two or
 // three rays. Each lane computes the single-ray kernel's slab
 // test (PairSlabs: the same products, the far distances scaled the same way, the same NaN rule) and every
-// leaf's triangles are tested ray by ray with the layout's triangle test, so every ray gets the hit it
-// gets alone, up to a tie within a rounding that the other order of the visits breaks the other way.
+// leaf's triangles are tested ray by ray by the single-ray walks' leaf loop (detail::test_leaf, four
+// triangles at a time), so every ray gets the hit it gets alone, up to a tie within a rounding that the
+// other order of the visits breaks the other way.
 
 // The BoxTestKind of a box test class of ray_box.h.
 template <class Box>
@@ -53,6 +54,12 @@ struct PackedPairTree {
   }
   SAHBENCH_KERNEL_INLINE uint32_t prim(uint32_t slot) const { return slot; }
   SAHBENCH_KERNEL_INLINE uint32_t scene_index(uint32_t prim) const { return tree.ids[prim]; }
+  // The triangles at slots [slot, slot + n) against one ray by a four-lane test (triangle_lanes.h).
+  template <bool kRefine, class Lanes>
+  SAHBENCH_KERNEL_INLINE unsigned four(const Lanes& test, uint32_t slot, uint32_t n, float tmin, float tmax,
+                                       float* t, float* u, float* v) const {
+    return test.template intersect<kRefine>(&tree.triangles[slot], n, tmin, tmax, t, u, v);
+  }
 };
 
 // The common format as built: a node's two children side by side from its `first`, each with its box
@@ -85,6 +92,27 @@ struct CommonPairTree {
   }
   SAHBENCH_KERNEL_INLINE uint32_t prim(uint32_t slot) const { return bvh.prim_refs[slot]; }
   SAHBENCH_KERNEL_INLINE uint32_t scene_index(uint32_t prim) const { return prim; }
+  template <bool kRefine, class Lanes>
+  SAHBENCH_KERNEL_INLINE unsigned four(const Lanes& test, uint32_t slot, uint32_t n, float tmin, float tmax,
+                                       float* t, float* u, float* v) const {
+    return test.template intersect<kRefine>(triangles, &bvh.prim_refs[slot], n, tmin, tmax, t, u, v);
+  }
+};
+
+// A leaf of `Tree` as the single-ray walks' leaf loop takes it (detail::test_leaf): its triangles at
+// slots [first, first + size).
+template <class Tree>
+struct PairTreeLeaf {
+  const Tree& tree;
+  uint32_t first, size;
+  SAHBENCH_KERNEL_INLINE const Triangle& triangle(uint32_t k) const { return tree.triangle(first + k); }
+  SAHBENCH_KERNEL_INLINE uint32_t prim(uint32_t k) const { return tree.prim(first + k); }
+  SAHBENCH_KERNEL_INLINE uint32_t scene_index(uint32_t prim) const { return tree.scene_index(prim); }
+  template <bool kRefine, class Lanes>
+  SAHBENCH_KERNEL_INLINE unsigned four(const Lanes& test, uint32_t k, uint32_t n, float tmin, float tmax,
+                                       float* t, float* u, float* v) const {
+    return tree.template four<kRefine>(test, first + k, n, tmin, tmax, t, u, v);
+  }
 };
 
 // The packet's slab constants from each ray's SlabSetup, as the single-ray box tests take them, and the
@@ -146,13 +174,15 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
     tmin[j] = rays[j < n ? j : 0].tmin;
   }
   Hit best[K];
-  // Each ray's triangle test, set up once (the watertight test's shear, for one).
+  // Each ray's leaf test, set up once (the watertight test's shear, for one): the single-ray walks'
+  // four-lane form where the test has one.
+  using LeafTest = LeafTestOf<Tri>;
   union Tests {
     Tests() {}
-    Tri lane[K];
+    LeafTest lane[K];
   } tests;
-  for (uint32_t j = 0; j < K; ++j) new (&tests.lane[j]) Tri(rays[j < n ? j : 0]);
-  static_assert(std::is_trivially_destructible_v<Tri>);
+  for (uint32_t j = 0; j < K; ++j) new (&tests.lane[j]) LeafTest(rays[j < n ? j : 0]);
+  static_assert(std::is_trivially_destructible_v<LeafTest>);
 
   float root_planes[6];  // the root's box in Tree's numbering, one float apart
   for (uint32_t axis = 0; axis < 3; ++axis) {
@@ -173,28 +203,13 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
     const uint32_t lanes = P::le(entry.t_entry, tmax);
     if (lanes != 0) {
       if (entry.count != 0) {
-        const uint32_t end = entry.child + entry.count;
-        uint32_t active = lanes;
-        for (uint32_t slot = entry.child; slot < end && active; ++slot) {
-          const Triangle& tri = tree.triangle(slot);
-          const uint32_t prim = tree.prim(slot);
-          for (uint32_t m = active; m; m &= m - 1) {
-            const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
-            float t, u, v;
-            const bool hit = kAnyHit ? intersect_any(tests.lane[j], tri, tmin[j], best_t[j], t, u, v)
-                                     : tests.lane[j].intersect(tri, tmin[j], best_t[j], t, u, v);
-            if (!hit) continue;
-            if constexpr (kAnyHit) {
-              best[j] = {prim, t, u, v};
-              best_t[j] = __builtin_nanf("");
-              active &= ~(1u << j);
-            } else if (t < best_t[j] || !best[j].found() ||
-                       tree.scene_index(prim) < tree.scene_index(best[j].prim)) {
-              // On a tie the lowest scene index wins, as in the single-ray walk.
-              best[j] = {prim, t, u, v};
-              best_t[j] = t;
-            }
-          }
+        // Ray by ray, by the single-ray walks' leaf loop: a ray's answer is the one it gets alone (on
+        // a tie the lowest scene index wins), its triangles four at a time where the test has lanes.
+        const PairTreeLeaf<Tree> leaf{tree, entry.child, entry.count};
+        for (uint32_t m = lanes; m; m &= m - 1) {
+          const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
+          if (detail::test_leaf<kAnyHit, Tri>(tests.lane[j], leaf, tmin[j], best_t[j], best[j]))
+            best_t[j] = __builtin_nanf("");  // an any-hit query's hit: the lane takes no entry again
         }
         if constexpr (kAnyHit) {
           if (P::ordered(P::load(best_t)) == 0) break;

@@ -9,7 +9,6 @@
 #include <bit>
 #include <cassert>
 #include <cstdint>
-#include <limits>
 #include <type_traits>
 
 #if defined(__SSE2__)
@@ -200,8 +199,8 @@ class MollerTrumboreLanes : public FourLaneTest<MollerTrumboreLanes<Scalar>> {
 };
 
 // Only where the compiler may emit FMA instructions, so LeafTestOf<MollerTrumboreNormalTest> depends on
-// the target: the binary walks that use it are compiled once, for the build's own target (the wide
-// kernels' per-instruction-set files include this header but instantiate no binary walk).
+// the target: the binary walks use it compiled for the build's own target, and the binary packet kernels
+// (pair_packets.inl, in the AVX2 and AVX-512 files) inline it into their flattened loops.
 #if defined(__FMA__)
 /// MollerTrumboreNormalTest on four lanes, by the code of the wide layouts' block test (mtn_lanes.inl),
 /// with the scalar test's fused multiply-adds as FMA instructions (so only where the CPU has them); a

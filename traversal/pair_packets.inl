@@ -18,8 +18,10 @@
 // three rays. Each lane computes the single-ray kernel's slab
 // test (PairSlabs: the same products, the far distances scaled the same way, the same NaN rule) and every
 // leaf's triangles are tested ray by ray by the single-ray walks' leaf loop (detail::test_leaf, four
-// triangles at a time), so every ray gets the hit it gets alone, up to a tie within a rounding that the
-// other order of the visits breaks the other way.
+// triangles at a time) or, tri=watertight where enough of the packet enters the leaf, a triangle at a time
+// against all its rays with each lane's ray's own operations (packet_leaf_watertight), so every ray gets
+// the hit it gets alone, up to a tie within a rounding that the other order of the visits breaks the other
+// way.
 
 // The BoxTestKind of a box test class of ray_box.h.
 template <class Box>
@@ -115,6 +117,110 @@ struct PairTreeLeaf {
   }
 };
 
+// tri=watertight: each lane's ray's permutation and shear (WatertightShear), for the test of one
+// triangle against all the packet's rays (packet_leaf_watertight). A triangle's coordinates are the same
+// in every lane, each lane takes them in its own ray's order: `uniform` where the packet's rays share
+// one order (rays of one octant and a common largest axis, the usual case), else per lane by selects.
+template <class P>
+struct PacketShear {
+  using V = typename P::V;
+  V org[3];    // each lane's origin on its kx, ky and kz
+  V shear[3];  // its sx, sy and sz
+  bool uniform;
+  uint32_t axis[3];           // uniform: the packet's kx, ky and kz
+  uint32_t is_x[3], is_y[3];  // else: the lanes whose kx (ky, kz) is x, y (z in the others)
+
+  // (x, y, z)'s coordinate on kx (slot 0), ky (1) or kz (2) of each lane's ray.
+  SAHBENCH_KERNEL_INLINE V permuted(const Vec3& p, uint32_t slot) const {
+    const detail::Components c = detail::components(p);
+    if (uniform) return P::set1(c[axis[slot]]);
+    return P::select(is_x[slot], P::set1(c[0]), P::select(is_y[slot], P::set1(c[1]), P::set1(c[2])));
+  }
+};
+
+template <class P>
+SAHBENCH_KERNEL_INLINE PacketShear<P> make_packet_shear(const WatertightLanes* tests, uint32_t mask) {
+  alignas(64) float lanes[6][P::kWidth];
+  PacketShear<P> s;
+  const WatertightShear& lead = tests[__builtin_ctz(mask)].one().shear();
+  s.uniform = true;
+  for (uint32_t slot = 0; slot < 3; ++slot) s.is_x[slot] = s.is_y[slot] = 0;
+  s.axis[0] = lead.kx;
+  s.axis[1] = lead.ky;
+  s.axis[2] = lead.kz;
+  for (uint32_t j = 0; j < P::kWidth; ++j) {
+    const WatertightShear& w = tests[j].one().shear();  // unused lanes hold ray 0's test
+    const detail::Components o = detail::components(tests[j].one().org());
+    const uint8_t k[3] = {w.kx, w.ky, w.kz};
+    for (uint32_t slot = 0; slot < 3; ++slot) {
+      lanes[slot][j] = o[k[slot]];
+      s.is_x[slot] |= uint32_t{k[slot] == 0} << j;
+      s.is_y[slot] |= uint32_t{k[slot] == 1} << j;
+      if (mask >> j & 1u && k[slot] != s.axis[slot]) s.uniform = false;
+    }
+    lanes[3][j] = w.sx;
+    lanes[4][j] = w.sy;
+    lanes[5][j] = w.sz;
+  }
+  for (uint32_t slot = 0; slot < 3; ++slot) {
+    s.org[slot] = P::load(lanes[slot]);
+    s.shear[slot] = P::load(lanes[3 + slot]);
+  }
+  return s;
+}
+
+// Whether a leaf of `triangles` is cheaper tested a triangle at a time against the packet's `rays`
+// entering it (packet_leaf_watertight) than ray by ray four triangles at a time (test_leaf): one
+// triangle against K lanes costs about what one ray against four triangles does.
+SAHBENCH_KERNEL_INLINE bool packet_leaf_pays(uint32_t rays, uint32_t triangles) {
+  return rays * ((triangles + 3) / 4) > triangles;
+}
+
+// tri=watertight: the triangles of a leaf (slots [first, first + count) of `tree`) against the packet's
+// rays in `lanes`, one triangle at a time in K lanes (watertight_in_lanes with the rays in the lanes),
+// as Embree's packet intersectors test a triangle against K rays. Each lane computes the scalar test's
+// float operations on its own ray, against that ray's closest hit so far, and a hit's distance is refined
+// and taken as test_leaf takes it, in leaf order: each ray gets the hits it gets alone. Updates best and
+// best_t as test_leaf does (any hit: a ray that hits gets a NaN best_t).
+template <class P, bool kAnyHit, class Tree>
+SAHBENCH_KERNEL_INLINE void packet_leaf_watertight(const Tree& tree, uint32_t first, uint32_t count,
+                                                   const PacketShear<P>& s, const WatertightLanes* tests,
+                                                   const float* tmin, uint32_t lanes, Hit* best,
+                                                   float* best_t) {
+  using V = typename P::V;
+  const auto in_double = [](float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
+                            float cz, float lo, float hi, float& t, float& u, float& v) {
+    return watertight_in_double(ax, ay, az, bx, by, bz, cx, cy, cz, lo, hi, t, u, v);
+  };
+  const V lo = P::load(tmin);
+  for (uint32_t k = first; k < first + count && lanes; ++k) {
+    const Triangle& tri = tree.triangle(k);
+    const V vertex[3][3] = {{s.permuted(tri.v0, 0), s.permuted(tri.v0, 1), s.permuted(tri.v0, 2)},
+                            {s.permuted(tri.v1, 0), s.permuted(tri.v1, 1), s.permuted(tri.v1, 2)},
+                            {s.permuted(tri.v2, 0), s.permuted(tri.v2, 1), s.permuted(tri.v2, 2)}};
+    alignas(64) float t[P::kWidth], u[P::kWidth], v[P::kWidth];
+    uint32_t hits = watertight_in_lanes<typename P::Ops>(vertex, s.org, s.shear, P::mask_vector(lanes), lo,
+                                                         P::load(best_t), t, u, v, in_double);
+    const uint32_t prim = tree.prim(k);
+    for (; hits; hits &= hits - 1) {
+      const uint32_t j = static_cast<uint32_t>(__builtin_ctz(hits));
+      if constexpr (kAnyHit) {
+        best[j] = {prim, t[j], u[j], v[j]};
+        best_t[j] = __builtin_nanf("");
+        lanes &= ~(1u << j);
+      } else {
+        const WatertightTriangleTest& one = tests[j].one();
+        if (!refine_watertight_t(tri.v0, tri.v1, tri.v2, one.org(), one.dir(), tmin[j], best_t[j], t[j]))
+          continue;
+        if (t[j] < best_t[j] || !best[j].found() || tree.scene_index(prim) < tree.scene_index(best[j].prim)) {
+          best[j] = {prim, t[j], u[j], v[j]};
+          best_t[j] = t[j];
+        }
+      }
+    }
+  }
+}
+
 // The packet's slab constants from each ray's SlabSetup, as the single-ray box tests take them, and the
 // near and far planes of `Tree`'s numbering: those of the octant of ray `lead`, or (kPerLane) the min
 // and max planes, with the lanes of a negative direction on each axis.
@@ -168,7 +274,7 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
       make_pair_packet<P, Tree, kPerLane>(rays, n, static_cast<uint32_t>(__builtin_ctz(mask)));
   const V nan = P::set1(__builtin_nanf(""));
   alignas(64) float best_t[K];
-  float tmin[K];
+  alignas(64) float tmin[K];
   for (uint32_t j = 0; j < K; ++j) {
     best_t[j] = mask >> j & 1u ? far_limit(rays[j]) : __builtin_nanf("");
     tmin[j] = rays[j < n ? j : 0].tmin;
@@ -183,6 +289,9 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
   } tests;
   for (uint32_t j = 0; j < K; ++j) new (&tests.lane[j]) LeafTest(rays[j < n ? j : 0]);
   static_assert(std::is_trivially_destructible_v<LeafTest>);
+  constexpr bool kWatertight = std::is_same_v<Tri, WatertightTriangleTest>;
+  [[maybe_unused]] PacketShear<P> shear;
+  if constexpr (kWatertight) shear = make_packet_shear<P>(tests.lane, mask);
 
   float root_planes[6];  // the root's box in Tree's numbering, one float apart
   for (uint32_t axis = 0; axis < 3; ++axis) {
@@ -203,10 +312,20 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
     const uint32_t lanes = P::le(entry.t_entry, tmax);
     if (lanes != 0) {
       if (entry.count != 0) {
-        // Ray by ray, by the single-ray walks' leaf loop: a ray's answer is the one it gets alone (on
-        // a tie the lowest scene index wins), its triangles four at a time where the test has lanes.
+        // A triangle at a time against the rays entering the leaf where that pays (tri=watertight),
+        // else ray by ray by the single-ray walks' leaf loop, its triangles four at a time where the test
+        // has lanes: either way a ray's answer is the one it gets alone (on a tie the lowest scene index
+        // wins).
+        uint32_t alone = lanes;  // the rays that test the leaf one at a time
+        if constexpr (kWatertight) {
+          if (packet_leaf_pays(static_cast<uint32_t>(std::popcount(lanes)), entry.count)) {
+            packet_leaf_watertight<P, kAnyHit>(tree, entry.child, entry.count, shear, tests.lane, tmin, lanes,
+                                               best, best_t);
+            alone = 0;
+          }
+        }
         const PairTreeLeaf<Tree> leaf{tree, entry.child, entry.count};
-        for (uint32_t m = lanes; m; m &= m - 1) {
+        for (uint32_t m = alone; m; m &= m - 1) {
           const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
           if (detail::test_leaf<kAnyHit, Tri>(tests.lane[j], leaf, tmin[j], best_t[j], best[j]))
             best_t[j] = __builtin_nanf("");  // an any-hit query's hit: the lane takes no entry again

@@ -684,8 +684,13 @@ struct Ops256 {
   }
   SAHBENCH_KERNEL_INLINE static __m256 and_(__m256 a, __m256 b) { return _mm256_and_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m256 xor_(__m256 a, __m256 b) { return _mm256_xor_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m256 or_(__m256 a, __m256 b) { return _mm256_or_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m256 andnot(__m256 a, __m256 b) { return _mm256_andnot_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m256 ge(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
   SAHBENCH_KERNEL_INLINE static __m256 le(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_LE_OQ); }
+  SAHBENCH_KERNEL_INLINE static __m256 lt(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_LT_OQ); }
+  SAHBENCH_KERNEL_INLINE static __m256 gt(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
+  SAHBENCH_KERNEL_INLINE static __m256 neq(__m256 a, __m256 b) { return _mm256_cmp_ps(a, b, _CMP_NEQ_UQ); }
   SAHBENCH_KERNEL_INLINE static int movemask(__m256 a) { return _mm256_movemask_ps(a); }
   SAHBENCH_KERNEL_INLINE static void store(float* p, __m256 a) { _mm256_storeu_ps(p, a); }
 };

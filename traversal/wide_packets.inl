@@ -63,8 +63,9 @@ struct Lanes8 {
 };
 
 #if defined(SAHBENCH_WIDE_AVX512)
-// intersect_mtn_lanes's operations on sixteen lanes. Its masks are vectors (all ones where true), as in
-// Ops256, moved to and from the mask registers of AVX-512 (AVX-512DQ's vpmovm2d and vpmovd2m).
+// intersect_mtn_lanes's and watertight_in_lanes's operations on sixteen lanes. Its masks are vectors (all
+// ones where true), as in Ops256, moved to and from the mask registers of AVX-512 (AVX-512DQ's vpmovm2d and
+// vpmovd2m).
 struct Ops512 {
   using V = __m512;
   SAHBENCH_KERNEL_INLINE static __m512 set1(float x) { return _mm512_set1_ps(x); }
@@ -80,6 +81,8 @@ struct Ops512 {
   }
   SAHBENCH_KERNEL_INLINE static __m512 and_(__m512 a, __m512 b) { return _mm512_and_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m512 xor_(__m512 a, __m512 b) { return _mm512_xor_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m512 or_(__m512 a, __m512 b) { return _mm512_or_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static __m512 andnot(__m512 a, __m512 b) { return _mm512_andnot_ps(a, b); }
   SAHBENCH_KERNEL_INLINE static __m512 from_mask(__mmask16 m) {
     return _mm512_castsi512_ps(_mm512_movm_epi32(m));
   }
@@ -88,6 +91,15 @@ struct Ops512 {
   }
   SAHBENCH_KERNEL_INLINE static __m512 le(__m512 a, __m512 b) {
     return from_mask(_mm512_cmp_ps_mask(a, b, _CMP_LE_OQ));
+  }
+  SAHBENCH_KERNEL_INLINE static __m512 lt(__m512 a, __m512 b) {
+    return from_mask(_mm512_cmp_ps_mask(a, b, _CMP_LT_OQ));
+  }
+  SAHBENCH_KERNEL_INLINE static __m512 gt(__m512 a, __m512 b) {
+    return from_mask(_mm512_cmp_ps_mask(a, b, _CMP_GT_OQ));
+  }
+  SAHBENCH_KERNEL_INLINE static __m512 neq(__m512 a, __m512 b) {
+    return from_mask(_mm512_cmp_ps_mask(a, b, _CMP_NEQ_UQ));
   }
   SAHBENCH_KERNEL_INLINE static int movemask(__m512 a) {
     return static_cast<int>(_mm512_movepi32_mask(_mm512_castps_si512(a)));

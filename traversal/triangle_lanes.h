@@ -79,11 +79,16 @@ template <class TriangleAt>
 
 }  // namespace detail
 
-/// The two ways a leaf's triangles are reached, for each test on four lanes (`Lanes`, which implements
-/// `intersect_at<kRefine>(at, n, tmin, tmax, t, u, v)` with at(i) the i-th triangle).
-template <class Lanes>
+/// What the tests on four lanes share: the scalar test `Scalar` they compute lane by lane, set up once per
+/// ray (one(): the same test on one triangle), and the two ways a leaf's triangles are reached (`Lanes`
+/// implements `intersect_at<kRefine>(at, n, tmin, tmax, t, u, v)` with at(i) the i-th triangle).
+template <class Lanes, class Scalar>
 class FourLaneTest {
  public:
+  explicit FourLaneTest(const Ray& ray) : one_(ray) {}
+
+  const Scalar& one() const { return one_; }
+
   /// Bit i set: tris[i] (i < n, n in [1, 4]) is hit within [tmin, tmax], at t[i] with u[i], v[i];
   /// kRefine: t[i] refined as the watertight test's intersect refines it (the other tests have no
   /// refinement and ignore it).
@@ -106,30 +111,30 @@ class FourLaneTest {
 
  private:
   const Lanes& lanes() const { return static_cast<const Lanes&>(*this); }
+
+  Scalar one_;
 };
 
 /// WatertightTriangleTest on four lanes, by the code of the wide layouts' block test
 /// (watertight_lanes.inl): a lane whose float edge functions or determinant cannot be trusted is
 /// finished in double by the scalar test's code, and a hit's distance refined by it.
-class WatertightLanes : public FourLaneTest<WatertightLanes> {
+class WatertightLanes : public FourLaneTest<WatertightLanes, WatertightTriangleTest> {
  public:
-  explicit WatertightLanes(const Ray& ray) : one_(ray) {}
-
-  /// The same test on one triangle: WatertightTriangleTest, set up once for both.
-  const WatertightTriangleTest& one() const { return one_; }
+  using FourLaneTest::FourLaneTest;
 
  private:
-  friend class FourLaneTest<WatertightLanes>;
+  friend class FourLaneTest<WatertightLanes, WatertightTriangleTest>;
 
   template <bool kRefine, class TriangleAt>
   unsigned intersect_at(TriangleAt at, uint32_t n, float tmin, float tmax, float* t, float* u,
                         float* v) const {
     const detail::FourTriangles four = detail::four_triangles(at, n);
-    const auto [kx, ky, kz, sx, sy, sz] = one_.shear();
+    const WatertightTriangleTest& one = this->one();
+    const auto [kx, ky, kz, sx, sy, sz] = one.shear();
     const __m128 permuted[3][3] = {{four.vertex[0][kx], four.vertex[0][ky], four.vertex[0][kz]},
                                    {four.vertex[1][kx], four.vertex[1][ky], four.vertex[1][kz]},
                                    {four.vertex[2][kx], four.vertex[2][ky], four.vertex[2][kz]}};
-    const detail::Components o = detail::components(one_.org());
+    const detail::Components o = detail::components(one.org());
     const __m128 org[3] = {_mm_set1_ps(o[kx]), _mm_set1_ps(o[ky]), _mm_set1_ps(o[kz])};
     const __m128 shear[3] = {_mm_set1_ps(sx), _mm_set1_ps(sy), _mm_set1_ps(sz)};
     const auto in_double = [](float ax, float ay, float az, float bx, float by, float bz, float cx, float cy,
@@ -142,42 +147,39 @@ class WatertightLanes : public FourLaneTest<WatertightLanes> {
       for (unsigned m = mask; m != 0; m &= m - 1) {
         const auto i = static_cast<unsigned>(std::countr_zero(m));
         const Triangle& tri = at(i);
-        if (!refine_watertight_t(tri.v0, tri.v1, tri.v2, one_.org(), one_.dir(), tmin, tmax, t[i]))
+        if (!refine_watertight_t(tri.v0, tri.v1, tri.v2, one.org(), one.dir(), tmin, tmax, t[i]))
           mask &= ~(1u << i);
       }
     return mask;
   }
-
-  WatertightTriangleTest one_;
 };
 
 /// MollerTrumboreTest (`Scalar`: it or MollerTrumboreNoEpsilonTest) on four lanes: Cramer's rule with
 /// every operation of the scalar test, in its order; the lanes compute what the scalar test's early
 /// outs skip, and mask it off.
 template <class Scalar>
-class MollerTrumboreLanes : public FourLaneTest<MollerTrumboreLanes<Scalar>> {
+class MollerTrumboreLanes : public FourLaneTest<MollerTrumboreLanes<Scalar>, Scalar> {
  public:
-  explicit MollerTrumboreLanes(const Ray& ray) : one_(ray) {}
-
-  const Scalar& one() const { return one_; }
+  using FourLaneTest<MollerTrumboreLanes<Scalar>, Scalar>::FourLaneTest;
 
  private:
-  friend class FourLaneTest<MollerTrumboreLanes>;
+  friend class FourLaneTest<MollerTrumboreLanes<Scalar>, Scalar>;
 
   template <bool, class TriangleAt>
   unsigned intersect_at(TriangleAt at, uint32_t n, float tmin, float tmax, float* t_out, float* u_out,
                         float* v_out) const {
     const detail::FourTriangles four = detail::four_triangles(at, n);
+    const Scalar& one = this->one();
     __m128 dir[3], org[3], edge1[3], edge2[3], s[3], p[3], q[3];
-    detail::lanes_broadcast(one_.dir(), dir);
-    detail::lanes_broadcast(one_.org(), org);
+    detail::lanes_broadcast(one.dir(), dir);
+    detail::lanes_broadcast(one.org(), org);
     detail::lanes_sub(four.vertex[1], four.vertex[0], edge1);
     detail::lanes_sub(four.vertex[2], four.vertex[0], edge2);
     detail::lanes_cross(dir, edge2, p);
     const __m128 det = detail::lanes_dot(edge1, p);
     // |det| > epsilon, ordered: a NaN determinant is a miss.
     const __m128 abs_det = _mm_andnot_ps(_mm_set1_ps(-0.0f), det);
-    __m128 hit = _mm_and_ps(four.valid, _mm_cmpgt_ps(abs_det, _mm_set1_ps(one_.det_epsilon())));
+    __m128 hit = _mm_and_ps(four.valid, _mm_cmpgt_ps(abs_det, _mm_set1_ps(one.det_epsilon())));
     if (_mm_movemask_ps(hit) == 0) return 0;
     const __m128 inv_det = _mm_div_ps(_mm_set1_ps(1.0f), det);
     detail::lanes_sub(org, four.vertex[0], s);
@@ -194,8 +196,6 @@ class MollerTrumboreLanes : public FourLaneTest<MollerTrumboreLanes<Scalar>> {
     _mm_store_ps(v_out, v);
     return static_cast<unsigned>(_mm_movemask_ps(hit));
   }
-
-  Scalar one_;
 };
 
 // Only where the compiler may emit FMA instructions, so LeafTestOf<MollerTrumboreNormalTest> depends on
@@ -204,17 +204,14 @@ class MollerTrumboreLanes : public FourLaneTest<MollerTrumboreLanes<Scalar>> {
 #if defined(__FMA__)
 /// MollerTrumboreNormalTest on four lanes, by the code of the wide layouts' block test (mtn_lanes.inl),
 /// with the scalar test's fused multiply-adds as FMA instructions (so only where the CPU has them); a
-/// lane outside the float test's range
-/// (mtn_triangle_in_range), or every lane of a ray outside it, is decided in double by the scalar
-/// test's mtn_in_double.
-class MollerTrumboreNormalLanes : public FourLaneTest<MollerTrumboreNormalLanes> {
+/// lane outside the float test's range (mtn_triangle_in_range), or every lane of a ray outside it, is
+/// decided in double by the scalar test's mtn_in_double.
+class MollerTrumboreNormalLanes : public FourLaneTest<MollerTrumboreNormalLanes, MollerTrumboreNormalTest> {
  public:
-  explicit MollerTrumboreNormalLanes(const Ray& ray) : one_(ray) {}
-
-  const MollerTrumboreNormalTest& one() const { return one_; }
+  using FourLaneTest::FourLaneTest;
 
  private:
-  friend class FourLaneTest<MollerTrumboreNormalLanes>;
+  friend class FourLaneTest<MollerTrumboreNormalLanes, MollerTrumboreNormalTest>;
 
   // Lanes of `four.valid` whose triangle is outside the float test's range: mtn_triangle_in_range
   // lane by lane. A NaN component compares false here (out of range) where the scalar check skips it;
@@ -238,14 +235,15 @@ class MollerTrumboreNormalLanes : public FourLaneTest<MollerTrumboreNormalLanes>
   unsigned intersect_at(TriangleAt at, uint32_t n, float tmin, float tmax, float* t_out, float* u_out,
                         float* v_out) const {
     const detail::FourTriangles four = detail::four_triangles(at, n);
+    const MollerTrumboreNormalTest& one = this->one();
     __m128 d[3], org[3], edge1[3], edge2[3], normal[3];
-    detail::lanes_broadcast(one_.dir(), d);
-    detail::lanes_broadcast(one_.org(), org);
+    detail::lanes_broadcast(one.dir(), d);
+    detail::lanes_broadcast(one.org(), org);
     detail::lanes_sub(four.vertex[1], four.vertex[0], edge1);
     detail::lanes_sub(four.vertex[2], four.vertex[0], edge2);
     detail::lanes_cross(edge1, edge2, normal);  // stored_normal
-    const unsigned in_double = one_.ray_in_range() ? out_of_range(four, edge1, edge2, normal)
-                                                   : static_cast<unsigned>(_mm_movemask_ps(four.valid));
+    const unsigned in_double = one.ray_in_range() ? out_of_range(four, edge1, edge2, normal)
+                                                  : static_cast<unsigned>(_mm_movemask_ps(four.valid));
     const auto load = [&](int part, int axis) __attribute__((always_inline)) {
       return part == 0   ? four.vertex[0][axis]
              : part == 1 ? edge1[axis]
@@ -260,14 +258,12 @@ class MollerTrumboreNormalLanes : public FourLaneTest<MollerTrumboreNormalLanes>
     for (unsigned m = in_double; m != 0; m &= m - 1) [[unlikely]] {
         const auto i = static_cast<unsigned>(std::countr_zero(m));
         const Triangle& tri = at(i);
-        if (mtn_in_double(tri.v0, tri.v1 - tri.v0, tri.v2 - tri.v0, one_.org(), one_.dir(), tmin, tmax,
+        if (mtn_in_double(tri.v0, tri.v1 - tri.v0, tri.v2 - tri.v0, one.org(), one.dir(), tmin, tmax,
                           t_out[i], u_out[i], v_out[i]))
           mask |= 1u << i;
       }
     return mask;
   }
-
-  MollerTrumboreNormalTest one_;
 };
 #endif
 

@@ -221,6 +221,55 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_watertight(const Tree& tree, uint32_t fi
   }
 }
 
+// tri=mtn: the triangles of a leaf against the packet's rays in `lanes`, a triangle at a time in K lanes
+// (intersect_mtn_lanes with the rays in the lanes; the wide packets' packet_leaf_mtn on a binary leaf):
+// the triangle's edges and normal computed once by the scalar test's operations, each lane the scalar
+// test's float operations on its own ray. A triangle or a ray outside the float test's range
+// (mtn_triangle_in_range, MollerTrumboreNormalTest::ray_in_range) goes through the scalar test, which
+// decides it in double. Each ray's hits are taken in leaf order as test_leaf takes them.
+template <class P, bool kAnyHit, class Tree>
+SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const Tree& tree, uint32_t first, uint32_t count,
+                                            const RayLanes<typename P::Ops>& rays, uint32_t in_range,
+                                            const MollerTrumboreNormalLanes* tests, const float* tmin,
+                                            uint32_t lanes, Hit* best, float* best_t) {
+  for (uint32_t k = first; k < first + count && lanes; ++k) {
+    const Triangle& tri = tree.triangle(k);
+    const Vec3 edge1 = tri.v1 - tri.v0, edge2 = tri.v2 - tri.v0;
+    const Vec3 normal = stored_normal(edge1, edge2);
+    alignas(64) float t[P::kWidth], u[P::kWidth], v[P::kWidth];
+    uint32_t alone = lanes, hits = 0;
+    if (mtn_triangle_in_range(tri.v0, edge1, edge2, normal)) {
+      const detail::Components parts[4] = {detail::components(tri.v0), detail::components(edge1),
+                                           detail::components(edge2), detail::components(normal)};
+      auto load = [&](int part, int axis) __attribute__((always_inline)) {
+        return P::set1(parts[part][axis]);
+      };
+      RayLanes<typename P::Ops> r = rays;
+      r.tmax = P::load(best_t);
+      hits = intersect_mtn_lanes<typename P::V, typename P::Ops>(P::mask_vector(lanes & in_range), load, r, t,
+                                                                 u, v);
+      alone = lanes & ~in_range;
+    }
+    for (uint32_t m = alone; m; m &= m - 1) [[unlikely]] {
+        const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
+        if (tests[j].one().intersect(tri, tmin[j], best_t[j], t[j], u[j], v[j])) hits |= 1u << j;
+      }
+    const uint32_t prim = tree.prim(k);
+    for (; hits; hits &= hits - 1) {
+      const uint32_t j = static_cast<uint32_t>(__builtin_ctz(hits));
+      if constexpr (kAnyHit) {
+        best[j] = {prim, t[j], u[j], v[j]};
+        best_t[j] = __builtin_nanf("");
+        lanes &= ~(1u << j);
+      } else if (t[j] < best_t[j] || !best[j].found() ||
+                 tree.scene_index(prim) < tree.scene_index(best[j].prim)) {
+        best[j] = {prim, t[j], u[j], v[j]};
+        best_t[j] = t[j];
+      }
+    }
+  }
+}
+
 // The packet's slab constants from each ray's SlabSetup, as the single-ray box tests take them, and the
 // near and far planes of `Tree`'s numbering: those of the octant of ray `lead`, or (kPerLane) the min
 // and max planes, with the lanes of a negative direction on each axis.
@@ -290,8 +339,29 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
   for (uint32_t j = 0; j < K; ++j) new (&tests.lane[j]) LeafTest(rays[j < n ? j : 0]);
   static_assert(std::is_trivially_destructible_v<LeafTest>);
   constexpr bool kWatertight = std::is_same_v<Tri, WatertightTriangleTest>;
+  constexpr bool kMtn = std::is_same_v<Tri, MollerTrumboreNormalTest>;
   [[maybe_unused]] PacketShear<P> shear;
   if constexpr (kWatertight) shear = make_packet_shear<P>(tests.lane, mask);
+  // tri=mtn: the rays' origins and directions in lanes, and the rays within the float test's range.
+  [[maybe_unused]] RayLanes<typename P::Ops> mtn_rays;
+  [[maybe_unused]] uint32_t mtn_in_range = 0;
+  if constexpr (kMtn) {
+    alignas(64) float lanes[6][K];
+    for (uint32_t j = 0; j < K; ++j) {
+      const MollerTrumboreNormalTest& one = tests.lane[j].one();
+      const detail::Components o = detail::components(one.org()), d = detail::components(one.dir());
+      for (uint32_t axis = 0; axis < 3; ++axis) {
+        lanes[axis][j] = o[axis];
+        lanes[3 + axis][j] = d[axis];
+      }
+      mtn_in_range |= uint32_t{one.ray_in_range()} << j;
+    }
+    for (uint32_t axis = 0; axis < 3; ++axis) {
+      mtn_rays.org[axis] = P::load(lanes[axis]);
+      mtn_rays.dir[axis] = P::load(lanes[3 + axis]);
+    }
+    mtn_rays.tmin = P::load(tmin);
+  }
 
   float root_planes[6];  // the root's box in Tree's numbering, one float apart
   for (uint32_t axis = 0; axis < 3; ++axis) {
@@ -321,6 +391,13 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
           if (packet_leaf_pays(static_cast<uint32_t>(std::popcount(lanes)), entry.count)) {
             packet_leaf_watertight<P, kAnyHit>(tree, entry.child, entry.count, shear, tests.lane, tmin, lanes,
                                                best, best_t);
+            alone = 0;
+          }
+        }
+        if constexpr (kMtn) {
+          if (packet_leaf_pays(static_cast<uint32_t>(std::popcount(lanes)), entry.count)) {
+            packet_leaf_mtn<P, kAnyHit>(tree, entry.child, entry.count, mtn_rays, mtn_in_range, tests.lane,
+                                        tmin, lanes, best, best_t);
             alone = 0;
           }
         }

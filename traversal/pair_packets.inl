@@ -18,10 +18,10 @@
 // three rays. Each lane computes the single-ray kernel's slab
 // test (PairSlabs: the same products, the far distances scaled the same way, the same NaN rule) and every
 // leaf's triangles are tested ray by ray by the single-ray walks' leaf loop (detail::test_leaf, four
-// triangles at a time) or, tri=watertight where enough of the packet enters the leaf, a triangle at a time
-// against all its rays with each lane's ray's own operations (packet_leaf_watertight), so every ray gets
-// the hit it gets alone, up to a tie within a rounding that the other order of the visits breaks the other
-// way.
+// triangles at a time) or, tri=watertight and tri=mtn where enough of the packet enters the leaf, a
+// triangle at a time against all its rays with each lane's ray's own operations (packet_leaf_watertight,
+// packet_leaf_mtn), so every ray gets the hit it gets alone, up to a tie within a rounding that the other
+// order of the visits breaks the other way.
 
 // The BoxTestKind of a box test class of ray_box.h.
 template <class Box>
@@ -120,7 +120,7 @@ struct PairTreeLeaf {
 // tri=watertight: each lane's ray's permutation and shear (WatertightShear), for the test of one
 // triangle against all the packet's rays (packet_leaf_watertight). A triangle's coordinates are the same
 // in every lane, each lane takes them in its own ray's order: `uniform` where the packet's rays share
-// one order (rays of one octant and a common largest axis, the usual case), else per lane by selects.
+// one order (a common largest axis, and the same sign along it: the usual case), else per lane by selects.
 template <class P>
 struct PacketShear {
   using V = typename P::V;
@@ -170,8 +170,8 @@ SAHBENCH_KERNEL_INLINE PacketShear<P> make_packet_shear(const WatertightLanes* t
 }
 
 // Whether a leaf of `triangles` is cheaper tested a triangle at a time against the packet's `rays`
-// entering it (packet_leaf_watertight) than ray by ray four triangles at a time (test_leaf): one
-// triangle against K lanes costs about what one ray against four triangles does.
+// entering it (packet_leaf_watertight, packet_leaf_mtn) than ray by ray four triangles at a time
+// (test_leaf): one triangle against K lanes costs about what one ray against four triangles does.
 SAHBENCH_KERNEL_INLINE bool packet_leaf_pays(uint32_t rays, uint32_t triangles) {
   return rays * ((triangles + 3) / 4) > triangles;
 }
@@ -181,7 +181,7 @@ SAHBENCH_KERNEL_INLINE bool packet_leaf_pays(uint32_t rays, uint32_t triangles) 
 // as Embree's packet intersectors test a triangle against K rays. Each lane computes the scalar test's
 // float operations on its own ray, against that ray's closest hit so far, and a hit's distance is refined
 // and taken as test_leaf takes it, in leaf order: each ray gets the hits it gets alone. Updates best and
-// best_t as test_leaf does (any hit: a ray that hits gets a NaN best_t).
+// best_t as test_leaf and its caller do (any hit: a ray that hits gets a NaN best_t).
 template <class P, bool kAnyHit, class Tree>
 SAHBENCH_KERNEL_INLINE void packet_leaf_watertight(const Tree& tree, uint32_t first, uint32_t count,
                                                    const PacketShear<P>& s, const WatertightLanes* tests,
@@ -361,6 +361,7 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
       mtn_rays.dir[axis] = P::load(lanes[3 + axis]);
     }
     mtn_rays.tmin = P::load(tmin);
+    mtn_rays.tmax = mtn_rays.tmin;  // each triangle's test takes the rays' closest hits so far
   }
 
   float root_planes[6];  // the root's box in Tree's numbering, one float apart
@@ -382,7 +383,7 @@ template <class P, class Tri, class Box, bool kAnyHit, bool kPerLane, class Tree
     const uint32_t lanes = P::le(entry.t_entry, tmax);
     if (lanes != 0) {
       if (entry.count != 0) {
-        // A triangle at a time against the rays entering the leaf where that pays (tri=watertight),
+        // A triangle at a time against the rays entering the leaf where that pays (tri=watertight, mtn),
         // else ray by ray by the single-ray walks' leaf loop, its triangles four at a time where the test
         // has lanes: either way a ray's answer is the one it gets alone (on a tie the lowest scene index
         // wins).

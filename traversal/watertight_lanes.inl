@@ -2,7 +2,7 @@
 // WatertightTriangleTest) on several lanes at once, from their vertices to the hits: the same
 // float operations in the same order as the scalar test, lane by lane, so the same decisions. Shared by
 // WatertightLanes (triangle_lanes.h, the binary layouts' leaves), the wide layouts' block test
-// (wide_kernels.inl) and the packet kernels' leaves (pair_packets.inl, wide_packets.inl). It is included
+// (wide_kernels.inl) and the binary packet kernels' leaves (pair_packets.inl). It is included
 // inside a namespace by each (wide_kernels.inl's once per instruction set), so it includes nothing and calls
 // only intrinsics, builtins and the double-precision finish its caller passes (triangle_tests.h's
 // watertight_in_double, or wide_kernels.inl's own copy, lane_in_double): the including file includes

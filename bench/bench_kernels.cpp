@@ -243,9 +243,10 @@ void BM_PairNodeVisit(benchmark::State& state) {
     uint32_t hits = 0;
     for (const Ray& ray : rs) {
       const detail::PairSlabs<BoxTest> test(ray);
+      const auto interval = detail::PairSlabs<BoxTest>::interval(ray.tmin, ray.tmax);
       float t_a, t_b;
       for (const PairNode& n : nodes)
-        hits += static_cast<uint32_t>(std::popcount(test.intersect(n, ray.tmin, ray.tmax, t_a, t_b)));
+        hits += static_cast<uint32_t>(std::popcount(test.intersect(n, interval, t_a, t_b)));
     }
     benchmark::DoNotOptimize(hits);
   }

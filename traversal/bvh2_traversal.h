@@ -208,8 +208,12 @@ class BinaryWalk {
         }
         if (size_ == kStackCapacity) [[unlikely]]
           throw_stack_overflow(current_, 2);
-        stack_[size_++] = second_first ? StackEntry{first, t0} : StackEntry{first + 1, t1};
-        current_ = second_first ? first + 1 : first;
+        // The nearer child as an index rather than a branch: which one it is changes from node to node, and
+        // a branch on it is often mispredicted. The pushed entry distance is the farther one, read only by
+        // closest hit's culling (there it is the other child's).
+        const uint32_t near = second_first ? 1u : 0u;
+        stack_[size_++] = {first + (near ^ 1u), std::max(t0, t1)};
+        current_ = first + near;
         return true;
       }
       if (hits != 0) {

@@ -98,6 +98,13 @@ template <class Box>
 class PairSlabs {
  public:
 #if defined(__SSE4_1__)
+  /// A ray's interval as intersect() takes it: (tmin, tmin, -tmax, -tmax), made once per change of tmax
+  /// rather than once per node.
+  using Interval = __m128;
+  static Interval interval(float tmin, float tmax) {
+    return _mm_setr_ps(tmin, tmin, -tmax, -tmax);
+  }
+
   explicit PairSlabs(const Ray& ray) {
     const SlabSetup setup(ray);
     for (int axis = 0; axis < 3; ++axis) {
@@ -105,41 +112,47 @@ class PairSlabs {
       org_[axis] = _mm_set1_ps(setup.org[a]);
       inv_[axis] = _mm_set1_ps(setup.inv_dir[a]);
       org_inv_[axis] = _mm_set1_ps(setup.org[a] * setup.inv_dir[a]);
-      negative_[axis] = _mm_castsi128_ps(_mm_set1_epi32(setup.negative[a] ? -1 : 0));
+      near_far_[axis] = setup.negative[a] ? _mm_setr_epi32(2, 3, 0, 1) : _mm_setr_epi32(0, 1, 2, 3);
     }
   }
 #else
+  struct Interval {
+    float tmin, tmax;
+  };
+  static Interval interval(float tmin, float tmax) {
+    return {tmin, tmax};
+  }
+
   explicit PairSlabs(const Ray& ray) : box_(ray) {}
 #endif
 
-  /// Bit 0: the left child is met within [tmin, tmax], bit 1: the right one; their entry distances in
+  /// Bit 0: the left child is met within `interval`, bit 1: the right one; their entry distances in
   /// t_left and t_right.
-  [[gnu::always_inline]] unsigned intersect(const PairNode& node, float tmin, float tmax, float& t_left,
+  [[gnu::always_inline]] unsigned intersect(const PairNode& node, const Interval& interval, float& t_left,
                                             float& t_right) const {
 #if defined(__SSE4_1__)
-    const __m128 clamp = _mm_setr_ps(tmin, tmin, -tmax, -tmax);
     __m128 m = axis_distances(node, 0);
-    m = _mm_max_ps(m, clamp);
-    m = _mm_max_ps(m, _mm_max_ps(axis_distances(node, 1), clamp));
-    m = _mm_max_ps(m, _mm_max_ps(axis_distances(node, 2), clamp));
+    m = _mm_max_ps(m, interval);
+    m = _mm_max_ps(m, _mm_max_ps(axis_distances(node, 1), interval));
+    m = _mm_max_ps(m, _mm_max_ps(axis_distances(node, 2), interval));
     // Lanes 0 and 1: entry distances; lanes 2 and 3: minus the exit distances.
     const __m128 exit = _mm_xor_ps(_mm_shuffle_ps(m, m, _MM_SHUFFLE(3, 2, 3, 2)), _mm_set1_ps(-0.0f));
     t_left = _mm_cvtss_f32(m);
     t_right = _mm_cvtss_f32(_mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 1, 1, 1)));
     return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(m, exit))) & 3u;
 #else
-    return unsigned(box_.intersect(node.box(0), tmin, tmax, t_left)) |
-           unsigned(box_.intersect(node.box(1), tmin, tmax, t_right)) << 1;
+    return unsigned(box_.intersect(node.box(0), interval.tmin, interval.tmax, t_left)) |
+           unsigned(box_.intersect(node.box(1), interval.tmin, interval.tmax, t_right)) << 1;
 #endif
   }
 
  private:
 #if defined(__SSE4_1__)
-  // (left near, right near, -left far, -right far) on `axis`, before clamping to [tmin, tmax].
+  // (left near, right near, -left far, -right far) on `axis`, before clamping to the interval. The near
+  // planes are put first by one permute whose control the ray's direction fixes (near_far_), where a
+  // blend by the sign would take a compare and a blend at every node.
   [[gnu::always_inline]] __m128 axis_distances(const PairNode& node, int axis) const {
-    const __m128 stored = _mm_load_ps(node.planes[axis]);
-    const __m128 swapped = _mm_shuffle_ps(stored, stored, _MM_SHUFFLE(1, 0, 3, 2));
-    const __m128 planes = _mm_blendv_ps(stored, swapped, negative_[axis]);  // near, near, far, far
+    const __m128 planes = _mm_permutevar_ps(_mm_load_ps(node.planes[axis]), near_far_[axis]);
     const __m128 far_sign = _mm_setr_ps(0.0f, 0.0f, -0.0f, -0.0f);
     if constexpr (std::is_same_v<Box, FmaRayBox>) {
 #if defined(__FMA__)
@@ -164,7 +177,8 @@ class PairSlabs {
 #endif
 
 #if defined(__SSE4_1__)
-  __m128 org_[3], inv_[3], org_inv_[3], negative_[3];
+  __m128 org_[3], inv_[3], org_inv_[3];
+  __m128i near_far_[3];  // per axis: the permute control that puts the near planes first
 #else
   Box box_;  // the scalar test, where SSE4.1 is not there
 #endif
@@ -188,6 +202,7 @@ class PackedWalk {
         any_order_(any_order),
         tmin_(ray.tmin),
         best_t_(far_limit(ray)),
+        interval_(PairSlabs<BoxTest>::interval(tmin_, best_t_)),
         current_(tree.root),
         count_(tree.root_count) {
     if constexpr (kCount) ++counters_->rays;
@@ -210,7 +225,7 @@ class PackedWalk {
       }
       const PairNode& node = nodes_[current_];
       float t0, t1;
-      const unsigned hits = slabs_.intersect(node, tmin_, best_t_, t0, t1);
+      const unsigned hits = slabs_.intersect(node, interval_, t0, t1);
       if (hits == 3) {
         bool second_first = !(t0 < t1);
         if constexpr (kAnyHit) {
@@ -220,8 +235,11 @@ class PackedWalk {
         }
         if (size_ == kStackCapacity) [[unlikely]]
           throw_stack_overflow(current_, 2);
-        const int near = second_first ? 1 : 0;
-        stack_[size_++] = {node.child[1 - near], node.count[1 - near], second_first ? t0 : t1};
+        // The nearer child as an index rather than a branch: which one it is changes from node to node, and
+        // a branch on it is often mispredicted. The pushed entry distance is the farther one, read only by
+        // closest hit's culling (there it is the other child's).
+        const uint32_t near = second_first ? 1u : 0u;
+        stack_[size_++] = {node.child[near ^ 1u], node.count[near ^ 1u], std::max(t0, t1)};
         current_ = node.child[near];
         count_ = node.count[near];
         return true;
@@ -240,6 +258,7 @@ class PackedWalk {
       if (test_leaf<kAnyHit, TriangleTest>(leaf_test_, PackedLeaf{triangles_, ids_, current_, count_}, tmin_,
                                            best_t_, best_))
         return active_ = false;  // an any-hit query's hit
+      interval_ = PairSlabs<BoxTest>::interval(tmin_, best_t_);
     }
     do {
       if (size_ == 0) return active_ = false;
@@ -281,6 +300,7 @@ class PackedWalk {
   [[maybe_unused]] TraversalCounters* counters_;
   AnyHitOrder any_order_;
   float tmin_, best_t_;
+  typename PairSlabs<BoxTest>::Interval interval_;  // [tmin_, best_t_] as slabs_ takes it
   uint32_t current_, count_;
   uint32_t size_ = 0;
   bool active_ = false;

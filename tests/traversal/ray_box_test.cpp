@@ -203,8 +203,8 @@ TYPED_TEST(TravRayBoxBoth, PairNodeTestAgreesWithTheBoxTestOnEachChild) {
       }
       SCOPED_TRACE(testing::Message() << "ray " << i);
       float t_left = -1.0f, t_right = -1.0f, want_left = -1.0f, want_right = -1.0f;
-      const unsigned mask =
-          detail::PairSlabs<TypeParam>(ray).intersect(node, ray.tmin, ray.tmax, t_left, t_right);
+      const unsigned mask = detail::PairSlabs<TypeParam>(ray).intersect(
+          node, detail::PairSlabs<TypeParam>::interval(ray.tmin, ray.tmax), t_left, t_right);
       const TypeParam box(ray);
       const bool left = box.intersect(kUnitBox, ray.tmin, ray.tmax, want_left);
       const bool right_hit = box.intersect(right, ray.tmin, ray.tmax, want_right);

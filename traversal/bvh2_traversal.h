@@ -81,11 +81,25 @@ static_assert(kStackCapacity >= kStackBound, "traversal stack too small for kMax
 
 struct StackEntry {
   uint32_t node;
-  float t_entry;  ///< distance at which the ray enters the node's box, to cull it after a closer hit
+  /// Distance at which the ray enters the node's box, to cull it after a closer hit. Closest hit only:
+  /// any hit reads none, and the binary walks push the farther child distance whichever child they push.
+  float t_entry;
 };
 
 /// Throws sahbench::Error naming the node: a tree deeper than kMaxDepth (the builders guarantee it).
 [[noreturn]] void throw_stack_overflow(uint32_t node, uint32_t child_count);
+
+/// Closest hit's rule for a hit of `prim` at `t` (no farther than best_t: the test met best_t as its
+/// tmax): the nearer hit, on a tie the one of lower scene index, so that every kernel keeps the hit that
+/// testing all triangles in scene order would. `scene_index(prim)` maps a kernel's triangle to the scene's.
+template <class SceneIndex>
+[[gnu::always_inline]] inline void take_closer(uint32_t prim, float t, float u, float v,
+                                               const SceneIndex& scene_index, float& best_t, Hit& best) {
+  if (t < best_t || !best.found() || scene_index(prim) < scene_index(best.prim)) {
+    best = {prim, t, u, v};
+    best_t = t;
+  }
+}
 
 /// A binary walk's leaf: its triangles `leaf.triangle(k)`, k < `leaf.size`, tested in order against
 /// the closest hit so far (`best`, at `best_t`); `leaf.prim(k)` is what a hit names and
@@ -109,10 +123,8 @@ template <bool kAnyHit, class TriangleTest, BinaryLeaf Leaf>
 [[gnu::always_inline]] inline bool test_leaf(const LeafTestOf<TriangleTest>& test, const Leaf& leaf,
                                              float tmin, float& best_t, Hit& best) {
   auto take = [&](uint32_t prim, float t, float u, float v) {
-    if (t < best_t || !best.found() || leaf.scene_index(prim) < leaf.scene_index(best.prim)) {
-      best = {prim, t, u, v};
-      best_t = t;
-    }
+    take_closer(
+        prim, t, u, v, [&](uint32_t p) { return leaf.scene_index(p); }, best_t, best);
   };
   if constexpr (kTestsInLanes<TriangleTest>) {
     for (uint32_t first = 0; first < leaf.size; first += 4) {
@@ -210,7 +222,7 @@ class BinaryWalk {
           throw_stack_overflow(current_, 2);
         // The nearer child as an index rather than a branch: which one it is changes from node to node, and
         // a branch on it is often mispredicted. The pushed entry distance is the farther one, read only by
-        // closest hit's culling (there it is the other child's).
+        // closest hit's culling (there it is the other child's); PackedWalk takes its children the same way.
         const uint32_t near = second_first ? 1u : 0u;
         stack_[size_++] = {first + (near ^ 1u), std::max(t0, t1)};
         current_ = first + near;

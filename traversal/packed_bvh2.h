@@ -92,8 +92,9 @@ namespace detail {
 /// FastRayBox or FmaRayBox) lane by lane. Near planes are picked by the direction's sign bit, as
 /// SlabSetup does, by swapping the min and max halves of an axis's planes where the direction is negative.
 /// The far distances are negated so that one max per axis clamps both ends of the interval: max(-t1,
-/// -tmax) is -min(t1, tmax) exactly, and `_mm_max_ps(t, clamp)` returns `clamp` for a NaN t, which is
-/// the slab tests' NaN rule (an origin on a face plane of a zero-direction axis is inside that slab).
+/// -tmax) is -min(t1, tmax) exactly, and `_mm_max_ps(t, interval)` returns the interval's bound for a NaN t,
+/// which is the slab tests' NaN rule (an origin on a face plane of a zero-direction axis is inside that
+/// slab).
 template <class Box>
 class PairSlabs {
  public:
@@ -112,7 +113,13 @@ class PairSlabs {
       org_[axis] = _mm_set1_ps(setup.org[a]);
       inv_[axis] = _mm_set1_ps(setup.inv_dir[a]);
       org_inv_[axis] = _mm_set1_ps(setup.org[a] * setup.inv_dir[a]);
+#if defined(__AVX__)
       near_far_[axis] = setup.negative[a] ? _mm_setr_epi32(2, 3, 0, 1) : _mm_setr_epi32(0, 1, 2, 3);
+#else
+      near_far_[axis] = setup.negative[a]
+                            ? _mm_setr_epi8(8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7)
+                            : _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+#endif
     }
   }
 #else
@@ -152,7 +159,12 @@ class PairSlabs {
   // planes are put first by one permute whose control the ray's direction fixes (near_far_), where a
   // blend by the sign would take a compare and a blend at every node.
   [[gnu::always_inline]] __m128 axis_distances(const PairNode& node, int axis) const {
+#if defined(__AVX__)
     const __m128 planes = _mm_permutevar_ps(_mm_load_ps(node.planes[axis]), near_far_[axis]);
+#else
+    const __m128 planes = _mm_castsi128_ps(_mm_shuffle_epi8(
+        _mm_load_si128(reinterpret_cast<const __m128i*>(node.planes[axis])), near_far_[axis]));
+#endif
     const __m128 far_sign = _mm_setr_ps(0.0f, 0.0f, -0.0f, -0.0f);
     if constexpr (std::is_same_v<Box, FmaRayBox>) {
 #if defined(__FMA__)
@@ -178,7 +190,8 @@ class PairSlabs {
 
 #if defined(__SSE4_1__)
   __m128 org_[3], inv_[3], org_inv_[3];
-  __m128i near_far_[3];  // per axis: the permute control that puts the near planes first
+  __m128i
+      near_far_[3];  // per axis: the permute (SSE4.1 without AVX: byte shuffle) that puts near planes first
 #else
   Box box_;  // the scalar test, where SSE4.1 is not there
 #endif
@@ -235,9 +248,7 @@ class PackedWalk {
         }
         if (size_ == kStackCapacity) [[unlikely]]
           throw_stack_overflow(current_, 2);
-        // The nearer child as an index rather than a branch: which one it is changes from node to node, and
-        // a branch on it is often mispredicted. The pushed entry distance is the farther one, read only by
-        // closest hit's culling (there it is the other child's).
+        // The nearer child as an index, as BinaryWalk takes it.
         const uint32_t near = second_first ? 1u : 0u;
         stack_[size_++] = {node.child[near ^ 1u], node.count[near ^ 1u], std::max(t0, t1)};
         current_ = node.child[near];
@@ -258,7 +269,7 @@ class PackedWalk {
       if (test_leaf<kAnyHit, TriangleTest>(leaf_test_, PackedLeaf{triangles_, ids_, current_, count_}, tmin_,
                                            best_t_, best_))
         return active_ = false;  // an any-hit query's hit
-      interval_ = PairSlabs<BoxTest>::interval(tmin_, best_t_);
+      if constexpr (!kAnyHit) interval_ = PairSlabs<BoxTest>::interval(tmin_, best_t_);
     }
     do {
       if (size_ == 0) return active_ = false;

@@ -176,6 +176,27 @@ SAHBENCH_KERNEL_INLINE bool packet_leaf_pays(uint32_t rays, uint32_t triangles) 
   return rays * ((triangles + 3) / 4) > triangles;
 }
 
+// Each lane j of `hits` hit triangle slot `k` of `tree` at t[j] (u[j], v[j]): taken as test_leaf takes a
+// hit. Any hit ends the ray's walk (its best_t becomes NaN and its lane leaves `lanes`); closest hit keeps
+// the nearer (detail::take_closer) of the hits that `keep(j)` keeps, which may first refine t[j] in place.
+template <bool kAnyHit, class Tree, class Keep>
+SAHBENCH_KERNEL_INLINE void take_lane_hits(const Tree& tree, uint32_t k, uint32_t hits, float* t,
+                                           const float* u, const float* v, const Keep& keep, Hit* best,
+                                           float* best_t, uint32_t& lanes) {
+  const uint32_t prim = tree.prim(k);
+  for (; hits; hits &= hits - 1) {
+    const uint32_t j = static_cast<uint32_t>(__builtin_ctz(hits));
+    if constexpr (kAnyHit) {
+      best[j] = {prim, t[j], u[j], v[j]};
+      best_t[j] = __builtin_nanf("");
+      lanes &= ~(1u << j);
+    } else if (keep(j)) {
+      detail::take_closer(
+          prim, t[j], u[j], v[j], [&](uint32_t p) { return tree.scene_index(p); }, best_t[j], best[j]);
+    }
+  }
+}
+
 // tri=watertight: the triangles of a leaf (slots [first, first + count) of `tree`) against the packet's
 // rays in `lanes`, one triangle at a time in K lanes (watertight_in_lanes with the rays in the lanes),
 // as Embree's packet intersectors test a triangle against K rays. Each lane computes the scalar test's
@@ -201,23 +222,11 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_watertight(const Tree& tree, uint32_t fi
     alignas(64) float t[P::kWidth], u[P::kWidth], v[P::kWidth];
     uint32_t hits = watertight_in_lanes<typename P::Ops>(vertex, s.org, s.shear, P::mask_vector(lanes), lo,
                                                          P::load(best_t), t, u, v, in_double);
-    const uint32_t prim = tree.prim(k);
-    for (; hits; hits &= hits - 1) {
-      const uint32_t j = static_cast<uint32_t>(__builtin_ctz(hits));
-      if constexpr (kAnyHit) {
-        best[j] = {prim, t[j], u[j], v[j]};
-        best_t[j] = __builtin_nanf("");
-        lanes &= ~(1u << j);
-      } else {
-        const WatertightTriangleTest& one = tests[j].one();
-        if (!refine_watertight_t(tri.v0, tri.v1, tri.v2, one.org(), one.dir(), tmin[j], best_t[j], t[j]))
-          continue;
-        if (t[j] < best_t[j] || !best[j].found() || tree.scene_index(prim) < tree.scene_index(best[j].prim)) {
-          best[j] = {prim, t[j], u[j], v[j]};
-          best_t[j] = t[j];
-        }
-      }
-    }
+    const auto refine = [&](uint32_t j) __attribute__((always_inline)) {
+      const WatertightTriangleTest& one = tests[j].one();
+      return refine_watertight_t(tri.v0, tri.v1, tri.v2, one.org(), one.dir(), tmin[j], best_t[j], t[j]);
+    };
+    take_lane_hits<kAnyHit>(tree, k, hits, t, u, v, refine, best, best_t, lanes);
   }
 }
 
@@ -254,19 +263,8 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const Tree& tree, uint32_t first, ui
         const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
         if (tests[j].one().intersect(tri, tmin[j], best_t[j], t[j], u[j], v[j])) hits |= 1u << j;
       }
-    const uint32_t prim = tree.prim(k);
-    for (; hits; hits &= hits - 1) {
-      const uint32_t j = static_cast<uint32_t>(__builtin_ctz(hits));
-      if constexpr (kAnyHit) {
-        best[j] = {prim, t[j], u[j], v[j]};
-        best_t[j] = __builtin_nanf("");
-        lanes &= ~(1u << j);
-      } else if (t[j] < best_t[j] || !best[j].found() ||
-                 tree.scene_index(prim) < tree.scene_index(best[j].prim)) {
-        best[j] = {prim, t[j], u[j], v[j]};
-        best_t[j] = t[j];
-      }
-    }
+    const auto keep = [](uint32_t) { return true; };  // the scalar test's t needs no refinement
+    take_lane_hits<kAnyHit>(tree, k, hits, t, u, v, keep, best, best_t, lanes);
   }
 }
 

@@ -113,13 +113,9 @@ class PairSlabs {
       org_[axis] = _mm_set1_ps(setup.org[a]);
       inv_[axis] = _mm_set1_ps(setup.inv_dir[a]);
       org_inv_[axis] = _mm_set1_ps(setup.org[a] * setup.inv_dir[a]);
-#if defined(__AVX__)
-      near_far_[axis] = setup.negative[a] ? _mm_setr_epi32(2, 3, 0, 1) : _mm_setr_epi32(0, 1, 2, 3);
-#else
       near_far_[axis] = setup.negative[a]
                             ? _mm_setr_epi8(8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7)
                             : _mm_setr_epi8(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-#endif
     }
   }
 #else
@@ -156,15 +152,12 @@ class PairSlabs {
  private:
 #if defined(__SSE4_1__)
   // (left near, right near, -left far, -right far) on `axis`, before clamping to the interval. The near
-  // planes are put first by one permute whose control the ray's direction fixes (near_far_), where a
-  // blend by the sign would take a compare and a blend at every node.
+  // planes are put first by one byte shuffle (SSSE3, so every x86 kernel that has SSE4.1 takes the same
+  // path) whose control the ray's direction fixes (near_far_), where a blend by the sign would take a
+  // compare and a blend at every node.
   [[gnu::always_inline]] __m128 axis_distances(const PairNode& node, int axis) const {
-#if defined(__AVX__)
-    const __m128 planes = _mm_permutevar_ps(_mm_load_ps(node.planes[axis]), near_far_[axis]);
-#else
     const __m128 planes = _mm_castsi128_ps(_mm_shuffle_epi8(
         _mm_load_si128(reinterpret_cast<const __m128i*>(node.planes[axis])), near_far_[axis]));
-#endif
     const __m128 far_sign = _mm_setr_ps(0.0f, 0.0f, -0.0f, -0.0f);
     if constexpr (std::is_same_v<Box, FmaRayBox>) {
 #if defined(__FMA__)
@@ -190,8 +183,7 @@ class PairSlabs {
 
 #if defined(__SSE4_1__)
   __m128 org_[3], inv_[3], org_inv_[3];
-  __m128i
-      near_far_[3];  // per axis: the permute (SSE4.1 without AVX: byte shuffle) that puts near planes first
+  __m128i near_far_[3];  // per axis: the byte shuffle that puts the near planes first
 #else
   Box box_;  // the scalar test, where SSE4.1 is not there
 #endif

@@ -43,6 +43,10 @@ struct Lanes8 {
   SAHBENCH_KERNEL_INLINE static uint32_t ordered(V a) {
     return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a, a, _CMP_ORD_Q)));
   }
+  // The lanes where a > b is false (true where either is NaN).
+  SAHBENCH_KERNEL_INLINE static uint32_t not_greater(V a, V b) {
+    return static_cast<uint32_t>(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_NGT_UQ)));
+  }
   // The lanes of `mask` as an all-ones vector mask.
   SAHBENCH_KERNEL_INLINE static V mask_vector(uint32_t mask) {
     const __m256i bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
@@ -59,6 +63,20 @@ struct Lanes8 {
     m = _mm256_min_ps(m, _mm256_permute_ps(m, _MM_SHUFFLE(1, 0, 3, 2)));
     m = _mm256_min_ps(m, _mm256_permute_ps(m, _MM_SHUFFLE(2, 3, 0, 1)));
     return _mm256_cvtss_f32(m);
+  }
+};
+
+// The four child slots of a WideNode<4> in one SSE register, for packet_cull.
+struct Lanes4 {
+  using V = __m128;
+  SAHBENCH_KERNEL_INLINE static V load(const float* p) { return _mm_load_ps(p); }
+  SAHBENCH_KERNEL_INLINE static V set1(float x) { return _mm_set1_ps(x); }
+  SAHBENCH_KERNEL_INLINE static V sub(V a, V b) { return _mm_sub_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static V mul(V a, V b) { return _mm_mul_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static V max(V a, V b) { return _mm_max_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static V min(V a, V b) { return _mm_min_ps(a, b); }
+  SAHBENCH_KERNEL_INLINE static uint32_t not_greater(V a, V b) {
+    return static_cast<uint32_t>(_mm_movemask_ps(_mm_cmp_ps(a, b, _CMP_NGT_UQ)));
   }
 };
 
@@ -156,6 +174,50 @@ struct PacketRays {
   // them the other way round.
   uint32_t negative[3];
 };
+
+// Bounds of the packet's slab constants over all its rays, for testing a node's children against the
+// whole packet at once (packet_cull). Only where every ray's origin and reciprocal direction are finite
+// and the reciprocal is not zero (`valid`): then no slab distance is NaN and each is monotonic in these
+// constants, which is what makes the bounds hold (packet_cull).
+struct PacketBounds {
+  bool valid = false;
+  float inv_lo[3], inv_hi[3];  // the reciprocal directions' range (one sign per axis in a packet)
+  float o_near[3], o_far[3];   // the origin giving the lowest near and the highest far distance
+  float tmin_lo, tmax_hi;      // the lowest tmin, the highest tmax
+};
+
+// Rays [0, n) of a coherent packet (packet_coherent: one sign per axis), bounded.
+SAHBENCH_KERNEL_INLINE PacketBounds make_packet_bounds(const WideRay* rays, uint32_t n) {
+  PacketBounds b;
+  float o_lo[3], o_hi[3];
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    b.inv_lo[axis] = b.inv_hi[axis] = rays[0].inv_dir[axis];
+    o_lo[axis] = o_hi[axis] = rays[0].org[axis];
+  }
+  b.tmin_lo = rays[0].tmin;
+  b.tmax_hi = rays[0].tmax;
+  for (uint32_t j = 0; j < n; ++j) {
+    const WideRay& r = rays[j];
+    for (uint32_t axis = 0; axis < 3; ++axis) {
+      if (!std::isfinite(r.inv_dir[axis]) || r.inv_dir[axis] == 0.0f || !std::isfinite(r.org[axis])) return b;
+      b.inv_lo[axis] = std::min(b.inv_lo[axis], r.inv_dir[axis]);
+      b.inv_hi[axis] = std::max(b.inv_hi[axis], r.inv_dir[axis]);
+      o_lo[axis] = std::min(o_lo[axis], r.org[axis]);
+      o_hi[axis] = std::max(o_hi[axis], r.org[axis]);
+    }
+    if (std::isnan(r.tmin) || std::isnan(r.tmax)) return b;
+    b.tmin_lo = std::min(b.tmin_lo, r.tmin);
+    b.tmax_hi = std::max(b.tmax_hi, r.tmax);
+  }
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    // (plane - org) * inv falls as org rises where inv > 0, and rises where inv < 0.
+    const bool positive = b.inv_lo[axis] > 0.0f;
+    b.o_near[axis] = positive ? o_hi[axis] : o_lo[axis];
+    b.o_far[axis] = positive ? o_lo[axis] : o_hi[axis];
+  }
+  b.valid = true;
+  return b;
+}
 
 // A child slot entered by some of the packet's rays: their entry distances, NaN in the other lanes (a
 // NaN entry compares false with everything, so those lanes never take the entry up again).
@@ -256,6 +318,38 @@ SAHBENCH_KERNEL_INLINE uint32_t occupied_slots(const WideNode<N>& node) {
         _mm_movemask_ps(_mm_cmp_ps(_mm_load_ps(node.planes[0]), _mm256_castps256_ps128(inf), _CMP_NEQ_UQ)));
 }
 
+// The slots of `node` whose box some ray of the packet may enter, all children at once in the lanes: an
+// interval test of the whole packet (Boulos et al. 2006, "Geometric and Arithmetic Culling Methods for
+// Entire Ray Packets"), in front of packet_enter's test of each child against each ray, as Embree's
+// coherent packet traversal tests a packet's frustum first. The bounds are packet_enter's own float
+// operations on the extreme constants: a rounded subtraction, product or fused product is monotonic in
+// each operand of fixed sign, so every ray's near distance on an axis is at least the smaller of its
+// bound's two products and its far distance at most the larger. A slot whose lowest entry lies beyond
+// its highest exit is entered by no ray; every other is tested as before, so each ray enters exactly the
+// children it entered without this test. Not taken by box=fma, whose test of a lane is one fused
+// operation per plane: there the interval test cost about what it saved (README, "Packets").
+template <uint32_t N, BoxTestKind kBox>
+SAHBENCH_KERNEL_INLINE uint32_t packet_cull(const WideNode<N>& node, const uint32_t (&near_plane)[3],
+                                            const uint32_t (&far_plane)[3], const PacketBounds& b) {
+  using S = std::conditional_t<N == 8, Lanes8, Lanes4>;
+  using V = typename S::V;
+  V lo = S::set1(b.tmin_lo), hi = S::set1(b.tmax_hi);
+  for (uint32_t axis = 0; axis < 3; ++axis) {
+    const V near = S::load(node.planes[near_plane[axis]]);
+    const V far = S::load(node.planes[far_plane[axis]]);
+    const V inv_lo = S::set1(b.inv_lo[axis]), inv_hi = S::set1(b.inv_hi[axis]);
+    static_assert(kBox != BoxTestKind::kFma, "the bounds follow the subtract-then-multiply slab test");
+    const V d0 = S::sub(near, S::set1(b.o_near[axis]));
+    const V d1 = S::sub(far, S::set1(b.o_far[axis]));
+    const V t0 = S::min(S::mul(d0, inv_lo), S::mul(d0, inv_hi));
+    V t1 = S::max(S::mul(d1, inv_lo), S::mul(d1, inv_hi));
+    if constexpr (kBox == BoxTestKind::kRobust) t1 = S::mul(t1, S::set1(kWideFarScale));
+    lo = S::max(t0, lo);
+    hi = S::min(t1, hi);
+  }
+  return S::not_greater(lo, hi);
+}
+
 // tri=mtn: the triangles of a leaf against the packet's rays in `lanes`, one triangle at a time in eight
 // lanes (intersect_mtn_lanes with the rays in the lanes), as Embree's packet intersectors test their
 // Triangle4 against K rays. Each lane computes mtn_lane's operations, so a ray's hit is a hit of the
@@ -312,6 +406,7 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
   using V = typename P::V;
   constexpr uint32_t K = P::kWidth;
   const PacketRays<P> p = make_packet<P>(rays, n);
+  const PacketBounds bounds = kBox == BoxTestKind::kFma ? PacketBounds{} : make_packet_bounds(rays, n);
   const V nan = P::set1(__builtin_nanf(""));
   alignas(64) float best_t[K];
   for (uint32_t j = 0; j < K; ++j) best_t[j] = j < n ? rays[j].tmax : __builtin_nanf("");
@@ -373,7 +468,11 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
         PacketEntry<P> entered[N];
         uint64_t keys[N < 4 ? 4 : N];
         uint32_t k = 0;
-        for (uint32_t slots = occupied_slots(node); slots; slots &= slots - 1) {
+        uint32_t slots = occupied_slots(node);
+        if constexpr (kBox != BoxTestKind::kFma) {
+          if (bounds.valid) slots &= packet_cull<N, kBox>(node, p.near_plane, p.far_plane, bounds);
+        }
+        for (; slots; slots &= slots - 1) {
           const uint32_t i = static_cast<uint32_t>(__builtin_ctz(slots));
           uint32_t mask;
           const V t = packet_enter<P, kBox>(&node.planes[0][i], N, p, active_tmax, mask);

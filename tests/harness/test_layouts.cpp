@@ -519,6 +519,71 @@ TEST(Layouts, RefitMovesATreeThatIsOneLeaf) {
   }
 }
 
+// Packets of one ray repeated, so that the wide packets' interval test of the whole packet
+// (wide_packets.inl: packet_cull) computes exactly that ray's own slab test: rays from integer points
+// through the vertices of a closed cube grid, in directions of components 3, 5 and 7, whose reciprocals
+// are not floats, so that each corner of the flat leaf boxes at a vertex is met an ulp early or late on
+// some axis. The robust box test enters those boxes by its scaled far distance; an interval test
+// without that scale, or with a bound taken at the wrong extreme, culls them, and the ray would leak
+// through the vertex. Every packet spec is held to its own variant's single-ray answers, and the
+// default variant to a hit on every ray.
+TEST(Layouts, PacketsOfOneRayEnterTheBoxesItGrazesAtAVertex) {
+  test::Skips skips;
+  if (!skips.have_isa(KernelIsa::kAvx2)) GTEST_SKIP() << "no packet kernels on this CPU";
+  const std::vector<Triangle> grid = test::cube_grid(8, 4.0f);  // vertices at integer points
+  std::vector<Ray> rays;
+  const float components[3] = {3.0f, 5.0f, 7.0f};
+  for (int x = -4; x <= 4; ++x)
+    for (int y = -4; y <= 4; ++y)
+      for (int k = 0; k < 6; ++k) {
+        // Into the cube through the vertex (x, y, 4) of its top face: z falls, x and y of either sign.
+        const Vec3 vertex{static_cast<float>(x), static_cast<float>(y), 4.0f};
+        const Vec3 dir{(k & 1 ? -1.0f : 1.0f) * components[k % 3],
+                       (k & 2 ? -1.0f : 1.0f) * components[(k + 1) % 3], -components[(k + 2) % 3]};
+        const float steps = static_cast<float>(1 + (x + y + 8) % 3);
+        Ray ray;
+        ray.org = vertex - dir * steps;
+        ray.dir = dir;
+        for (std::size_t copy = 0; copy < kMaxWidePacket; ++copy) rays.push_back(ray);
+      }
+  for (const char* name : {"bvh4", "bvh8"}) {
+    const LayoutInfo& layout = find_layout(name);
+    const BuilderInfo& builder = find_builder("wide_collapse");
+    const Bvh bvh = builder.build(
+        BuildInput::from_triangles(grid),
+        resolve_params(builder.name, builder.params, {{"arity", std::to_string(layout.arity)}}));
+    std::vector<std::string> variants{""};
+    for (const char* tri : {"watertight", "mtn"})
+      for (const char* box : {"robust", "fast", "fma"})
+        variants.push_back(std::string("tri=") + tri + ",box=" + box + ",");
+    for (const std::string& variant : variants) {
+      const auto alone = compile_layout(
+          layout.name + (variant.empty() ? "" : ":" + variant.substr(0, variant.size() - 1)), bvh, grid);
+      std::vector<Hit> expected(rays.size());
+      std::vector<uint8_t> expected_any(rays.size());
+      alone->trace_closest(rays, expected);
+      alone->trace_any(rays, expected_any);
+      std::vector<std::string> packets{"packet=8"};
+      if (skips.have_isa(KernelIsa::kAvx512)) packets.push_back("packet=16");
+      for (const std::string& packet : packets) {
+        const std::string spec = layout.name + ":" + variant + packet;
+        SCOPED_TRACE(spec);
+        const auto compiled = compile_layout(spec, bvh, grid);
+        std::vector<Hit> hits(rays.size());
+        std::vector<uint8_t> occluded(rays.size());
+        compiled->trace_closest(rays, hits);
+        compiled->trace_any(rays, occluded);
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+          ASSERT_EQ(occluded[i], expected_any[i]) << "ray " << i;
+          ASSERT_EQ(hits[i].found(), expected[i].found()) << "ray " << i;
+          if (hits[i].found()) ASSERT_EQ(hits[i].t, expected[i].t) << "ray " << i;
+          if (variant.empty()) ASSERT_TRUE(hits[i].found()) << "ray " << i << " leaked through its vertex";
+        }
+      }
+    }
+  }
+}
+
 TEST(Layouts, RefitRejectsADifferentTriangleCount) {
   const auto tris = test::random_triangles(100, 2);
   const Bvh binary = find_builder("binned_sah")

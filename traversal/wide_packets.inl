@@ -7,8 +7,8 @@
 // uses).
 //
 // Packets are the batch's rays K at a time, in the ray set's own order, as Embree's rtcIntersect8 and
-// rtcIntersect16 are fed (primary rays in rows of pixels). A packet goes down the tree together only when
-// its rays agree on the sign of each direction component, so that one near and one far plane per axis
+// rtcIntersect16 are fed (primary rays in tiles of 4 x 4 pixels). A packet goes down the tree together only
+// when its rays agree on the sign of each direction component, so that one near and one far plane per axis
 // serve all K, and (box=fma) every ray is in that test's domain; otherwise its rays are traced one at a
 // time by the single-ray kernel. Each lane computes the slab test of intersect_children with the same
 // operations in the same order, and leaves are tested ray by ray with intersect_leaf (tri=mtn: a triangle

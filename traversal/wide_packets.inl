@@ -11,9 +11,11 @@
 // when its rays agree on the sign of each direction component, so that one near and one far plane per axis
 // serve all K, and (box=fma) every ray is in that test's domain; otherwise its rays are traced one at a
 // time by the single-ray kernel. Each lane computes the slab test of intersect_children with the same
-// operations in the same order, and leaves are tested ray by ray with intersect_leaf (tri=mtn: a triangle
-// against all the rays at once where most of the packet enters the leaf, packet_leaf_mtn), so every ray
-// gets a hit of the single-ray tests; only the order in which nodes and triangles are visited differs.
+// operations in the same order (with box=robust and box=fast, after an interval test of the whole packet
+// has dropped the children no ray can enter: packet_cull), and leaves are tested ray by ray with
+// intersect_leaf (tri=mtn: a triangle against all the rays at once where most of the packet enters the leaf,
+// packet_leaf_mtn), so every ray gets a hit of the single-ray tests; only the order in which nodes and
+// triangles are visited differs.
 
 // A packet's rays go on one at a time below a node that this many or fewer of them enter: a packet's
 // node visit tests every child against all K lanes in one register, which costs about what a single
@@ -198,20 +200,26 @@ SAHBENCH_KERNEL_INLINE PacketBounds make_packet_bounds(const WideRay* rays, uint
   b.tmax_hi = rays[0].tmax;
   for (uint32_t j = 0; j < n; ++j) {
     const WideRay& r = rays[j];
+    // Builtins and plain comparisons rather than std::isfinite or std::min: this file is compiled once
+    // per instruction set, and calls to shared inline functions may link to another set's copy
+    // (wide_kernels.inl).
     for (uint32_t axis = 0; axis < 3; ++axis) {
-      if (!std::isfinite(r.inv_dir[axis]) || r.inv_dir[axis] == 0.0f || !std::isfinite(r.org[axis])) return b;
-      b.inv_lo[axis] = std::min(b.inv_lo[axis], r.inv_dir[axis]);
-      b.inv_hi[axis] = std::max(b.inv_hi[axis], r.inv_dir[axis]);
-      o_lo[axis] = std::min(o_lo[axis], r.org[axis]);
-      o_hi[axis] = std::max(o_hi[axis], r.org[axis]);
+      const float inv = r.inv_dir[axis], org = r.org[axis];
+      if (!__builtin_isfinite(inv) || inv == 0.0f || !__builtin_isfinite(org)) return b;
+      b.inv_lo[axis] = inv < b.inv_lo[axis] ? inv : b.inv_lo[axis];
+      b.inv_hi[axis] = inv > b.inv_hi[axis] ? inv : b.inv_hi[axis];
+      o_lo[axis] = org < o_lo[axis] ? org : o_lo[axis];
+      o_hi[axis] = org > o_hi[axis] ? org : o_hi[axis];
     }
-    if (std::isnan(r.tmin) || std::isnan(r.tmax)) return b;
-    b.tmin_lo = std::min(b.tmin_lo, r.tmin);
-    b.tmax_hi = std::max(b.tmax_hi, r.tmax);
+    if (__builtin_isnan(r.tmin) || __builtin_isnan(r.tmax)) return b;
+    b.tmin_lo = r.tmin < b.tmin_lo ? r.tmin : b.tmin_lo;
+    b.tmax_hi = r.tmax > b.tmax_hi ? r.tmax : b.tmax_hi;
   }
   for (uint32_t axis = 0; axis < 3; ++axis) {
-    // (plane - org) * inv falls as org rises where inv > 0, and rises where inv < 0.
+    // (plane - org) * inv falls as org rises where inv > 0, and rises where inv < 0; the bounds need one
+    // sign per axis, which packet_coherent gives (checked again here, as nothing else would catch it).
     const bool positive = b.inv_lo[axis] > 0.0f;
+    if (positive != (b.inv_hi[axis] > 0.0f)) return b;
     b.o_near[axis] = positive ? o_hi[axis] : o_lo[axis];
     b.o_far[axis] = positive ? o_lo[axis] : o_hi[axis];
   }
@@ -321,16 +329,18 @@ SAHBENCH_KERNEL_INLINE uint32_t occupied_slots(const WideNode<N>& node) {
 // The slots of `node` whose box some ray of the packet may enter, all children at once in the lanes: an
 // interval test of the whole packet (Boulos et al. 2006, "Geometric and Arithmetic Culling Methods for
 // Entire Ray Packets"), in front of packet_enter's test of each child against each ray, as Embree's
-// coherent packet traversal tests a packet's frustum first. The bounds are packet_enter's own float
-// operations on the extreme constants: a rounded subtraction, product or fused product is monotonic in
-// each operand of fixed sign, so every ray's near distance on an axis is at least the smaller of its
-// bound's two products and its far distance at most the larger. A slot whose lowest entry lies beyond
-// its highest exit is entered by no ray; every other is tested as before, so each ray enters exactly the
-// children it entered without this test. Not taken by box=fma, whose test of a lane is one fused
-// operation per plane: there the interval test cost about what it saved (README, "Packets").
+// coherent packet traversal tests a frustum of the packet first (its node_intersector_frustum.h). The
+// bounds are packet_enter's own float operations on the extreme constants: a rounded subtraction or
+// product is monotonic in each operand of fixed sign, so every ray's near distance on an axis is at
+// least the smaller of its bound's two products and its far distance (robust: scaled alike) at most the
+// larger. A slot whose lowest entry lies beyond its highest exit is entered by no ray; every other is
+// tested as before, so each ray enters exactly the children it entered without this test. Not taken by
+// box=fma, whose test of a lane is one fused operation per plane: there the interval test cost more
+// than it saved on the tuning scenes (README, "Packets").
 template <uint32_t N, BoxTestKind kBox>
 SAHBENCH_KERNEL_INLINE uint32_t packet_cull(const WideNode<N>& node, const uint32_t (&near_plane)[3],
                                             const uint32_t (&far_plane)[3], const PacketBounds& b) {
+  static_assert(kBox != BoxTestKind::kFma, "the bounds follow the subtract-then-multiply slab test");
   using S = std::conditional_t<N == 8, Lanes8, Lanes4>;
   using V = typename S::V;
   V lo = S::set1(b.tmin_lo), hi = S::set1(b.tmax_hi);
@@ -338,7 +348,6 @@ SAHBENCH_KERNEL_INLINE uint32_t packet_cull(const WideNode<N>& node, const uint3
     const V near = S::load(node.planes[near_plane[axis]]);
     const V far = S::load(node.planes[far_plane[axis]]);
     const V inv_lo = S::set1(b.inv_lo[axis]), inv_hi = S::set1(b.inv_hi[axis]);
-    static_assert(kBox != BoxTestKind::kFma, "the bounds follow the subtract-then-multiply slab test");
     const V d0 = S::sub(near, S::set1(b.o_near[axis]));
     const V d1 = S::sub(far, S::set1(b.o_far[axis]));
     const V t0 = S::min(S::mul(d0, inv_lo), S::mul(d0, inv_hi));
@@ -406,7 +415,6 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
   using V = typename P::V;
   constexpr uint32_t K = P::kWidth;
   const PacketRays<P> p = make_packet<P>(rays, n);
-  const PacketBounds bounds = kBox == BoxTestKind::kFma ? PacketBounds{} : make_packet_bounds(rays, n);
   const V nan = P::set1(__builtin_nanf(""));
   alignas(64) float best_t[K];
   for (uint32_t j = 0; j < K; ++j) best_t[j] = j < n ? rays[j].tmax : __builtin_nanf("");
@@ -422,6 +430,7 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
     }
     return;
   }
+  const PacketBounds bounds = kBox == BoxTestKind::kFma ? PacketBounds{} : make_packet_bounds(rays, n);
   PacketEntry<P> stack[kWideStackCapacity];
   uint32_t size = 0;
   PacketEntry<P> entry{P::select(root_mask, t_root, nan), 0, 0};

@@ -524,14 +524,19 @@ TEST(Layouts, RefitMovesATreeThatIsOneLeaf) {
 // through the vertices of a closed cube grid, in directions of components 3, 5 and 7, whose reciprocals
 // are not floats, so that each corner of the flat leaf boxes at a vertex is met an ulp early or late on
 // some axis. The robust box test enters those boxes by its scaled far distance; an interval test
-// without that scale, or with a bound taken at the wrong extreme, culls them, and the ray would leak
-// through the vertex. Every packet spec is held to its own variant's single-ray answers, and the
-// default variant to a hit on every ray.
+// without that scale culls them, and the ray would leak through the vertex. (Bounds taken at the wrong
+// extreme are no error here, the extremes being equal: LayoutVsReference's packets of distinct rays
+// catch those.) Every packet spec is held to its own variant's single-ray answers: whether it hits and
+// at which distance, the same for every variant, as identical lanes visit the nodes in the single-ray
+// kernel's order; which of the triangles at the vertex it reports is left to the tie rules. The default
+// variant must hit every ray through an inner vertex (a ray through a vertex on the cube's edge may
+// leave it there).
 TEST(Layouts, PacketsOfOneRayEnterTheBoxesItGrazesAtAVertex) {
   test::Skips skips;
   if (!skips.have_isa(KernelIsa::kAvx2)) GTEST_SKIP() << "no packet kernels on this CPU";
   const std::vector<Triangle> grid = test::cube_grid(8, 4.0f);  // vertices at integer points
   std::vector<Ray> rays;
+  std::vector<bool> inner;  // through a vertex inside the top face, not on the cube's edge
   const float components[3] = {3.0f, 5.0f, 7.0f};
   for (int x = -4; x <= 4; ++x)
     for (int y = -4; y <= 4; ++y)
@@ -544,7 +549,10 @@ TEST(Layouts, PacketsOfOneRayEnterTheBoxesItGrazesAtAVertex) {
         Ray ray;
         ray.org = vertex - dir * steps;
         ray.dir = dir;
-        for (std::size_t copy = 0; copy < kMaxWidePacket; ++copy) rays.push_back(ray);
+        for (std::size_t copy = 0; copy < kMaxWidePacket; ++copy) {
+          rays.push_back(ray);
+          inner.push_back(std::abs(x) < 4 && std::abs(y) < 4);
+        }
       }
   for (const char* name : {"bvh4", "bvh8"}) {
     const LayoutInfo& layout = find_layout(name);
@@ -564,7 +572,8 @@ TEST(Layouts, PacketsOfOneRayEnterTheBoxesItGrazesAtAVertex) {
       alone->trace_closest(rays, expected);
       alone->trace_any(rays, expected_any);
       std::vector<std::string> packets{"packet=8"};
-      if (skips.have_isa(KernelIsa::kAvx512)) packets.push_back("packet=16");
+      if (skips.have_isa(KernelIsa::kAvx512))
+        packets.insert(packets.end(), {"packet=16", "packet=8,isa=avx2"});
       for (const std::string& packet : packets) {
         const std::string spec = layout.name + ":" + variant + packet;
         SCOPED_TRACE(spec);
@@ -576,12 +585,17 @@ TEST(Layouts, PacketsOfOneRayEnterTheBoxesItGrazesAtAVertex) {
         for (std::size_t i = 0; i < rays.size(); ++i) {
           ASSERT_EQ(occluded[i], expected_any[i]) << "ray " << i;
           ASSERT_EQ(hits[i].found(), expected[i].found()) << "ray " << i;
-          if (hits[i].found()) ASSERT_EQ(hits[i].t, expected[i].t) << "ray " << i;
-          if (variant.empty()) ASSERT_TRUE(hits[i].found()) << "ray " << i << " leaked through its vertex";
+          if (hits[i].found()) {
+            ASSERT_EQ(hits[i].t, expected[i].t) << "ray " << i;
+          }
+          if (variant.empty() && inner[i]) {
+            ASSERT_TRUE(hits[i].found()) << "ray " << i << " leaked through its vertex";
+          }
         }
       }
     }
   }
+  SAHBENCH_REPORT_SKIPS(skips);
 }
 
 TEST(Layouts, RefitRejectsADifferentTriangleCount) {

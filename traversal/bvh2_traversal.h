@@ -136,6 +136,7 @@ template <bool kAnyHit, class TriangleTest, BinaryLeaf Leaf>
         const uint32_t k = first + static_cast<uint32_t>(std::countr_zero(mask));
         const uint32_t i = k - first;
         if constexpr (kAnyHit) {
+          if (!any_hit_holds(test.one(), leaf.triangle(k), tmin, tmax, t[i])) continue;
           best = {leaf.prim(k), t[i], u[i], v[i]};
           return true;
         } else {

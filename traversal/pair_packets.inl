@@ -177,8 +177,8 @@ SAHBENCH_KERNEL_INLINE bool packet_leaf_pays(uint32_t rays, uint32_t triangles) 
 }
 
 // Each lane j of `hits` hit triangle slot `k` of `tree` at t[j] (u[j], v[j]): taken as test_leaf takes a
-// hit. Any hit ends the ray's walk (its best_t becomes NaN and its lane leaves `lanes`); closest hit keeps
-// the nearer (detail::take_closer) of the hits that `keep(j)` keeps, which may first refine t[j] in place.
+// hit where `keep(j)` keeps it (which may first refine t[j] in place). Any hit ends the ray's walk (its
+// best_t becomes NaN and its lane leaves `lanes`); closest hit keeps the nearer (detail::take_closer).
 template <bool kAnyHit, class Tree, class Keep>
 SAHBENCH_KERNEL_INLINE void take_lane_hits(const Tree& tree, uint32_t k, uint32_t hits, float* t,
                                            const float* u, const float* v, const Keep& keep, Hit* best,
@@ -186,11 +186,12 @@ SAHBENCH_KERNEL_INLINE void take_lane_hits(const Tree& tree, uint32_t k, uint32_
   const uint32_t prim = tree.prim(k);
   for (; hits; hits &= hits - 1) {
     const uint32_t j = static_cast<uint32_t>(__builtin_ctz(hits));
+    if (!keep(j)) continue;
     if constexpr (kAnyHit) {
       best[j] = {prim, t[j], u[j], v[j]};
       best_t[j] = __builtin_nanf("");
       lanes &= ~(1u << j);
-    } else if (keep(j)) {
+    } else {
       detail::take_closer(
           prim, t[j], u[j], v[j], [&](uint32_t p) { return tree.scene_index(p); }, best_t[j], best[j]);
     }
@@ -222,8 +223,10 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_watertight(const Tree& tree, uint32_t fi
     alignas(64) float t[P::kWidth], u[P::kWidth], v[P::kWidth];
     uint32_t hits = watertight_in_lanes<typename P::Ops>(vertex, s.org, s.shear, P::mask_vector(lanes), lo,
                                                          P::load(best_t), t, u, v, in_double);
+    // Closest hit refines every hit; any hit only those whose float decision cannot stand (any_hit_holds).
     const auto refine = [&](uint32_t j) __attribute__((always_inline)) {
       const WatertightTriangleTest& one = tests[j].one();
+      if constexpr (kAnyHit) return any_hit_holds(one, tri, tmin[j], best_t[j], t[j]);
       return refine_watertight_t(tri.v0, tri.v1, tri.v2, one.org(), one.dir(), tmin[j], best_t[j], t[j]);
     };
     take_lane_hits<kAnyHit>(tree, k, hits, t, u, v, refine, best, best_t, lanes);

@@ -132,6 +132,21 @@ inline bool refine_watertight_t(Vec3 v0, Vec3 v1, Vec3 v2, Vec3 org, Vec3 dir, f
   return t >= tmin && t <= tmax;
 }
 
+/// Whether a watertight hit's float distance t decides it against [tmin, tmax] without its refined
+/// distance: t lies inside the interval by more than 2^-8 of the farthest vertex's distance along the
+/// ray. z0, z1 and z2 are the vertices' distances along the ray as the test computes them, sz * (v[kz]
+/// - org[kz]). The float t is a weighted mean of them, wrong by a few float roundings of the largest times
+/// the triangle's conditioning (its barycentric weights' sensitivity), so the margin holds for triangles
+/// up to some thousand times worse conditioned than an even one; what it catches is a hit near either end
+/// of the interval: a ray leaving a surface from an origin moved off it met that surface at a float t of
+/// -0 or just above 0 where the exact distance is below 0.
+inline bool watertight_range_holds(float t, float z0, float z1, float z2, float tmin, float tmax) {
+  const float a0 = std::abs(z0), a1 = std::abs(z1), a2 = std::abs(z2);
+  const float a01 = a0 > a1 ? a0 : a1;  // as the SIMD kernels take it, NaN included
+  const float margin = (a01 > a2 ? a01 : a2) * 0x1p-12f;
+  return t > tmin + margin && t < tmax - margin;
+}
+
 /// Watertight ray/triangle intersection of Woop, Benthin and Wald 2013, "Watertight Ray/Triangle
 /// Intersection" (JCGT 2(1)). The ray is turned into the +z axis by a permutation and a shear computed
 /// once per ray (section 3); the vertices are transformed by the same float operations for every
@@ -161,9 +176,27 @@ class WatertightTriangleTest {
   const Vec3& dir() const { return dir_; }
   const WatertightShear& shear() const { return shear_; }
 
-  /// The watertight decision with the float distance of Woop et al.: what any-hit queries run, which
-  /// report no distance (a shadow ray pays no double-precision distance; its decision against [tmin,
-  /// tmax] is made on the float t, as Embree's is).
+  /// The watertight decision as any-hit queries run it, which report no distance: the float one, and the
+  /// refined distance (refine_watertight_t) only where the float one's decision against [tmin, tmax]
+  /// cannot stand (range_holds), so that a shadow ray rarely pays for a double-precision distance and is
+  /// occluded exactly where closest hit finds a hit.
+  bool intersect_any(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
+    return intersect_float(tri, tmin, tmax, t, u, v) &&
+           (range_holds(tri, t, tmin, tmax) ||
+            refine_watertight_t(tri.v0, tri.v1, tri.v2, org_, dir_, tmin, tmax, t));
+  }
+
+  /// watertight_range_holds for a float hit at t on `tri`, its vertices' distances along the ray computed
+  /// as intersect_float computes them.
+  bool range_holds(const Triangle& tri, float t, float tmin, float tmax) const {
+    const float o = detail::components(org_)[shear_.kz];
+    return watertight_range_holds(t, shear_.sz * (detail::components(tri.v0)[shear_.kz] - o),
+                                  shear_.sz * (detail::components(tri.v1)[shear_.kz] - o),
+                                  shear_.sz * (detail::components(tri.v2)[shear_.kz] - o), tmin, tmax);
+  }
+
+  /// The watertight decision with the float distance of Woop et al., which intersect refines and
+  /// intersect_any checks.
   bool intersect_float(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
     // Vertices relative to the origin, then sheared so the ray is the +z axis through (0, 0).
     const detail::Components a = detail::components(tri.v0 - org_);
@@ -211,15 +244,26 @@ class WatertightTriangleTest {
   WatertightShear shear_;
 };
 
-/// The triangle test as an any-hit query runs it: the watertight test without its refined distance
-/// (WatertightTriangleTest::intersect_float), the others as they are.
+/// The triangle test as an any-hit query runs it: the watertight test's own (WatertightTriangleTest::
+/// intersect_any), the others as they are.
 template <class TriangleTest>
 bool intersect_any(const TriangleTest& test, const Triangle& tri, float tmin, float tmax, float& t, float& u,
                    float& v) {
-  if constexpr (requires { test.intersect_float(tri, tmin, tmax, t, u, v); })
-    return test.intersect_float(tri, tmin, tmax, t, u, v);
+  if constexpr (requires { test.intersect_any(tri, tmin, tmax, t, u, v); })
+    return test.intersect_any(tri, tmin, tmax, t, u, v);
   else
     return test.intersect(tri, tmin, tmax, t, u, v);
+}
+
+/// Whether an any-hit query keeps a hit at t that a four-lane test's float form found on `tri`:
+/// WatertightTriangleTest::intersect_any's check for the watertight test; the others' hits stand.
+template <class TriangleTest>
+bool any_hit_holds(const TriangleTest& test, const Triangle& tri, float tmin, float tmax, float& t) {
+  if constexpr (requires { test.range_holds(tri, t, tmin, tmax); })
+    return test.range_holds(tri, t, tmin, tmax) ||
+           refine_watertight_t(tri.v0, tri.v1, tri.v2, test.org(), test.dir(), tmin, tmax, t);
+  else
+    return true;
 }
 
 /// Default determinant threshold of MollerTrumboreTest: EPSILON = 0.000001 in the code listing of

@@ -293,14 +293,32 @@ inline bool lane_in_double(float ax, float ay, float az, float bx, float by, flo
   return true;
 }
 
+// triangle_tests.h's watertight_range_holds, for lane i of a block hit at t: its vertices' distances
+// along the ray computed as the lanes compute them.
+SAHBENCH_KERNEL_INLINE bool lane_range_holds(const TriangleBlock& b, const WideRay& r, uint32_t i, float t,
+                                             float tmin, float tmax) {
+  const float o = r.org[r.kz];
+  const float z0 = __builtin_fabsf(r.sz * (b.v0[r.kz][i] - o)),
+              z1 = __builtin_fabsf(r.sz * (b.v1[r.kz][i] - o)),
+              z2 = __builtin_fabsf(r.sz * (b.v2[r.kz][i] - o));
+  const float z01 = z0 > z1 ? z0 : z1;
+  const float margin = (z01 > z2 ? z01 : z2) * 0x1p-12f;
+  return t > tmin + margin && t < tmax - margin;
+}
+
 // triangle_tests.h's plane_distance_in_double and refine_watertight_t, for the lanes of `mask` (a
 // watertight block test's hits): each hit's distance recomputed in double from the block's vertices and
 // the ray, the lane dropped where it falls outside [tmin, tmax]. The same operations in the same order,
-// so every instruction set returns the same t as the scalar test.
+// so every instruction set returns the same t as the scalar test. Any hit (kAnyHit) refines only the
+// lanes whose float decision cannot stand (lane_range_holds), as WatertightTriangleTest::intersect_any.
+template <bool kAnyHit>
 inline uint32_t refine_lanes(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, uint32_t mask,
                              float* t_out) {
   for (uint32_t hits = mask; hits; hits &= hits - 1) {
     const uint32_t i = static_cast<uint32_t>(__builtin_ctz(hits));
+    if constexpr (kAnyHit) {
+      if (lane_range_holds(b, r, i, t_out[i], tmin, tmax)) continue;
+    }
     const double e1x = static_cast<double>(b.v1[0][i]) - b.v0[0][i],
                  e1y = static_cast<double>(b.v1[1][i]) - b.v0[1][i],
                  e1z = static_cast<double>(b.v1[2][i]) - b.v0[2][i];
@@ -438,8 +456,8 @@ SAHBENCH_KERNEL_INLINE float component(const float (&v)[3][kBlockWidth], uint32_
   return v[axis][lane];
 }
 
-// kRefine: closest hit's distances refined in double (refine_lanes); any hit takes the float ones, as
-// triangle_tests.h's intersect_any does.
+// kRefine: closest hit's distances refined in double (refine_lanes); any hit takes the float ones and
+// checks them in intersect_leaf (refine_lanes<true>), as triangle_tests.h's intersect_any does.
 template <bool kRefine>
 inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
                                            float* t_out, float* u_out, float* v_out) {
@@ -483,7 +501,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
     v_out[i] = e2 * inv_det;
     mask |= 1u << i;
   }
-  return kRefine ? refine_lanes(b, r, tmin, tmax, mask, t_out) : mask;
+  return kRefine ? refine_lanes<false>(b, r, tmin, tmax, mask, t_out) : mask;
 }
 
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin,
@@ -529,8 +547,8 @@ SAHBENCH_KERNEL_INLINE __m128 lanes_valid(const TriangleBlock& b) {
   return _mm_castsi128_ps(_mm_xor_si128(invalid, _mm_set1_epi32(-1)));
 }
 
-// kRefine: closest hit's distances refined in double (refine_lanes); any hit takes the float ones, as
-// triangle_tests.h's intersect_any does.
+// kRefine: closest hit's distances refined in double (refine_lanes); any hit takes the float ones and
+// checks them in intersect_leaf (refine_lanes<true>), as triangle_tests.h's intersect_any does.
 template <bool kRefine>
 inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
                                            float* t_out, float* u_out, float* v_out) {
@@ -547,7 +565,7 @@ inline uint32_t intersect_block_watertight(const TriangleBlock& b, const WideRay
   };
   const uint32_t mask =
       watertight_lanes(vertex, org, shear, valid, tmin, tmax, t_out, u_out, v_out, in_double);
-  return kRefine && mask ? refine_lanes(b, r, tmin, tmax, mask, t_out) : mask;
+  return kRefine && mask ? refine_lanes<false>(b, r, tmin, tmax, mask, t_out) : mask;
 }
 
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_mt(const TriangleBlock& b, const WideRay& r, float tmin,
@@ -957,6 +975,15 @@ SAHBENCH_KERNEL_INLINE bool intersect_leaf(const BlockOf<kTri>* blocks, uint32_t
     if constexpr (kCount) counts->prim_tests += occupied_lanes(block);
     if constexpr (kAnyHit) {
       if (lanes) {
+        // A watertight float hit near either end of the interval is kept only where its refined distance
+        // lies in it (triangle_tests.h: WatertightTriangleTest::intersect_any).
+        if constexpr (kTri == TriangleTestKind::kWatertight) {
+          const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
+          if (!lane_range_holds(block, r, i, t[i], r.tmin, best_t)) [[unlikely]] {
+            lanes = refine_lanes<true>(block, r, r.tmin, best_t, lanes, t);
+            if (!lanes) continue;
+          }
+        }
         best = {block.prim[__builtin_ctz(lanes)], t[__builtin_ctz(lanes)], 0.0f, 0.0f};
         return true;
       }

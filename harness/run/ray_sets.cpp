@@ -68,20 +68,6 @@ Vec3 uniform_sphere(RayRng& rng) {
   return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
-// Waechter and Binder 2019: move p off the surface along n by a few ulps of p's integer representation
-// (far from the origin) or by a small absolute amount (near it). Constants from the chapter.
-Vec3 offset_ray_origin(Vec3 p, Vec3 n) {
-  constexpr float kOrigin = 1.0f / 32.0f, kFloatScale = 1.0f / 65536.0f, kIntScale = 256.0f;
-  Vec3 out;
-  for (int a = 0; a < 3; ++a) {
-    const auto of_i = static_cast<int32_t>(kIntScale * n[a]);
-    const int32_t bits = std::bit_cast<int32_t>(p[a]);
-    const float p_i = std::bit_cast<float>(bits + (p[a] < 0 ? -of_i : of_i));
-    out[a] = std::fabs(p[a]) < kOrigin ? p[a] + kFloatScale * n[a] : p_i;
-  }
-  return out;
-}
-
 Aabb scene_bounds(const Scene& scene) {
   Aabb box;
   for (const auto& t : scene.triangles) box.extend(t.bounds());
@@ -137,6 +123,20 @@ std::vector<Hitpoint> primary_hits(const Scene& scene, std::span<const Ray> rays
 }
 
 }  // namespace
+
+// Waechter and Binder 2019: by a few ulps of p's integer representation (far from the origin) or by a
+// small absolute amount (near it). Constants from the chapter.
+Vec3 offset_ray_origin(Vec3 p, Vec3 n) {
+  constexpr float kOrigin = 1.0f / 32.0f, kFloatScale = 1.0f / 65536.0f, kIntScale = 256.0f;
+  Vec3 out;
+  for (int a = 0; a < 3; ++a) {
+    const auto of_i = static_cast<int32_t>(kIntScale * n[a]);
+    const int32_t bits = std::bit_cast<int32_t>(p[a]);
+    const float p_i = std::bit_cast<float>(bits + (p[a] < 0 ? -of_i : of_i));
+    out[a] = std::fabs(p[a]) < kOrigin ? p[a] + kFloatScale * n[a] : p_i;
+  }
+  return out;
+}
 
 std::vector<uint32_t> primary_pixel_order(uint32_t width, uint32_t height) {
   constexpr uint32_t kTile = 4;

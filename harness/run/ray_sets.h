@@ -48,6 +48,10 @@ GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetCon
 /// (its tutorials trace 4 x 4 and 4 x 2 blocks of a tile); the secondary sets follow, ray by ray.
 std::vector<uint32_t> primary_pixel_order(uint32_t width, uint32_t height);
 
+/// Where a secondary ray leaving the surface point `p` with unit normal `n` starts: p moved off the
+/// surface along n (Waechter and Binder 2019, "A Fast and Robust Method for Avoiding Self-Intersection").
+Vec3 offset_ray_origin(Vec3 p, Vec3 n);
+
 /// The automatic point lights: `count` points in the top tenth of the scene box, spread over its middle
 /// 80% horizontally (y up), deterministic from the seed.
 std::vector<Vec3> automatic_lights(const Scene& scene, uint32_t count, uint64_t seed);

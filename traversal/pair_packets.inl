@@ -201,8 +201,9 @@ SAHBENCH_KERNEL_INLINE void take_lane_hits(const Tree& tree, uint32_t k, uint32_
 // tri=watertight: the triangles of a leaf (slots [first, first + count) of `tree`) against the packet's
 // rays in `lanes`, one triangle at a time in K lanes (watertight_in_lanes with the rays in the lanes),
 // as Embree's packet intersectors test a triangle against K rays. Each lane computes the scalar test's
-// float operations on its own ray, against that ray's closest hit so far, and a hit's distance is refined
-// and taken as test_leaf takes it, in leaf order: each ray gets the hits it gets alone. Updates best and
+// float operations on its own ray, against that ray's closest hit so far, and a hit is checked (closest
+// hit: its distance refined; any hit: any_hit_holds) and taken as test_leaf takes it, in leaf order: each
+// ray gets the hits it gets alone. Updates best and
 // best_t as test_leaf and its caller do (any hit: a ray that hits gets a NaN best_t).
 template <class P, bool kAnyHit, class Tree>
 SAHBENCH_KERNEL_INLINE void packet_leaf_watertight(const Tree& tree, uint32_t first, uint32_t count,
@@ -224,12 +225,12 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_watertight(const Tree& tree, uint32_t fi
     uint32_t hits = watertight_in_lanes<typename P::Ops>(vertex, s.org, s.shear, P::mask_vector(lanes), lo,
                                                          P::load(best_t), t, u, v, in_double);
     // Closest hit refines every hit; any hit only those whose float decision cannot stand (any_hit_holds).
-    const auto refine = [&](uint32_t j) __attribute__((always_inline)) {
+    const auto keep = [&](uint32_t j) __attribute__((always_inline)) {
       const WatertightTriangleTest& one = tests[j].one();
       if constexpr (kAnyHit) return any_hit_holds(one, tri, tmin[j], best_t[j], t[j]);
       return refine_watertight_t(tri.v0, tri.v1, tri.v2, one.org(), one.dir(), tmin[j], best_t[j], t[j]);
     };
-    take_lane_hits<kAnyHit>(tree, k, hits, t, u, v, refine, best, best_t, lanes);
+    take_lane_hits<kAnyHit>(tree, k, hits, t, u, v, keep, best, best_t, lanes);
   }
 }
 

@@ -133,16 +133,17 @@ inline bool refine_watertight_t(Vec3 v0, Vec3 v1, Vec3 v2, Vec3 org, Vec3 dir, f
 }
 
 /// Whether a watertight hit's float distance t decides it against [tmin, tmax] without its refined
-/// distance: t lies inside the interval by more than 2^-8 of the farthest vertex's distance along the
+/// distance: t lies inside the interval by more than 2^-12 of the farthest vertex's distance along the
 /// ray. z0, z1 and z2 are the vertices' distances along the ray as the test computes them, sz * (v[kz]
 /// - org[kz]). The float t is a weighted mean of them, wrong by a few float roundings of the largest times
-/// the triangle's conditioning (its barycentric weights' sensitivity), so the margin holds for triangles
-/// up to some thousand times worse conditioned than an even one; what it catches is a hit near either end
-/// of the interval: a ray leaving a surface from an origin moved off it met that surface at a float t of
-/// -0 or just above 0 where the exact distance is below 0.
+/// the triangle's conditioning (the sensitivity of its barycentric weights), so the margin holds for
+/// triangles up to about a hundred times worse conditioned than an even one (a 1000:1 needle can be
+/// farther off: intersect's comment). What it catches is a hit near either end of the interval, such as a
+/// ray leaving a large triangle from an origin moved off it, whose float t to that triangle can be -0 or
+/// just above 0 where the exact distance is below 0.
 inline bool watertight_range_holds(float t, float z0, float z1, float z2, float tmin, float tmax) {
   const float a0 = std::abs(z0), a1 = std::abs(z1), a2 = std::abs(z2);
-  const float a01 = a0 > a1 ? a0 : a1;  // as the SIMD kernels take it, NaN included
+  const float a01 = a0 > a1 ? a0 : a1;  // as wide_kernels.inl's lane_range_holds takes it, NaN included
   const float margin = (a01 > a2 ? a01 : a2) * 0x1p-12f;
   return t > tmin + margin && t < tmax - margin;
 }
@@ -179,7 +180,7 @@ class WatertightTriangleTest {
   /// The watertight decision as any-hit queries run it, which report no distance: the float one, and the
   /// refined distance (refine_watertight_t) only where the float one's decision against [tmin, tmax]
   /// cannot stand (range_holds), so that a shadow ray rarely pays for a double-precision distance and is
-  /// occluded exactly where closest hit finds a hit.
+  /// occluded where closest hit finds a hit (within range_holds' limit on the triangle's conditioning).
   bool intersect_any(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
     return intersect_float(tri, tmin, tmax, t, u, v) &&
            (range_holds(tri, t, tmin, tmax) ||

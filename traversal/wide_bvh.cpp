@@ -4,10 +4,15 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <string>
 
@@ -168,6 +173,33 @@ inline void set_up(const Ray& ray, WideRay& r) {
   }
 }
 
+#if defined(__AVX__)
+// Rows m[0..7] of an 8 x 8 matrix of 32-bit words become its columns (Intel's optimization manual's
+// transpose: interleave pairs of rows, then pairs of pairs, then swap 128-bit halves).
+inline void transpose8(__m256 (&m)[8]) {
+  __m256 t[8], u[8];
+  for (int i = 0; i < 8; i += 2) {
+    t[i] = _mm256_unpacklo_ps(m[i], m[i + 1]);
+    t[i + 1] = _mm256_unpackhi_ps(m[i], m[i + 1]);
+  }
+  for (int i = 0; i < 8; i += 4) {
+    u[i] = _mm256_shuffle_ps(t[i], t[i + 2], 0x44);
+    u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], 0xEE);
+    u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0x44);
+    u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], 0xEE);
+  }
+  for (int i = 0; i < 4; ++i) {
+    m[i] = _mm256_permute2f128_ps(u[i], u[i + 4], 0x20);
+    m[i + 4] = _mm256_permute2f128_ps(u[i], u[i + 4], 0x31);
+  }
+}
+
+// An array of words seen as floats, for the transposes, which move bits.
+inline const float* words(const uint32_t* a) {
+  return reinterpret_cast<const float*>(a);
+}
+#endif
+
 // The same set-up for a block of kSetupBlock rays at a time, field by field in loops over the block
 // that the compiler turns into SIMD instructions: a ray's six divisions and its selects, one ray at a
 // time, cost about as much as a few node visits, most of the time of a ray that crosses few nodes (a
@@ -186,6 +218,17 @@ WideRaysInfo set_up_block(std::span<const Ray> rays, WideRay* out) {
   const std::size_t n = rays.size();
   // Lanes past the rays copy the first: computed, never stored.
   alignas(64) float o[3][B], d[3][B], tmin[B], tmax[B];
+#if defined(__AVX__)
+  // A Ray is eight floats (org, tmin, dir, tmax): eight rays are one 8 x 8 transpose away from the arrays.
+  for (std::size_t h = 0; h < B; h += 8) {
+    __m256 m[8];
+    for (std::size_t i = 0; i < 8; ++i)
+      m[i] = _mm256_loadu_ps(reinterpret_cast<const float*>(&rays[h + i < n ? h + i : 0]));
+    transpose8(m);
+    float* const columns[8] = {o[0], o[1], o[2], tmin, d[0], d[1], d[2], tmax};
+    for (std::size_t i = 0; i < 8; ++i) _mm256_store_ps(columns[i] + h, m[i]);
+  }
+#else
   for (std::size_t j = 0; j < B; ++j) {
     const Ray& ray = rays[j < n ? j : 0];
     for (uint32_t axis = 0; axis < 3; ++axis) {
@@ -195,13 +238,16 @@ WideRaysInfo set_up_block(std::span<const Ray> rays, WideRay* out) {
     tmin[j] = ray.tmin;
     tmax[j] = ray.tmax;
   }
+#endif
   alignas(64) float inv[3][B], org_inv[3][B], t0[B], t1[B], sx[B], sy[B], sz[B];
-  alignas(64) uint32_t negative[3][B], kx[B], ky[B], kz[B], order[B], robust[B], in_double[B];
+  alignas(64) uint32_t near[3][B], far[3][B], kx[B], ky[B], kz[B], order[B], robust[B], in_double[B];
   for (uint32_t axis = 0; axis < 3; ++axis)
     for (std::size_t j = 0; j < B; ++j) {
       inv[axis][j] = 1.0f / d[axis][j];
       org_inv[axis][j] = o[axis][j] * inv[axis][j];
-      negative[axis][j] = std::bit_cast<uint32_t>(d[axis][j]) >> 31;
+      const uint32_t negative = std::bit_cast<uint32_t>(d[axis][j]) >> 31;
+      near[axis][j] = 2 * axis + negative;
+      far[axis][j] = 2 * axis + (1u - negative);
     }
   for (std::size_t j = 0; j < B; ++j) {
     auto finite = [](float x) { return x - x == 0.0f; };
@@ -257,6 +303,9 @@ WideRaysInfo set_up_block(std::span<const Ray> rays, WideRay* out) {
       sx[j] = dx / dk;
       sy[j] = dy / dk;
       sz[j] = 1.0f / dk;
+    } else {
+      kx[j] = 0, ky[j] = 1, kz[j] = 2;
+      sx[j] = sy[j] = sz[j] = 0.0f;
     }
   }
   // set_up's tests of the interval in a loop of their own: in the loop above, the compiler does not
@@ -264,36 +313,58 @@ WideRaysInfo set_up_block(std::span<const Ray> rays, WideRay* out) {
   if constexpr (kFma)
     for (std::size_t j = 0; j < B; ++j)
       order[j] = (std::bit_cast<int32_t>(t0[j]) < 0) | (t1[j] < 0.0f) ? 0u : order[j];
-  WideRaysInfo info{IntOrder::kFree, false};
-  for (std::size_t j = 0; j < n; ++j) {
+  std::size_t j = 0;
+#if defined(__AVX__)
+  // WideRay's first 24 words are whole fields, so eight rays are three 8 x 8 transposes from the arrays;
+  // the last three words (sy, sz and the flags) go field by field.
+  static_assert(offsetof(WideRay, sx) == 23 * sizeof(float) && offsetof(WideRay, sy) == 24 * sizeof(float));
+  // clang-format off
+  const float* const columns[24] = {
+      o[0], o[1], o[2], d[0], d[1], d[2], inv[0], inv[1],
+      inv[2], org_inv[0], org_inv[1], org_inv[2], t0, t1, words(near[0]), words(near[1]),
+      words(near[2]), words(far[0]), words(far[1]), words(far[2]), words(kx), words(ky), words(kz), sx};
+  // clang-format on
+  for (; j + 8 <= n; j += 8) {
+    for (std::size_t part = 0; part < 3; ++part) {
+      __m256 m[8];
+      for (std::size_t i = 0; i < 8; ++i) m[i] = _mm256_load_ps(columns[8 * part + i] + j);
+      transpose8(m);
+      for (std::size_t i = 0; i < 8; ++i)
+        _mm256_storeu_ps(reinterpret_cast<float*>(out + j + i) + 8 * part, m[i]);
+    }
+    for (std::size_t i = j; i < j + 8; ++i) {
+      out[i].sy = sy[i], out[i].sz = sz[i];
+      out[i].int_order = static_cast<IntOrder>(order[i]);
+      out[i].robust_box = robust[i] != 0;
+      out[i].mtn_in_double = in_double[i] != 0;
+    }
+  }
+#endif
+  for (; j < n; ++j) {
     WideRay& r = out[j];
     for (uint32_t axis = 0; axis < 3; ++axis) {
       r.org[axis] = o[axis][j];
       r.dir[axis] = d[axis][j];
       r.inv_dir[axis] = inv[axis][j];
       r.org_inv[axis] = org_inv[axis][j];
-      r.near_plane[axis] = 2 * axis + negative[axis][j];
-      r.far_plane[axis] = 2 * axis + (1u - negative[axis][j]);
+      r.near_plane[axis] = near[axis][j];
+      r.far_plane[axis] = far[axis][j];
     }
     r.tmin = t0[j];
     r.tmax = t1[j];
-    if constexpr (kShear) {
-      r.kx = kx[j], r.ky = ky[j], r.kz = kz[j];
-      r.sx = sx[j], r.sy = sy[j], r.sz = sz[j];
-    } else {
-      r.kx = 0, r.ky = 1, r.kz = 2;
-      r.sx = r.sy = r.sz = 0.0f;
-    }
+    r.kx = kx[j], r.ky = ky[j], r.kz = kz[j];
+    r.sx = sx[j], r.sy = sy[j], r.sz = sz[j];
     r.int_order = static_cast<IntOrder>(order[j]);
     r.robust_box = robust[j] != 0;
     r.mtn_in_double = in_double[j] != 0;
-    // A ray on the robust box test takes no integer path, so it does not lower the batch's.
-    if (r.robust_box)
-      info.robust_box = true;
-    else
-      info.int_order = std::min(info.int_order, r.int_order);
   }
-  return info;
+  // A ray on the robust box test takes no integer path, so it does not lower the batch's.
+  uint32_t any_robust = 0, lowest = static_cast<uint32_t>(IntOrder::kFree);
+  for (std::size_t i = 0; i < n; ++i) {
+    any_robust |= robust[i];
+    lowest = std::min(lowest, robust[i] ? lowest : order[i]);
+  }
+  return WideRaysInfo{static_cast<IntOrder>(lowest), any_robust != 0};
 }
 
 template <bool kShear, bool kFma>

@@ -182,9 +182,14 @@ class WatertightTriangleTest {
   /// cannot stand (range_holds), so that a shadow ray rarely pays for a double-precision distance and is
   /// occluded where closest hit finds a hit (within range_holds' limit on the triangle's conditioning).
   bool intersect_any(const Triangle& tri, float tmin, float tmax, float& t, float& u, float& v) const {
-    return intersect_float(tri, tmin, tmax, t, u, v) &&
-           (range_holds(tri, t, tmin, tmax) ||
-            refine_watertight_t(tri.v0, tri.v1, tri.v2, org_, dir_, tmin, tmax, t));
+    return intersect_float(tri, tmin, tmax, t, u, v) && any_hit_holds(tri, tmin, tmax, t);
+  }
+
+  /// Whether an any-hit query keeps a float hit at t on `tri`: where range_holds cannot vouch for it, its
+  /// refined distance (written to t) decides.
+  bool any_hit_holds(const Triangle& tri, float tmin, float tmax, float& t) const {
+    return range_holds(tri, t, tmin, tmax) ||
+           refine_watertight_t(tri.v0, tri.v1, tri.v2, org_, dir_, tmin, tmax, t);
   }
 
   /// watertight_range_holds for a float hit at t on `tri`, its vertices' distances along the ray computed
@@ -257,12 +262,11 @@ bool intersect_any(const TriangleTest& test, const Triangle& tri, float tmin, fl
 }
 
 /// Whether an any-hit query keeps a hit at t that a four-lane test's float form found on `tri`:
-/// WatertightTriangleTest::intersect_any's check for the watertight test; the others' hits stand.
+/// WatertightTriangleTest::any_hit_holds for the watertight test; the others' hits stand.
 template <class TriangleTest>
 bool any_hit_holds(const TriangleTest& test, const Triangle& tri, float tmin, float tmax, float& t) {
-  if constexpr (requires { test.range_holds(tri, t, tmin, tmax); })
-    return test.range_holds(tri, t, tmin, tmax) ||
-           refine_watertight_t(tri.v0, tri.v1, tri.v2, test.org(), test.dir(), tmin, tmax, t);
+  if constexpr (requires { test.any_hit_holds(tri, tmin, tmax, t); })
+    return test.any_hit_holds(tri, tmin, tmax, t);
   else
     return true;
 }

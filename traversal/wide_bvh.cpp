@@ -220,6 +220,8 @@ WideRaysInfo set_up_block(std::span<const Ray> rays, WideRay* out) {
   alignas(64) float o[3][B], d[3][B], tmin[B], tmax[B];
 #if defined(__AVX__)
   // A Ray is eight floats (org, tmin, dir, tmax): eight rays are one 8 x 8 transpose away from the arrays.
+  static_assert(sizeof(Ray) == 8 * sizeof(float) && offsetof(Ray, tmin) == 3 * sizeof(float) &&
+                offsetof(Ray, dir) == 4 * sizeof(float) && offsetof(Ray, tmax) == 7 * sizeof(float));
   for (std::size_t h = 0; h < B; h += 8) {
     __m256 m[8];
     for (std::size_t i = 0; i < 8; ++i)
@@ -253,9 +255,9 @@ WideRaysInfo set_up_block(std::span<const Ray> rays, WideRay* out) {
     auto finite = [](float x) { return x - x == 0.0f; };
     const bool traceable = finite(o[0][j]) & finite(o[1][j]) & finite(o[2][j]) & finite(d[0][j]) &
                            finite(d[1][j]) & finite(d[2][j]) & (tmin[j] == tmin[j]) & (tmax[j] == tmax[j]);
-    const float far = tmax[j] > kMax ? kMax : tmax[j];
+    const float limit = tmax[j] > kMax ? kMax : tmax[j];
     t0[j] = traceable ? tmin[j] : 1.0f;
-    t1[j] = traceable ? far : 0.0f;
+    t1[j] = traceable ? limit : 0.0f;
     bool fma_takes = true;
     for (uint32_t axis = 0; axis < 3; ++axis)
       fma_takes &= (std::abs(d[axis][j]) >= kMin) & (std::abs(org_inv[axis][j]) < kInfinity);

@@ -486,6 +486,50 @@ std::vector<std::string> missing_cell_notes(const GroupKey& key, const std::vect
   return notes;
 }
 
+// The notes (the CSV's `notes`, "; "-separated) that hold for a whole column or table, once each: those
+// every row of the table carries (the configured view), then those every row of one ray set carries (a
+// shadow set's lights enclosed by the scene: ray_sets.h, enclosed), so that the figures they qualify are
+// not read without them.
+std::vector<std::string> row_notes(const std::vector<const CsvRow*>& group) {
+  auto notes_of = [](const CsvRow& r) {
+    std::set<std::string> out;
+    const std::string all = field(r, "notes");
+    for (std::size_t begin = 0; begin < all.size();) {
+      const std::size_t end = std::min(all.find("; ", begin), all.size());
+      out.insert(all.substr(begin, end - begin));
+      begin = end + 2;
+    }
+    return out;
+  };
+  std::vector<std::string> sets;
+  std::map<std::string, std::set<std::string>> shared;  // ray set -> notes all its rows carry
+  std::set<std::string> everywhere;
+  bool first = true;
+  for (const CsvRow* r : group) {
+    const std::string set = field(*r, "ray_set");
+    const std::set<std::string> here = notes_of(*r);
+    auto intersect = [&](std::set<std::string>& into) {
+      std::erase_if(into, [&](const std::string& n) { return !here.count(n); });
+    };
+    if (const auto it = shared.find(set); it == shared.end()) {
+      sets.push_back(set);
+      shared[set] = here;
+    } else {
+      intersect(it->second);
+    }
+    if (first)
+      everywhere = here, first = false;
+    else
+      intersect(everywhere);
+  }
+  std::vector<std::string> out;
+  for (const std::string& note : everywhere) out.push_back(fmt::format("every row: {}.", note));
+  for (const std::string& set : sets)
+    for (const std::string& note : shared[set])
+      if (!everywhere.count(note)) out.push_back(fmt::format("ray set '{}': {}.", set, note));
+  return out;
+}
+
 }  // namespace
 
 ReportFormat parse_report_format(std::string_view name) {
@@ -589,6 +633,7 @@ void print_report(const ReportOptions& options, std::ostream& out) {
       if (group_of(*r) == key) group.push_back(r);
     ReportTable table = select_columns(make_table(key, group, timings, options.format), options.columns);
     table.notes = missing_cell_notes(key, group, others);
+    for (std::string& note : row_notes(group)) table.notes.push_back(std::move(note));
     for (const ReportRow& row : table.rows) any_marked |= row.marked;
     render(table);
     render_predictors(key.text(), predictor_rows(group), options.format, out);

@@ -7,6 +7,7 @@
 #include <bit>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "builders/binned_sah.h"
 #include "core/build_input.h"
@@ -103,11 +104,9 @@ std::vector<Ray> primary_rays(const Scene& scene, const RaySetConfig& cfg, const
   return rays;
 }
 
-// Traces the primary rays on a reference tree and keeps the hit points, in ray order (the primary set's
+// Traces the primary rays on the reference tree and keeps the hit points, in ray order (the primary set's
 // tiles), misses left out.
-std::vector<Hitpoint> primary_hits(const Scene& scene, std::span<const Ray> rays) {
-  const BuildInput input = BuildInput::from_triangles(scene.triangles);
-  const Bvh bvh = build_binned_sah(input, {});
+std::vector<Hitpoint> primary_hits(const Scene& scene, const Bvh& bvh, std::span<const Ray> rays) {
   std::vector<Hit> hits(rays.size());
   tbb::parallel_for(std::size_t{0}, rays.size(),
                     [&](std::size_t i) { hits[i] = closest_hit(bvh, scene.triangles, rays[i]); });
@@ -161,6 +160,38 @@ std::vector<Vec3> automatic_lights(const Scene& scene, uint32_t count, uint64_t 
   return lights;
 }
 
+bool enclosed(const Bvh& bvh, std::span<const Triangle> triangles, Vec3 p) {
+  const double golden_angle = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (uint32_t i = 0; i < kEnclosureProbes; ++i) {
+    const double y = 1.0 - (2.0 * i + 1.0) / kEnclosureProbes;
+    const double r = std::sqrt(1.0 - y * y), phi = golden_angle * i;
+    Ray ray;
+    ray.org = p;
+    ray.dir = {static_cast<float>(r * std::cos(phi)), static_cast<float>(y),
+               static_cast<float>(r * std::sin(phi))};
+    if (!any_hit(bvh, triangles, ray)) return false;
+  }
+  return true;
+}
+
+namespace {
+
+// The note of a shadow set whose lights the scene encloses; empty when it encloses none.
+std::string enclosed_lights_note(const Bvh& bvh, std::span<const Triangle> triangles,
+                                 std::span<const Vec3> lights, bool automatic) {
+  std::vector<std::size_t> inside;
+  for (std::size_t i = 0; i < lights.size(); ++i)
+    if (enclosed(bvh, triangles, lights[i])) inside.push_back(i + 1);
+  if (inside.empty()) return "";
+  return fmt::format(
+      "{} light{} {} of {} enclosed by the scene (each of {} rays from it hits a triangle): the shadow rays "
+      "to {} end inside that enclosure",
+      automatic ? "automatic" : "scene", inside.size() == 1 ? "" : "s", fmt::join(inside, ", "),
+      lights.size(), kEnclosureProbes, inside.size() == 1 ? "it" : "them");
+}
+
+}  // namespace
+
 GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetConfig> configs, uint64_t seed) {
   GeneratedRaySets out;
   if (scene.triangles.empty()) {
@@ -169,13 +200,20 @@ GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetCon
   }
   const Aabb box = scene_bounds(scene);
   const float diagonal = length(box.extent());
+  // The reference tree (binned SAH, watertight test) that finds the primary hits and probes the lights,
+  // built once, when a set first needs it.
+  std::optional<Bvh> reference;
+  auto tree = [&]() -> const Bvh& {
+    if (!reference) reference = build_binned_sah(BuildInput::from_triangles(scene.triangles), {});
+    return *reference;
+  };
   // Secondary sets start from the hits of the primary image of their resolution; shared between sets.
   std::vector<std::pair<std::pair<uint32_t, uint32_t>, std::vector<Hitpoint>>> hit_cache;
   auto hits_for = [&](const RaySetConfig& cfg) -> const std::vector<Hitpoint>& {
     for (const auto& [size, hits] : hit_cache)
       if (size == std::make_pair(cfg.width, cfg.height)) return hits;
     hit_cache.emplace_back(std::make_pair(cfg.width, cfg.height),
-                           primary_hits(scene, primary_rays(scene, cfg, box)));
+                           primary_hits(scene, tree(), primary_rays(scene, cfg, box)));
     return hit_cache.back().second;
   };
 
@@ -209,6 +247,7 @@ GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetCon
                                  cfg.light_source == "scene" ? "the scene has no lights" : "lights = 0");
         continue;
       }
+      set.note = enclosed_lights_note(tree(), scene.triangles, lights, cfg.light_source != "scene");
     }
     const std::vector<Hitpoint>& hits = hits_for(cfg);
     if (hits.empty()) {

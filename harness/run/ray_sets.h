@@ -16,7 +16,9 @@
 #include <utility>
 #include <vector>
 
+#include "core/bvh.h"
 #include "core/ray.h"
+#include "core/triangle.h"
 #include "harness/config/config.h"
 #include "scenes/camera.h"
 #include "scenes/scene.h"
@@ -28,6 +30,9 @@ struct RaySet {
   RayKind kind = RayKind::kPrimary;
   bool occlusion = false;  ///< any-hit query (shadow, ambient occlusion) rather than closest hit
   std::vector<Ray> rays;
+  /// What a reader of the set's figures should know about its rays (a shadow set's lights enclosed by
+  /// the scene), for the rows' notes and the run's log; empty when nothing.
+  std::string note;
 };
 
 struct GeneratedRaySets {
@@ -55,5 +60,16 @@ Vec3 offset_ray_origin(Vec3 p, Vec3 n);
 /// The automatic point lights: `count` points in the top tenth of the scene box, spread over its middle
 /// 80% horizontally (y up), deterministic from the seed.
 std::vector<Vec3> automatic_lights(const Scene& scene, uint32_t count, uint64_t seed);
+
+/// Rays cast from a light to tell whether the scene encloses it.
+inline constexpr uint32_t kEnclosureProbes = 64;
+
+/// Whether every one of kEnclosureProbes rays from `p`, in directions spread evenly over the sphere (a
+/// Fibonacci lattice: González 2010, "Measurement of areas on a sphere using Fibonacci and
+/// latitude-longitude lattices"), hits a triangle of `bvh`. A light there lights only the inside of a
+/// closed surface (a model's hull, a lamp's shade): nearly every shadow ray to it is occluded near the
+/// light, which measures that enclosure rather than the scene's shadows. Automatic lights land there in
+/// closed models, whose box's top tenth lies inside them.
+bool enclosed(const Bvh& bvh, std::span<const Triangle> triangles, Vec3 p);
 
 }  // namespace sahbench

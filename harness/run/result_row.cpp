@@ -96,6 +96,7 @@ void put_ray_set(CsvRow& row, const RaySet& rs) {
   row["ray_set"] = rs.name;
   row["ray_count"] = std::to_string(rs.rays.size());
   row["query"] = rs.occlusion ? "any" : "closest";
+  if (!rs.note.empty()) add_note(row, rs.note);
 }
 
 void put_epo(CsvRow& row, double epo, double sah) {

@@ -158,6 +158,9 @@ class ExperimentRunner {
                           reason);
       progress.skip(skipped);
     }
+    for (const RaySet& set : generated.sets)
+      if (!set.note.empty())
+        log_ << fmt::format("scene {}: ray set '{}': {}\n", scene_name, set.name, set.note);
     std::vector<Reference> references(generated.sets.size());
     reference_ms_ += time_ms([&] {
       for (std::size_t i = 0; i < generated.sets.size(); ++i)

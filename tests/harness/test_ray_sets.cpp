@@ -5,8 +5,11 @@
 #include <cmath>
 #include <limits>
 
+#include "builders/binned_sah.h"
+#include "core/build_input.h"
 #include "core/error.h"
 #include "harness/run/ray_sets.h"
+#include "harness/run/result_row.h"
 #include "scenes/load.h"
 #include "traversal/brute_force.h"
 
@@ -103,6 +106,58 @@ TEST(HarnessRaySets, SceneLightsMissingSkipsTheSetWithAReason) {
   ASSERT_EQ(out.skipped.size(), 1u);
   EXPECT_EQ(out.skipped[0].first, "shadow_scene");
   EXPECT_NE(out.skipped[0].second.find("no lights"), std::string::npos);
+}
+
+// A closed sphere encloses the automatic lights that land inside it (its box's top tenth is partly
+// inside): the shadow set lists them, in a note its rows carry, and every shadow ray to them is occluded.
+// A light of the scene's own at the centre is enclosed, one above the sphere is not, and a single
+// triangle encloses nothing.
+TEST(HarnessRaySets, ShadowSetNotesTheLightsTheSceneEncloses) {
+  Scene scene = load_scene("proc:sphere:tris=2000");
+  RaySetConfig automatic;
+  automatic.name = "shadow";
+  automatic.kind = RayKind::kShadow;
+  automatic.width = automatic.height = 32;
+  RaySetConfig own = automatic;
+  own.name = "shadow_scene";
+  own.light_source = "scene";
+  Aabb box;
+  for (const Triangle& t : scene.triangles) box.extend(t.bounds());
+  const Vec3 centre = box.center();
+  const float radius = 0.5f * box.extent().y;
+  scene.lights = {centre + Vec3{0.0f, 2.0f * radius, 0.0f}, centre};
+  const auto out = generate_ray_sets(scene, std::vector<RaySetConfig>{automatic, own}, 1);
+  ASSERT_EQ(out.sets.size(), 2u);
+
+  // Which automatic lights lie inside, by their distance to the centre: none is within 1% of the radius of
+  // the surface, where 2000 triangles stray from the sphere by about 0.2%.
+  const std::vector<Vec3> lights = automatic_lights(scene, automatic.lights, 1);
+  std::vector<std::size_t> inside;
+  for (std::size_t i = 0; i < lights.size(); ++i) {
+    const float d = length(lights[i] - centre);
+    ASSERT_GT(std::abs(d - radius), 0.01f * radius) << "light " << i << " too near the surface to tell";
+    if (d < radius) inside.push_back(i);
+  }
+  ASSERT_FALSE(inside.empty());
+  ASSERT_LT(inside.size(), lights.size());
+  std::string listed;
+  for (const std::size_t i : inside) listed += (listed.empty() ? "" : ", ") + std::to_string(i + 1);
+  EXPECT_NE(out.sets[0].note.find(listed + " of 4 enclosed"), std::string::npos) << out.sets[0].note;
+  for (std::size_t i = 0; i < out.sets[0].rays.size(); ++i)
+    if (std::find(inside.begin(), inside.end(), i % lights.size()) != inside.end())
+      EXPECT_TRUE(brute_force_any(scene.triangles, out.sets[0].rays[i])) << "shadow ray " << i;
+  EXPECT_NE(out.sets[1].note.find("scene light 2 of 2 enclosed"), std::string::npos) << out.sets[1].note;
+
+  CsvRow row;
+  put_ray_set(row, out.sets[0]);
+  EXPECT_EQ(row.at("notes"), out.sets[0].note);
+
+  const Bvh bvh = build_binned_sah(BuildInput::from_triangles(scene.triangles), {});
+  EXPECT_TRUE(enclosed(bvh, scene.triangles, centre));
+  EXPECT_FALSE(enclosed(bvh, scene.triangles, scene.lights[0]));
+  const std::vector<Triangle> one{{{-1, 0, -1}, {1, 0, -1}, {0, 0, 1}}};
+  const Bvh single = build_binned_sah(BuildInput::from_triangles(one), {});
+  EXPECT_FALSE(enclosed(single, one, Vec3{0.0f, 0.5f, 0.0f}));
 }
 
 TEST(HarnessRaySets, PrimaryRaysComeInTilesOfFourByFour) {

@@ -335,6 +335,35 @@ TEST(Report, TheCaptionNamesTheIsaOfEachLayoutWhereTheyDiffer) {
       << out.str();
 }
 
+// A note every row of one ray set carries (a shadow set's enclosed lights) is printed under the table for
+// that set, one every row carries (the view) for the table; a note of some rows only is not.
+TEST(Report, NotesOfARaySetOrOfEveryRowArePrintedUnderTheTable) {
+  const auto path = temp_csv("notes.csv");
+  const std::string view = "camera eye (0, 0, 10) target (0, 0, 0) up (0, 1, 0) fov 20";
+  const std::string lights = "automatic light 1 of 4 enclosed by the scene";
+  {
+    std::vector<std::string> columns = columns_with_samples();
+    columns.push_back("notes");
+    CsvWriter w(path, columns);
+    auto noted = [](CsvRow row, const std::string& notes) {
+      row["notes"] = notes;
+      return row;
+    };
+    for (const std::string rs : {"primary", "shadow"}) {
+      const std::string notes = rs == "shadow" ? view + "; " + lights : view;
+      w.append(noted(make_row("embree", "quality=medium", "embree_1", rs, 10.0, 1 << 20, "", 8.0), notes));
+      w.append(noted(make_row("binned_sah", "bins=8", "bvh2", rs, 5.0, 1 << 20, "40", 2.0),
+                     rs == "primary" ? notes + "; invalid tree, not traced: x" : notes));
+    }
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  EXPECT_NE(out.str().find("Note: every row: " + view + "."), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("Note: ray set 'shadow': " + lights + "."), std::string::npos) << out.str();
+  EXPECT_EQ(out.str().find("invalid tree"), std::string::npos) << out.str();
+  EXPECT_EQ(out.str().find("ray set 'primary'"), std::string::npos) << out.str();
+}
+
 TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {
   // Two rows costed with c_trav = 1 and one with c_trav = 2, whose larger constants make its cost
   // incomparable (here it is even the lowest): it gets its constants as a note and no bold.

@@ -389,10 +389,11 @@ TEST(HarnessRun, ConfigCameraGivesThePrimaryViewAndSecondarySetsFollowIt) {
   EXPECT_GT(std::stod(facing[0].at("nodes_per_ray")), 1.0);
   EXPECT_EQ(facing[1].at("ray_set"), "shadow");
   EXPECT_GT(std::stoi(facing[1].at("ray_count")), 16 * 16 / 4);
-  // Each row names the view its rays came from.
-  for (const auto& row : facing)
-    EXPECT_EQ(row.at("notes"), "camera eye (0, 0, 10) target (0, 0, 0) up (0, 1, 0) fov 20")
-        << row.at("ray_set");
+  // Each row names the view its rays came from; the shadow row also the automatic lights inside the sphere.
+  const std::string view = "camera eye (0, 0, 10) target (0, 0, 0) up (0, 1, 0) fov 20";
+  EXPECT_EQ(facing[0].at("notes"), view);
+  EXPECT_TRUE(facing[1].at("notes").starts_with(view + "; automatic light")) << facing[1].at("notes");
+  EXPECT_NE(facing[1].at("notes").find("enclosed by the scene"), std::string::npos) << facing[1].at("notes");
 
   const auto [away, away_log] = run("camera_away", "[0, 0, 20]");
   ASSERT_EQ(away.size(), 1u) << away_log;

@@ -510,11 +510,58 @@ void read_cameras(const Source& src, const toml::table& root, ExperimentConfig& 
   }
 }
 
+// [[lights]]: each names a scene of the experiment, once, and some shadow set takes the scene's lights.
+void read_lights(const Source& src, const toml::table& root, ExperimentConfig& config) {
+  const auto* node = root.get("lights");
+  if (!node) return;
+  const bool used = std::any_of(config.ray_sets.begin(), config.ray_sets.end(), [](const RaySetConfig& rs) {
+    return rs.kind == RayKind::kShadow && rs.light_source == "scene";
+  });
+  for (const toml::table* table : read_table_array(src, *node, "lights")) {
+    check_keys(src, *table, "[[lights]]", {"scene", "positions"});
+    if (!used)
+      src.fail(*table,
+               "[[lights]] is for shadow sets with light_source = \"scene\", and no [[ray_set]] has one; "
+               "add one, or remove the table");
+    LightsConfig lights;
+    const auto* scene = table->get("scene");
+    if (!scene) src.fail(*table, "[[lights]] has no scene (scene = \"...\", as in experiment.scenes)");
+    lights.scene = read_string(src, *scene, "lights.scene");
+    const auto& required = config.scenes;
+    const auto& optional = config.optional_scenes;
+    if (std::find(required.begin(), required.end(), lights.scene) == required.end() &&
+        std::find(optional.begin(), optional.end(), lights.scene) == optional.end())
+      src.fail(*scene, "lights.scene = \"" + lights.scene +
+                           "\" is not a scene of this experiment (experiment.scenes or optional_scenes)");
+    if (config.lights_for(lights.scene))
+      src.fail(*scene,
+               "scene \"" + lights.scene + "\" has two [[lights]] tables; list all its lights in one");
+    const auto* positions = table->get("positions");
+    const std::string must = "lights.positions must be a list of 1 to " + std::to_string(kMaxLights) +
+                             " points, e.g. [[0.0, 2.0, 0.5]]";
+    if (!positions) src.fail(*table, "[[lights]] has no positions (positions = [[x, y, z], ...])");
+    const auto* list = positions->as_array();
+    if (!list) src.fail(*positions, must + ", not " + type_name(*positions));
+    if (list->empty() || list->size() > kMaxLights)
+      src.fail(*positions, must + ", not " + std::to_string(list->size()));
+    for (std::size_t i = 0; i < list->size(); ++i)
+      lights.positions.push_back(
+          read_vec3(src, *list->get(i), "lights.positions[" + std::to_string(i) + "]"));
+    config.lights.push_back(std::move(lights));
+  }
+}
+
 }  // namespace
 
 const CameraConfig* ExperimentConfig::camera_for(std::string_view scene) const {
   for (const auto& camera : cameras)
     if (camera.scene == scene) return &camera;
+  return nullptr;
+}
+
+const LightsConfig* ExperimentConfig::lights_for(std::string_view scene) const {
+  for (const auto& l : lights)
+    if (l.scene == scene) return &l;
   return nullptr;
 }
 
@@ -599,6 +646,12 @@ Camera to_camera(const CameraConfig& camera) {
   return look_at_camera(vec(camera.eye), vec(camera.target), vec(camera.up), camera.fov);
 }
 
+std::vector<Vec3> to_lights(const LightsConfig& lights) {
+  std::vector<Vec3> out;
+  for (const auto& p : lights.positions) out.push_back({p[0], p[1], p[2]});
+  return out;
+}
+
 std::string to_string(RayKind kind) {
   return spelling(kRayKinds, kind);
 }
@@ -615,7 +668,7 @@ ExperimentConfig parse_experiment_config(std::string_view toml_text, const std::
   const Source src{source_name};
   const toml::table root = parse_toml(toml_text, source_name);
   check_keys(src, root, "the top level",
-             {"experiment", "repetitions", "builder", "ray_set", "camera", "animation"});
+             {"experiment", "repetitions", "builder", "ray_set", "camera", "lights", "animation"});
 
   ExperimentConfig config;
   config.path = source_name;
@@ -626,6 +679,7 @@ ExperimentConfig parse_experiment_config(std::string_view toml_text, const std::
   read_builders(src, root, config);
   read_ray_sets(src, root, config);
   read_cameras(src, root, config);
+  read_lights(src, root, config);
   return config;
 }
 

@@ -86,6 +86,10 @@
 //                                     # made, e.g. target = eye, is an error at the [[camera]] line)
 //   fov = 45                          # vertical field of view in degrees, in (0, 180); default 45
 //
+//   [[lights]]                        # optional, at most one per scene: point lights for its shadow sets
+//   scene = "crytek_sponza"           # with light_source = "scene", in place of the file's own lights
+//   positions = [[0.0, 120.0, 0.0], [60.0, 100.0, -10.0]]  # in the scene's units; 1 to kMaxLights
+//
 // Keys by ray-set kind (any other key is an error, so that no setting is silently ignored):
 //   all: name, kind;  primary, shadow, diffuse, ao: width, height;  shadow, diffuse, ao, random: count;
 //   shadow: light_source, and lights when light_source = "auto";  ao: ao_radius.
@@ -226,6 +230,19 @@ struct CameraConfig {
 /// look_at_camera (scenes/camera.h) of a [[camera]]: an Error where the view cannot be made.
 Camera to_camera(const CameraConfig& camera);
 
+/// Point lights for one scene's shadow sets with light_source = "scene" ([[lights]] above): they replace
+/// the file's own lights, as a [[camera]] replaces its view, so that a scene without lights of its own,
+/// or whose automatic lights fall inside it (ray_sets.h: enclosed), gets the lights a renderer would use.
+struct LightsConfig {
+  std::string scene;  ///< as spelled in experiment.scenes or experiment.optional_scenes
+  std::vector<std::array<float, 3>> positions;
+
+  bool operator==(const LightsConfig&) const = default;
+};
+
+/// The positions of a [[lights]] as the scene's lights.
+std::vector<Vec3> to_lights(const LightsConfig& lights);
+
 /// Most frames an animation experiment may sample: a guard against a typo, as every frame is a full set
 /// of builds and traces per builder (10,000 frames are close to three minutes of animation at 60 Hz).
 inline constexpr uint32_t kMaxFrames = 10000;
@@ -272,6 +289,8 @@ struct ExperimentConfig {
   std::vector<RaySetConfig> ray_sets;
   /// At most one per scene, each naming a scene of this experiment.
   std::vector<CameraConfig> cameras;
+  /// At most one per scene, each naming a scene of this experiment; only with a light_source = "scene" set.
+  std::vector<LightsConfig> lights;
   Repetitions reps;
   ReferencePolicy reference = ReferencePolicy::kAuto;
   uint64_t brute_force_max_triangles = 20000;
@@ -282,6 +301,8 @@ struct ExperimentConfig {
 
   /// The [[camera]] for `scene` (as spelled in scenes or optional_scenes), or null.
   const CameraConfig* camera_for(std::string_view scene) const;
+  /// The [[lights]] for `scene`, or null.
+  const LightsConfig* lights_for(std::string_view scene) const;
 
   bool operator==(const ExperimentConfig&) const = default;
 };

@@ -260,6 +260,8 @@ class AnimationRunner {
     frame.time = time;
     frame.scene = animated.scene;
     frame.scene.camera = camera;
+    if (const LightsConfig* lights = cfg_.lights_for(animated.scene.name))
+      frame.scene.lights = to_lights(*lights);
     animated.positions_at(time, frame.scene.triangles);
     frame.diagonal = scene_diagonal(frame.scene.triangles);
     GeneratedRaySets generated = generate_ray_sets(frame.scene, cfg_.ray_sets, cfg_.seed);

@@ -66,6 +66,12 @@ std::vector<CellLayout> layouts_for(const BuilderRun& b, const RunLayouts& layou
   return out;
 }
 
+std::string lights_note(const LightsConfig& lights) {
+  std::vector<std::string> points;
+  for (const auto& p : lights.positions) points.push_back(fmt::format("({})", fmt::join(p, ", ")));
+  return fmt::format("lights {}", fmt::join(points, " "));
+}
+
 std::string camera_note(const CameraConfig& camera) {
   return fmt::format("camera eye ({}) target ({}) up ({}) fov {}", fmt::join(camera.eye, ", "),
                      fmt::join(camera.target, ", "), fmt::join(camera.up, ", "), camera.fov);
@@ -98,6 +104,7 @@ CsvRow common_row(const RunIdentity& id, const Environment& env, const Experimen
   row["scene_removed"] = std::to_string(scene.removed.total());
   row["embree_version"] = env.embree;
   if (const CameraConfig* camera = cfg.camera_for(scene.name)) add_note(row, camera_note(*camera));
+  if (const LightsConfig* lights = cfg.lights_for(scene.name)) add_note(row, lights_note(*lights));
   return row;
 }
 

@@ -52,6 +52,8 @@ std::vector<CellLayout> layouts_for(const BuilderRun& b, const RunLayouts& layou
 
 /// "camera eye (x, y, z) target (x, y, z) up (x, y, z) fov F": the view of a [[camera]], for `notes`.
 std::string camera_note(const CameraConfig& camera);
+/// A config's [[lights]] as a row's `notes` say it: "lights (x, y, z) (x, y, z)".
+std::string lights_note(const LightsConfig& lights);
 
 /// The columns every row of a cell starts with: the run (run_id, run_fingerprint, fingerprint_parts,
 /// shard, config, seed, build_reps, trace_reps), the machine (git_commit, cpu, compiler, embree_version), the

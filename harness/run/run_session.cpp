@@ -109,6 +109,8 @@ Fingerprint fingerprint_of(const ExperimentConfig& cfg, const std::vector<std::s
     sets += fmt::format("{} {} {}x{} count {} lights {} {} ao {}\n", rs.name, static_cast<int>(rs.kind),
                         rs.width, rs.height, rs.count, rs.lights, rs.light_source, rs.ao_radius);
   for (const auto& c : cfg.cameras) cameras += c.scene + ": " + camera_note(c) + "\n";
+  // The configured lights in the same part, so that a config without them keeps its fingerprint.
+  for (const auto& l : cfg.lights) cameras += l.scene + ": " + lights_note(l) + "\n";
   std::vector<std::string> layouts;
   for (const LayoutSpec& l : cfg.layouts) layouts.push_back(l.text());
   // Part name -> the text it hashes.

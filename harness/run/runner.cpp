@@ -143,6 +143,10 @@ class ExperimentRunner {
     log_ << fmt::format("scene {}: {} triangles ({} removed), {}, from {} in {:.0f} ms\n", scene_name,
                         scene.triangles.size(), scene.removed.total(), scene.animated ? "animated" : "static",
                         scene.source, load_ms);
+    if (const LightsConfig* lights = cfg_.lights_for(scene_name)) {
+      scene.lights = to_lights(*lights);
+      log_ << fmt::format("scene {}: {} from the config\n", scene_name, lights_note(*lights));
+    }
     if (const CameraConfig* view = cfg_.camera_for(scene_name)) {
       scene.camera = to_camera(*view);
       log_ << fmt::format("scene {}: camera from the config: eye ({}), target ({}), fov {} degrees\n",

@@ -185,6 +185,8 @@ TEST(HarnessConfigParse, HeaderExampleIsValid) {
   EXPECT_EQ(config.threads, (std::vector<int>{1, 2}));
   ASSERT_EQ(config.cameras.size(), 1u);
   EXPECT_EQ(config.cameras[0].scene, "crytek_sponza");
+  ASSERT_EQ(config.lights.size(), 1u);
+  EXPECT_EQ(config.lights[0].positions.size(), 2u);
 }
 
 TEST(HarnessConfigDefaults, OptionalKeysMissing) {
@@ -769,6 +771,49 @@ TEST(HarnessConfigCamera, BadViewsNameKeyValueAndLine) {
                    "eye = [0, 0, 2]\ntarget = [0, 0, 0]\n",
                15, {"scene \"proc:soup:tris=1k\" has two [[camera]] tables"});
   expect_error("camera = 3\n" + kBase, 1, {"camera must be written as [[camera]] tables"});
+}
+
+// [[lights]]: per scene, for the shadow sets that take the scene's lights.
+TEST(HarnessConfigLights, PositionsPerSceneForSceneLightShadowSets) {
+  const auto config = parse_with(R"([[ray_set]]
+kind = "shadow"
+light_source = "scene"
+
+[[lights]]
+scene = "proc:soup:tris=1k"
+positions = [[0, 2, 0.5], [1.5, -2, 3]]
+)");
+  const LightsConfig* lights = config.lights_for("proc:soup:tris=1k");
+  ASSERT_NE(lights, nullptr);
+  ASSERT_EQ(lights->positions.size(), 2u);
+  EXPECT_EQ(lights->positions[1], (std::array<float, 3>{1.5f, -2.0f, 3.0f}));
+  EXPECT_EQ(to_lights(*lights)[0], (Vec3{0.0f, 2.0f, 0.5f}));
+  EXPECT_EQ(config.lights_for("crytek_sponza"), nullptr);
+  EXPECT_TRUE(parse_with("").lights.empty());
+}
+
+TEST(HarnessConfigLights, BadLightsNameKeyValueAndLine) {
+  // kBase is lines 1-9; the shadow set takes lines 10-12 and [[lights]] starts on line 13.
+  const std::string shadow = "[[ray_set]]\nkind = \"shadow\"\nlight_source = \"scene\"\n";
+  const std::string table = "[[lights]]\nscene = \"proc:soup:tris=1k\"\n";
+  expect_error(kBase + table + "positions = [[0, 1, 0]]\n", 10,
+               {"[[lights]] is for shadow sets with light_source = \"scene\"", "no [[ray_set]] has one"});
+  expect_error(kBase + shadow + "[[lights]]\nscene = \"crytek_sponza\"\npositions = [[0, 1, 0]]\n", 14,
+               {"lights.scene = \"crytek_sponza\" is not a scene of this experiment"});
+  expect_error(kBase + shadow + "[[lights]]\npositions = [[0, 1, 0]]\n", 13, {"[[lights]] has no scene"});
+  expect_error(kBase + shadow + table, 13, {"[[lights]] has no positions"});
+  expect_error(kBase + shadow + table + "positions = []\n", 15,
+               {"lights.positions must be a list of 1 to 65536 points", "not 0"});
+  expect_error(kBase + shadow + table + "positions = [0, 1, 0]\n", 15,
+               {"lights.positions[0] must be a list of three numbers", "not an integer"});
+  expect_error(kBase + shadow + table + "positions = [[0, 1, 0], [0, 1]]\n", 15,
+               {"lights.positions[1] must be a list of three numbers", "not 2"});
+  expect_error(kBase + shadow + table + "positions = [[0, 1e39, 0]]\n", 15,
+               {"lights.positions[0]", "not finite as a float"});
+  expect_error(kBase + shadow + table + "positions = [[0, 1, 0]]\nintensity = 2\n", 16,
+               {"unknown key 'intensity' in [[lights]]", "scene, positions"});
+  expect_error(kBase + shadow + table + "positions = [[0, 1, 0]]\n" + table + "positions = [[0, 2, 0]]\n", 17,
+               {"scene \"proc:soup:tris=1k\" has two [[lights]] tables"});
 }
 
 // Every experiment config shipped in configs/ loads, and every one that measures Sponza looks at it from

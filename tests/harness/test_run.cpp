@@ -360,6 +360,41 @@ TEST(HarnessRun, RaysBeyondEmbreesRangeAreAnErrorNotAnAbort) {
   }
 }
 
+// A procedural sphere has no lights of its own: a shadow set with light_source = "scene" takes the
+// config's [[lights]]. From a light in front of the sphere, on the camera's side, the lit half's rays are
+// not occluded; from one at its centre every ray is, and the rows say that the scene encloses it.
+TEST(HarnessRun, ConfigLightsAreTheScenesLightsForItsShadowSets) {
+  const auto dir = temp_dir();
+  auto run = [&](const std::string& name, const std::string& light) {
+    const auto path = dir / (name + ".toml"), csv = dir / (name + ".csv");
+    std::filesystem::remove(csv);
+    std::ofstream(path)
+        << "[experiment]\nname = \"" << name << "\"\noutput = \"" << csv.string() << "\"\n"
+        << "scenes = [\"proc:sphere:tris=3000\"]\nreference = \"brute_force\"\n"
+        << "[repetitions]\nbuild = 1\nbuild_warmup = 0\ntrace = 1\ntrace_warmup = 0\n"
+        << "[[builder]]\nname = \"binned_sah\"\n"
+        << "[[camera]]\nscene = \"proc:sphere:tris=3000\"\neye = [0, 0, 10]\ntarget = [0, 0, 0]\n"
+        << "[[lights]]\nscene = \"proc:sphere:tris=3000\"\npositions = [" << light << "]\n"
+        << "[[ray_set]]\nkind = \"shadow\"\nlight_source = \"scene\"\nwidth = 16\nheight = 16\n";
+    std::ostringstream log;
+    EXPECT_EQ(run_experiment({path, false, "", std::nullopt}, log), 0) << log.str();
+    EXPECT_NE(log.str().find("lights (" + light.substr(1, light.size() - 2) + ") from the config"),
+              std::string::npos)
+        << log.str();
+    const auto rows = read_csv(csv);
+    EXPECT_EQ(rows.size(), 1u) << log.str();
+    return rows.empty() ? CsvRow{} : rows[0];
+  };
+  const CsvRow front = run("light_front", "[0, 0, 5]");
+  EXPECT_EQ(front.at("mismatches"), "0");
+  EXPECT_LT(std::stod(front.at("hit_fraction")), 0.5);
+  EXPECT_NE(front.at("notes").find("lights (0, 0, 5)"), std::string::npos) << front.at("notes");
+  EXPECT_EQ(front.at("notes").find("enclosed"), std::string::npos) << front.at("notes");
+  const CsvRow inside = run("light_inside", "[0, 0, 0]");
+  EXPECT_EQ(inside.at("hit_fraction"), "1.0000");
+  EXPECT_NE(inside.at("notes").find("scene light 1 of 1 enclosed"), std::string::npos) << inside.at("notes");
+}
+
 TEST(HarnessRun, ConfigCameraGivesThePrimaryViewAndSecondarySetsFollowIt) {
   // The same scene seen from a [[camera]] that faces it, and from one that faces away: every primary ray
   // then misses, and the shadow set, which starts at the primary hits, is skipped with the reason.

@@ -469,6 +469,22 @@ std::array<float, 3> read_vec3(const Source& src, const toml::node& node, const 
   return out;
 }
 
+// The scene a per-scene table ([[camera]], [[lights]]) names: present, a string, and a scene of the
+// experiment (required or optional).
+std::string read_table_scene(const Source& src, const toml::table& table, const std::string& kind,
+                             const ExperimentConfig& config) {
+  const auto* scene = table.get("scene");
+  if (!scene) src.fail(table, "[[" + kind + "]] has no scene (scene = \"...\", as in experiment.scenes)");
+  std::string name = read_string(src, *scene, kind + ".scene");
+  const auto& required = config.scenes;
+  const auto& optional = config.optional_scenes;
+  if (std::find(required.begin(), required.end(), name) == required.end() &&
+      std::find(optional.begin(), optional.end(), name) == optional.end())
+    src.fail(*scene, kind + ".scene = \"" + name +
+                         "\" is not a scene of this experiment (experiment.scenes or optional_scenes)");
+  return name;
+}
+
 // [[camera]]: each names a scene of the experiment (checked after [experiment] is read), once.
 void read_cameras(const Source& src, const toml::table& root, ExperimentConfig& config) {
   const auto* node = root.get("camera");
@@ -476,17 +492,10 @@ void read_cameras(const Source& src, const toml::table& root, ExperimentConfig& 
   for (const toml::table* table : read_table_array(src, *node, "camera")) {
     check_keys(src, *table, "[[camera]]", {"scene", "eye", "target", "up", "fov"});
     CameraConfig camera;
-    const auto* scene = table->get("scene");
-    if (!scene) src.fail(*table, "[[camera]] has no scene (scene = \"...\", as in experiment.scenes)");
-    camera.scene = read_string(src, *scene, "camera.scene");
-    const auto& required = config.scenes;
-    const auto& optional = config.optional_scenes;
-    if (std::find(required.begin(), required.end(), camera.scene) == required.end() &&
-        std::find(optional.begin(), optional.end(), camera.scene) == optional.end())
-      src.fail(*scene, "camera.scene = \"" + camera.scene +
-                           "\" is not a scene of this experiment (experiment.scenes or optional_scenes)");
+    camera.scene = read_table_scene(src, *table, "camera", config);
     if (config.camera_for(camera.scene))
-      src.fail(*scene, "scene \"" + camera.scene + "\" has two [[camera]] tables; give one view per scene");
+      src.fail(*table->get("scene"),
+               "scene \"" + camera.scene + "\" has two [[camera]] tables; give one view per scene");
     for (const char* key : {"eye", "target"})
       if (!table->get(key))
         src.fail(*table, std::string("[[camera]] has no ") + key + " (" + key + " = [x, y, z])");
@@ -524,17 +533,9 @@ void read_lights(const Source& src, const toml::table& root, ExperimentConfig& c
                "[[lights]] is for shadow sets with light_source = \"scene\", and no [[ray_set]] has one; "
                "add one, or remove the table");
     LightsConfig lights;
-    const auto* scene = table->get("scene");
-    if (!scene) src.fail(*table, "[[lights]] has no scene (scene = \"...\", as in experiment.scenes)");
-    lights.scene = read_string(src, *scene, "lights.scene");
-    const auto& required = config.scenes;
-    const auto& optional = config.optional_scenes;
-    if (std::find(required.begin(), required.end(), lights.scene) == required.end() &&
-        std::find(optional.begin(), optional.end(), lights.scene) == optional.end())
-      src.fail(*scene, "lights.scene = \"" + lights.scene +
-                           "\" is not a scene of this experiment (experiment.scenes or optional_scenes)");
+    lights.scene = read_table_scene(src, *table, "lights", config);
     if (config.lights_for(lights.scene))
-      src.fail(*scene,
+      src.fail(*table->get("scene"),
                "scene \"" + lights.scene + "\" has two [[lights]] tables; list all its lights in one");
     const auto* positions = table->get("positions");
     const std::string must = "lights.positions must be a list of 1 to " + std::to_string(kMaxLights) +

@@ -40,16 +40,22 @@ TopDownConfig top_down_config(const ParamSet& p) {
 // Wide trees are traced by the bvh4/bvh8 layouts, which test 4 triangles at once (traversal/wide_bvh.h).
 constexpr uint32_t kWideSahBlock = 4;
 
+ParamSpec sah_block_param(uint32_t default_block) {
+  return {"sah_block",
+          ParamType::kInt,
+          double(default_block),
+          1,
+          16,
+          "primitives per leaf block in the SAH: a leaf costs c_isect per started block (power of two)"};
+}
+
 // sah_block is declared by the wide builders, and by binned_sah (default 1, every primitive costed) so
 // that a binary tree meant for a wide collapse can be built with the wide leaves' costs, e.g. as the
 // source of a pass the collapse then reads (wide_collapse over reinsert over binned_sah with
 // sah_block=4): built per primitive, its smaller leaves survive the pass and the collapse.
 std::vector<ParamSpec> binned_params(uint32_t default_block = 0) {
   auto params = top_down_params();
-  if (default_block != 0)
-    params.push_back(
-        {"sah_block", ParamType::kInt, double(default_block), 1, 16,
-         "primitives per leaf block in the SAH: a leaf costs c_isect per started block (power of two)"});
+  if (default_block != 0) params.push_back(sah_block_param(default_block));
   const BinnedSahParams defaults;
   params.insert(params.begin(), {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins,
                                   "centroid bins per axis"},
@@ -228,7 +234,7 @@ SbvhParams sbvh_params(const ParamSet& p) {
   return s;
 }
 
-BuilderInfo sbvh_info() {
+std::vector<ParamSpec> sbvh_param_specs(uint32_t default_block = 0) {
   auto params = top_down_params();
   const SbvhParams defaults;
   // alpha and max_dup as doubles, so the CSV shows 1e-05 and 0.5 rather than their float roundings.
@@ -249,10 +255,35 @@ BuilderInfo sbvh_info() {
         "... and by at least node_overlap * node area (Embree's rule; 0: Stich et al.'s alone)"},
        {"max_dup", ParamType::kFloat, kDefaultMaxDup, 0, kSbvhMaxDup, "at most (1 + max_dup) * n references"},
        {"unsplit", ParamType::kInt, double(defaults.unsplit), 0, 1, "1: reference unsplitting"}});
+  if (default_block != 0) params.push_back(sah_block_param(default_block));
+  return params;
+}
+
+BuilderInfo sbvh_info() {
   return {"sbvh", "spatial-split BVH (Stich, Friedrich and Dietrich 2009), object and spatial binned SAH",
-          std::move(params),
+          sbvh_param_specs(),
           [](const BuildInput& input, const ParamSet& p) { return build_sbvh(input, sbvh_params(p)); },
           [](const ParamSet& p) { check_sbvh_params(sbvh_params(p)); }};
+}
+
+// Spatial splits on the direct wide recursion: each wide node splits its child of largest area, by the
+// better of the object and the spatial split, until it has `arity` children, as Embree's spatial-split
+// BVH8 builder does (kernels/bvh/bvh_builder_sah_spatial.cpp), rather than collapsing a binary SBVH.
+BuilderInfo wide_sbvh_info() {
+  auto params = sbvh_param_specs(kWideSahBlock);
+  params.insert(params.begin(), arity_param());
+  auto config = [](const ParamSet& p) {
+    SbvhParams s = sbvh_params(p);
+    s.top_down.arity = arity_of(p);
+    return s;
+  };
+  return {"wide_sbvh",
+          "spatial-split BVH built wide directly: the child of largest area is split, by an object or a "
+          "spatial split, until `arity` children (Stich et al. 2009 on Embree's BVHN builder)",
+          std::move(params),
+          [config](const BuildInput& input, const ParamSet& p) { return build_sbvh(input, config(p)); },
+          [config](const ParamSet& p) { check_sbvh_params(config(p), "wide_sbvh"); },
+          arity_of};
 }
 
 // The Morton-order builders: the code length as a choice, and the leaf parameters of the top-down
@@ -392,6 +423,7 @@ std::vector<BuilderInfo>& registry() {
       with_children_for_occlusion(wide_binned_sah_info()),
       with_children_for_occlusion(wide_collapse_info()),
       sbvh_info(),
+      with_children_for_occlusion(wide_sbvh_info()),
       reinsert_info(),
       treelet_info(),
       lbvh_info(),

@@ -660,8 +660,8 @@ class SbvhSplitter {
 
 }  // namespace
 
-void check_sbvh_params(const SbvhParams& params) {
-  const std::string name(kName);
+void check_sbvh_params(const SbvhParams& params, std::string_view builder) {
+  const std::string name(builder);
   auto check_bins = [&](const char* key, uint32_t bins) {
     if (bins < kMinBins || bins > kMaxBins)
       throw Error(name + ": " + key + " = " + std::to_string(bins) + " is outside [" +
@@ -676,11 +676,11 @@ void check_sbvh_params(const SbvhParams& params) {
   if (!(params.max_dup >= 0.0f && params.max_dup <= kSbvhMaxDup))
     throw Error(name + ": max_dup = " + std::to_string(params.max_dup) + " is outside [0, " +
                 std::to_string(kSbvhMaxDup) + "]");
-  check_config(params.top_down, kName);
+  check_config(params.top_down, builder);
 }
 
 Bvh build_sbvh(const BuildInput& input, const SbvhParams& params) {
-  check_sbvh_params(params);
+  check_sbvh_params(params, kName);
   check_prim_count(input.size(), kName);
   const std::size_t n = input.size();
   if (input.triangles.size() != n)

@@ -15,6 +15,7 @@
 /// spatial-split builder does. The tree is the same for any thread count.
 
 #include <cstdint>
+#include <string_view>
 
 #include "builders/binned_sah.h"
 #include "builders/top_down.h"
@@ -53,7 +54,7 @@ inline constexpr float kSbvhMaxDup = 4.0f;
 /// Builds an SBVH of `input`, whose `triangles` must be given (the clipping needs them).
 Bvh build_sbvh(const BuildInput& input, const SbvhParams& params);
 
-/// Rejects parameters out of range or inconsistent; the message names the parameter and value.
-void check_sbvh_params(const SbvhParams& params);
+/// Rejects parameters out of range or inconsistent; the message names the builder, parameter and value.
+void check_sbvh_params(const SbvhParams& params, std::string_view builder = "sbvh");
 
 }  // namespace sahbench

@@ -78,6 +78,7 @@ inline std::vector<BuilderVariant> builder_variants() {
   out.push_back(
       {"sbvh",
        {{"alpha", "0"}, {"max_dup", "2"}, {"max_leaf", "1"}, {"spatial_bins", "256"}, {"c_trav", "3"}}});
+  out.push_back({"wide_sbvh", {{"arity", "4"}, {"alpha", "0"}, {"max_leaf", "1"}}});
   // The bottom-up builders: 63-bit codes, Karras's pass beside the default Apetrei's, single-primitive
   // leaves, and a coarser collapse.
   out.push_back({"lbvh", {{"bits", "63"}}});

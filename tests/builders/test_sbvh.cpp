@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -111,6 +112,35 @@ TEST(Sbvh, CountsLeafBlocksSoThatItsWideCollapseFillsThem) {
   EXPECT_GT(refs_per_leaf(from_sbvh), 0.8 * refs_per_leaf(from_binned));
 }
 
+// The direct wide build with spatial splits: nodes of up to eight children, references within the
+// budget, and a lower SAH than the same recursion without spatial splits (wide_binned_sah).
+TEST(Sbvh, WideBuildSplitsSpatiallyWithinBudget) {
+  const auto& tris = needles();
+  const Bvh wide = test::build_tree("wide_sbvh", tris);
+  const Bvh binned = test::build_tree("wide_binned_sah", tris);
+  const ValidationReport report = validate(wide, std::span<const Triangle>(tris));
+  ASSERT_TRUE(report.ok()) << report.summary();
+  EXPECT_TRUE(test::leaves_hold_parts_of_their_triangles(wide, tris));
+  EXPECT_EQ(wide.arity, 8u);
+  uint32_t widest = 0;
+  for (const Node& node : wide.nodes) widest = std::max<uint32_t>(widest, node.child_count);
+  EXPECT_EQ(widest, 8u);
+  EXPECT_GT(wide.prim_refs.size(), tris.size());
+  EXPECT_LE(wide.prim_refs.size(), static_cast<std::size_t>(std::floor(1.5 * double(tris.size()))));
+  SahCost cost;
+  cost.block = 4;
+  EXPECT_LT(sah_cost(wide, cost), 0.95 * sah_cost(binned, cost));
+  // Without spatial splits it is the direct wide binned build itself.
+  EXPECT_TRUE(test::build_tree("wide_sbvh", tris, {{"alpha", "1"}}) == binned);
+
+  const auto rays = test::random_rays(tris, kSanitized ? 300 : 1000, 12);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const Hit ref = brute_force_closest(tris, rays[i]);
+    ASSERT_TRUE(test::same_closest_hit(closest_hit(wide, tris, rays[i]), ref, tris, rays[i])) << "ray " << i;
+    ASSERT_EQ(any_hit(wide, tris, rays[i]), brute_force_any(tris, rays[i])) << "ray " << i;
+  }
+}
+
 TEST(Sbvh, AlphaOneTurnsSpatialSplitsOff) {
   for (const auto& tris : {needles(), test::random_triangles(5000, 3, 10.0f, 8.0f)}) {
     const Bvh bvh = test::build_tree("sbvh", tris, {{"alpha", "1"}});
@@ -122,12 +152,13 @@ TEST(Sbvh, AlphaOneTurnsSpatialSplitsOff) {
 TEST(Sbvh, SameTreeForAnyThreadCount) {
   // Large enough for parallel clipping, binning, partitioning and subtree tasks: needles with spatial
   // splits tried wherever they may pay and a large budget, and a random soup with the defaults.
-  const BuilderInfo& info = find_builder("sbvh");
   const std::size_t n = kSanitized ? 20000 : 30000;
-  const std::pair<std::vector<Triangle>, ParamOverrides> cases[] = {
-      {generate_needles(n, 9, 50.0), {{"alpha", "0"}, {"max_dup", "1"}}},
-      {test::random_triangles(n, 77, 40.0f), {}}};
-  for (const auto& [tris, overrides] : cases) {
+  const std::tuple<const char*, std::vector<Triangle>, ParamOverrides> cases[] = {
+      {"sbvh", generate_needles(n, 9, 50.0), {{"alpha", "0"}, {"max_dup", "1"}}},
+      {"sbvh", test::random_triangles(n, 77, 40.0f), {}},
+      {"wide_sbvh", generate_needles(n, 9, 50.0), {{"max_dup", "1"}}}};
+  for (const auto& [name, tris, overrides] : cases) {
+    const BuilderInfo& info = find_builder(name);
     const BuildInput input = BuildInput::from_triangles(tris);
     const ParamSet params = resolve_params(info.name, info.params, overrides);
     auto build_with = [&](int threads) {
@@ -136,7 +167,8 @@ TEST(Sbvh, SameTreeForAnyThreadCount) {
     };
     const Bvh one = build_with(1);
     ASSERT_GT(one.prim_refs.size(), tris.size());
-    EXPECT_TRUE(one == build_with(3)) << params.to_string() << ": 1 and 3 threads give different trees";
+    EXPECT_TRUE(one == build_with(3))
+        << name << " [" << params.to_string() << "]: 1 and 3 threads give different trees";
   }
 }
 
@@ -179,6 +211,13 @@ TEST(Sbvh, RejectsBadParametersAndMissingTriangles) {
   EXPECT_THROW(resolve_params(info.name, info.params, {{"alpha", "2"}}), Error);
   EXPECT_THROW(resolve_params(info.name, info.params, {{"max_dup", "-0.1"}}), Error);
   EXPECT_THROW(resolve_params(info.name, info.params, {{"spatial_bins", "2"}}), Error);
+  const BuilderInfo& wide = find_builder("wide_sbvh");
+  try {
+    wide.check(resolve_params(wide.name, wide.params, {{"arity", "6"}}));
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("wide_sbvh: arity = 6"), std::string::npos) << e.what();
+  }
   const auto tris = test::random_triangles(10, 1);
   BuildInput input = BuildInput::from_triangles(tris);
   input.triangles = {};

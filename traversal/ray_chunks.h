@@ -16,14 +16,24 @@ namespace sahbench {
 /// Calls `body(begin, end)` on the chunks [i * chunk, (i + 1) * chunk) that cover [0, count) (the last one
 /// shorter), in parallel. Chunks start at multiples of `chunk`, so that a packet kernel's packets (a
 /// divisor of it) hold the rays the ray set put side by side, as Embree's packet calls get them.
+///
+/// Each run of kChunksPerTask chunks is a task of its own (simple_partitioner), as the harness runs
+/// Embree's 1024-ray chunks (embree_trace.cpp), so that threads end a ray set at most one task apart.
+/// TBB's default auto_partitioner splits a range only when a thread steals from it: where rays' costs
+/// vary across the image, a set ended with one thread alone on a long run of chunks. A task per chunk
+/// costs its scheduling on every chunk, which shows on cheap primary rays; chunks handed out one at a
+/// time from a shared counter, the threads taking neighbouring tiles in turn, traced slower at 2 threads.
+inline constexpr std::size_t kChunksPerTask = 4;
+
 template <class Body>
 void for_each_ray_chunk(std::size_t count, std::size_t chunk, Body body) {
   const std::size_t chunks = (count + chunk - 1) / chunk;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i < r.end(); ++i)
-                        body(i * chunk, std::min(count, (i + 1) * chunk));
-                    });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, chunks, kChunksPerTask),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) body(i * chunk, std::min(count, (i + 1) * chunk));
+      },
+      tbb::simple_partitioner());
 }
 
 /// The sum of `counts(begin, end)` (the TraceCounts of rays [begin, end)) over chunks of at most

@@ -187,7 +187,7 @@ BuilderInfo wide_collapse_info() {
               sbvh.bins = binary.bins;
               sbvh.adaptive_bins = binary.adaptive_bins;
               sbvh.top_down = binary.top_down;
-              tree = build_sbvh(input, sbvh);
+              tree = build_sbvh(input, sbvh, "wide_collapse");
             } else {
               tree = build_binned_sah(input, binary);
             }
@@ -260,10 +260,11 @@ std::vector<ParamSpec> sbvh_param_specs(uint32_t default_block = 0) {
 }
 
 BuilderInfo sbvh_info() {
-  return {"sbvh", "spatial-split BVH (Stich, Friedrich and Dietrich 2009), object and spatial binned SAH",
-          sbvh_param_specs(),
-          [](const BuildInput& input, const ParamSet& p) { return build_sbvh(input, sbvh_params(p)); },
-          [](const ParamSet& p) { check_sbvh_params(sbvh_params(p)); }};
+  return {
+      "sbvh", "spatial-split BVH (Stich, Friedrich and Dietrich 2009), object and spatial binned SAH",
+      sbvh_param_specs(),
+      [](const BuildInput& input, const ParamSet& p) { return build_sbvh(input, sbvh_params(p), "sbvh"); },
+      [](const ParamSet& p) { check_sbvh_params(sbvh_params(p), "sbvh"); }};
 }
 
 // Spatial splits on the direct wide recursion: each wide node splits its child of largest area, by the
@@ -281,7 +282,9 @@ BuilderInfo wide_sbvh_info() {
           "spatial-split BVH built wide directly: the child of largest area is split, by an object or a "
           "spatial split, until `arity` children (Stich et al. 2009 on Embree's BVHN builder)",
           std::move(params),
-          [config](const BuildInput& input, const ParamSet& p) { return build_sbvh(input, config(p)); },
+          [config](const BuildInput& input, const ParamSet& p) {
+            return build_sbvh(input, config(p), "wide_sbvh");
+          },
           [config](const ParamSet& p) { check_sbvh_params(config(p), "wide_sbvh"); },
           arity_of};
 }

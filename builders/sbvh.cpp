@@ -679,17 +679,18 @@ void check_sbvh_params(const SbvhParams& params, std::string_view builder) {
   check_config(params.top_down, builder);
 }
 
-Bvh build_sbvh(const BuildInput& input, const SbvhParams& params) {
-  check_sbvh_params(params, kName);
-  check_prim_count(input.size(), kName);
+Bvh build_sbvh(const BuildInput& input, const SbvhParams& params, std::string_view builder) {
+  check_sbvh_params(params, builder);
+  check_prim_count(input.size(), builder);
+  const std::string name(builder);
   const std::size_t n = input.size();
   if (input.triangles.size() != n)
-    throw Error(std::string(kName) + ": needs the triangles in the BuildInput (" +
-                std::to_string(input.triangles.size()) + " triangles for " + std::to_string(n) + " bounds)");
+    throw Error(name + ": needs the triangles in the BuildInput (" + std::to_string(input.triangles.size()) +
+                " triangles for " + std::to_string(n) + " bounds)");
   if (n == 0) return Bvh{};
   const auto spare = static_cast<uint64_t>(std::floor(double(params.max_dup) * double(n)));
   if (n + spare > kMaxCapacity)
-    throw Error(std::string(kName) + ": " + std::to_string(n) +
+    throw Error(name + ": " + std::to_string(n) +
                 " primitives with max_dup = " + std::to_string(params.max_dup) + " exceed the limit of " +
                 std::to_string(kMaxCapacity) + " references");
   PrimRefArray refs(n + spare);

@@ -51,10 +51,11 @@ struct SbvhParams {
 
 inline constexpr float kSbvhMaxDup = 4.0f;
 
-/// Builds an SBVH of `input`, whose `triangles` must be given (the clipping needs them).
-Bvh build_sbvh(const BuildInput& input, const SbvhParams& params);
+/// Builds an SBVH of `input`, whose `triangles` must be given (the clipping needs them). Errors name
+/// `builder`, the registered builder that asked for the tree.
+Bvh build_sbvh(const BuildInput& input, const SbvhParams& params, std::string_view builder);
 
 /// Rejects parameters out of range or inconsistent; the message names the builder, parameter and value.
-void check_sbvh_params(const SbvhParams& params, std::string_view builder = "sbvh");
+void check_sbvh_params(const SbvhParams& params, std::string_view builder);
 
 }  // namespace sahbench

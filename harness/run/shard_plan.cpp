@@ -45,7 +45,8 @@ double relative_build_cost(const BuilderRun& run) {
   if (run.is_embree())
     return run.quality == EmbreeQuality::kHigh ? 1.0 : run.quality == EmbreeQuality::kLow ? 0.2 : 0.4;
   static const std::map<std::string, double, std::less<>> known = {
-      {"binned_sah", 1.0}, {"wide_binned_sah", 1.2}, {"sweep_sah", 3.0}, {"sbvh", 4.0}, {"lbvh", 0.3},
+      {"binned_sah", 1.0}, {"wide_binned_sah", 1.2}, {"sweep_sah", 3.0},
+      {"sbvh", 4.0},       {"wide_sbvh", 4.0},       {"lbvh", 0.3},
       {"ploc", 1.5},       {"wide_collapse", 2.5}};
   const auto it = known.find(run.name);
   return it == known.end() ? 2.0 : it->second;  // passes over a source tree (reinsertion, treelets)

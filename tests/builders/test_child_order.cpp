@@ -96,7 +96,7 @@ TEST(ChildOrder, EveryWideBuilderWritesTheOcclusionOrder) {
     ++wide_builders;
     expect_ordered(bvh, tris, sah_cost_of(params));
   }
-  EXPECT_GE(wide_builders, 2) << "wide_binned_sah and wide_collapse";
+  EXPECT_GE(wide_builders, 3) << "wide_binned_sah, wide_collapse and wide_sbvh";
 }
 
 }  // namespace

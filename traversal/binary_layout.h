@@ -1,8 +1,9 @@
 #pragma once
 // What the two binary layouts, bvh2 (layouts.cpp) and bvh2_packed (packed_bvh2.cpp), do alike with a
-// batch of rays: chunks of kBinaryRayChunk rays as tasks, each traced one ray at a time with several walks
-// in flight (detail::trace_walks) or in packets of 8 or 16 rays (detail::trace_in_packets). They differ
-// in the walk, the packet kernel and what a closest hit's triangle is.
+// batch of rays: chunks of kBinaryRayChunk rays, a few to a task (ray_chunks.h), each traced one ray at a
+// time with several walks in flight (detail::trace_walks) or in packets of 8 or 16 rays
+// (detail::trace_in_packets). They differ in the walk, the packet kernel and what a closest hit's triangle
+// is.
 
 #include <cstddef>
 #include <cstdint>

@@ -1,10 +1,11 @@
 #pragma once
-// How layouts spread a batch of rays over TBB tasks: chunks of a fixed number of rays, each a task (the
+// How layouts spread a batch of rays over TBB tasks: chunks of a fixed number of rays, a few to a task (the
 // harness calls a layout once per batch, the layout its kernel once per chunk). Internal to the harness.
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/partitioner.h>
 
 #include <algorithm>
 #include <cstddef>
@@ -17,21 +18,23 @@ namespace sahbench {
 /// shorter), in parallel. Chunks start at multiples of `chunk`, so that a packet kernel's packets (a
 /// divisor of it) hold the rays the ray set put side by side, as Embree's packet calls get them.
 ///
-/// Each run of kChunksPerTask chunks is a task of its own (simple_partitioner), as the harness runs
-/// Embree's 1024-ray chunks (embree_trace.cpp), so that threads end a ray set at most one task apart.
-/// TBB's default auto_partitioner splits a range only when a thread steals from it: where rays' costs
-/// vary across the image, a set ended with one thread alone on a long run of chunks. A task per chunk
-/// costs its scheduling on every chunk, which shows on cheap primary rays; chunks handed out one at a
-/// time from a shared counter, the threads taking neighbouring tiles in turn, traced slower at 2 threads.
+/// Every run of kChunksPerTask chunks is a task of its own, as the harness runs each of Embree's 1024-ray
+/// chunks (embree_trace.cpp), so that the threads end a ray set at most one task apart. TBB's default
+/// auto_partitioner splits a range only when a thread steals from it: where rays' costs vary across the
+/// image, a set could end with one thread alone on a long run of chunks. Fewer chunks per task cost
+/// their scheduling more often, which shows on cheap primary rays.
 inline constexpr std::size_t kChunksPerTask = 4;
 
 template <class Body>
 void for_each_ray_chunk(std::size_t count, std::size_t chunk, Body body) {
   const std::size_t chunks = (count + chunk - 1) / chunk;
+  const std::size_t tasks = (chunks + kChunksPerTask - 1) / kChunksPerTask;
   tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, chunks, kChunksPerTask),
+      tbb::blocked_range<std::size_t>(0, tasks, 1),
       [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) body(i * chunk, std::min(count, (i + 1) * chunk));
+        const std::size_t last = std::min(chunks, r.end() * kChunksPerTask);
+        for (std::size_t i = r.begin() * kChunksPerTask; i < last; ++i)
+          body(i * chunk, std::min(count, (i + 1) * chunk));
       },
       tbb::simple_partitioner());
 }

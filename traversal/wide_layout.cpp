@@ -12,8 +12,8 @@
 namespace sahbench {
 namespace {
 
-// Rays per kernel call: their WideRay set-ups (80 bytes each) stay in L1 and one task amortises the
-// scheduling, as kRayChunk does for the binary layouts.
+// Rays per kernel call: their WideRay set-ups (80 bytes each) stay in L1, as kBinaryRayChunk's rays do
+// for the binary layouts.
 constexpr std::size_t kWideChunk = 256;
 static_assert(kWideChunk % kMaxWidePacket == 0, "chunks hold whole packets");
 

@@ -42,6 +42,23 @@ const std::vector<Triangle>& needles() {
   return tris;
 }
 
+std::size_t needle_rays() {
+  return kSanitized ? 300 : 1000;
+}
+
+// Closest and any hits of `bvh` over `tris` against brute force on needle_rays() random rays from `seed`,
+// stopping at the first mismatch; `hits` counts the rays that hit.
+void expect_brute_force_hits(const Bvh& bvh, const std::vector<Triangle>& tris, uint64_t seed,
+                             std::size_t& hits) {
+  const auto rays = test::random_rays(tris, needle_rays(), seed);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const Hit ref = brute_force_closest(tris, rays[i]);
+    hits += ref.found();
+    ASSERT_TRUE(test::same_closest_hit(closest_hit(bvh, tris, rays[i]), ref, tris, rays[i])) << "ray " << i;
+    ASSERT_EQ(any_hit(bvh, tris, rays[i]), brute_force_any(tris, rays[i])) << "ray " << i;
+  }
+}
+
 TEST(Sbvh, NeedlesSameHitsAsBruteForceWithSplitsWithinBudget) {
   const auto& tris = needles();
   const Bvh sbvh = test::build_tree("sbvh", tris);
@@ -58,15 +75,9 @@ TEST(Sbvh, NeedlesSameHitsAsBruteForceWithSplitsWithinBudget) {
   EXPECT_LT(sah_cost(test::build_tree("sbvh", tris, {{"max_dup", "1"}}), cost),
             0.75 * sah_cost(binned, cost));
 
-  const auto rays = test::random_rays(tris, kSanitized ? 300 : 1000, 11);
   std::size_t hits = 0;
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    const Hit ref = brute_force_closest(tris, rays[i]);
-    hits += ref.found();
-    ASSERT_TRUE(test::same_closest_hit(closest_hit(sbvh, tris, rays[i]), ref, tris, rays[i])) << "ray " << i;
-    ASSERT_EQ(any_hit(sbvh, tris, rays[i]), brute_force_any(tris, rays[i])) << "ray " << i;
-  }
-  EXPECT_GT(hits, rays.size() / 20);
+  ASSERT_NO_FATAL_FAILURE(expect_brute_force_hits(sbvh, tris, 11, hits));
+  EXPECT_GT(hits, needle_rays() / 20);
 }
 
 TEST(Sbvh, DuplicatesStayWithinTheBudget) {
@@ -136,12 +147,8 @@ TEST(Sbvh, WideBuildSplitsSpatiallyWithinBudget) {
   // Without spatial splits it is the direct wide binned build itself.
   EXPECT_TRUE(test::build_tree("wide_sbvh", tris, {{"alpha", "1"}}) == binned);
 
-  const auto rays = test::random_rays(tris, kSanitized ? 300 : 1000, 12);
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    const Hit ref = brute_force_closest(tris, rays[i]);
-    ASSERT_TRUE(test::same_closest_hit(closest_hit(wide, tris, rays[i]), ref, tris, rays[i])) << "ray " << i;
-    ASSERT_EQ(any_hit(wide, tris, rays[i]), brute_force_any(tris, rays[i])) << "ray " << i;
-  }
+  std::size_t hits = 0;
+  expect_brute_force_hits(wide, tris, 12, hits);
 }
 
 TEST(Sbvh, AlphaOneTurnsSpatialSplitsOff) {

@@ -749,6 +749,7 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, c
 // Two consecutive blocks, 8 lanes: intersect_block_watertight<true> lane for lane (watertight_in_lanes on
 // 256-bit registers, each lane the scalar test's operations), then each hit's distance refined in double.
 // Bits 0-3 are the first block's lanes, 4-7 the second's.
+template <bool kRefine>
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_watertight(const TriangleBlock* b, const WideRay& r,
                                                                 float tmin, float tmax, float* t_out,
                                                                 float* u_out, float* v_out) {
@@ -771,7 +772,7 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_watertight(const TriangleBl
   const uint32_t mask =
       watertight_in_lanes<Ops256>(vertex, org, shear, pair_lanes_valid(b[0], b[1]), _mm256_set1_ps(tmin),
                                   _mm256_set1_ps(tmax), t_out, u_out, v_out, in_double);
-  if (!mask) return 0;
+  if (!kRefine || !mask) return mask;
   constexpr uint32_t kLow = (1u << kBlockWidth) - 1;
   return refine_lanes<false>(b[0], r, tmin, tmax, mask & kLow, t_out) |
          refine_lanes<false>(b[1], r, tmin, tmax, mask >> kBlockWidth, t_out + kBlockWidth) << kBlockWidth;
@@ -967,6 +968,24 @@ SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t 
   return {node.child[i], node.count[i], t_entry[i]};
 }
 
+// Any hit: the first lane of `lanes` (hits of `block` at the float distances in t) that stands goes into
+// `best`; false when none does. A watertight float hit near either end of the interval is kept only where
+// its refined distance lies in it (triangle_tests.h: WatertightTriangleTest::intersect_any).
+template <TriangleTestKind kTri>
+SAHBENCH_KERNEL_INLINE bool take_any_hit(const TriangleBlock& block, const WideRay& r, uint32_t lanes,
+                                         float* t, float tmax, Hit& best) {
+  if (!lanes) return false;
+  if constexpr (kTri == TriangleTestKind::kWatertight) {
+    const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
+    if (!lane_range_holds(block, r, i, t[i], r.tmin, tmax)) [[unlikely]] {
+      lanes = refine_lanes<true>(block, r, r.tmin, tmax, lanes, t);
+      if (!lanes) return false;
+    }
+  }
+  best = {block.prim[__builtin_ctz(lanes)], t[__builtin_ctz(lanes)], 0.0f, 0.0f};
+  return true;
+}
+
 // The blocks of a leaf against one ray. Closest hit: hits closer than best_t (or as close with a lower
 // primitive index) go into `best`, and false is returned. Any hit: true on the first hit, in `best`.
 template <TriangleTestKind kTri, bool kAnyHit, bool kCount>
@@ -986,7 +1005,7 @@ SAHBENCH_KERNEL_INLINE bool intersect_leaf(const BlockOf<kTri>* blocks, uint32_t
       alignas(32) float t[8], u[8], v[8];
       uint32_t lanes;
       if constexpr (kTri == TriangleTestKind::kWatertight) {
-        lanes = intersect_block_pair_watertight(blocks + b, r, r.tmin, best_t, t, u, v);
+        lanes = intersect_block_pair_watertight<true>(blocks + b, r, r.tmin, best_t, t, u, v);
       } else if constexpr (kTri == TriangleTestKind::kMollerTrumboreNormal) {
         lanes = intersect_block_pair_mtn(blocks + b, r, r.tmin, best_t, t, u, v);
       } else {
@@ -1003,6 +1022,17 @@ SAHBENCH_KERNEL_INLINE bool intersect_leaf(const BlockOf<kTri>* blocks, uint32_t
       }
     }
   }
+  if constexpr (kAnyHit && kTri == TriangleTestKind::kWatertight && !kCount) {
+    // Any hit with the watertight test: two blocks at a time, the first block's hits taken before the
+    // second's, so the same hit as block by block.
+    for (; b + 1 < count; b += 2) {
+      alignas(32) float t[8], u[8], v[8];
+      const uint32_t lanes = intersect_block_pair_watertight<false>(blocks + b, r, r.tmin, best_t, t, u, v);
+      if (take_any_hit<kTri>(tri_part(blocks[b]), r, lanes & 0xFu, t, best_t, best) ||
+          take_any_hit<kTri>(tri_part(blocks[b + 1]), r, lanes >> kBlockWidth, t + kBlockWidth, best_t, best))
+        return true;
+    }
+  }
 #endif
   for (; b < count; ++b) {
     alignas(16) float t[kBlockWidth], u[kBlockWidth], v[kBlockWidth];
@@ -1010,19 +1040,7 @@ SAHBENCH_KERNEL_INLINE bool intersect_leaf(const BlockOf<kTri>* blocks, uint32_t
     const TriangleBlock& block = tri_part(blocks[b]);
     if constexpr (kCount) counts->prim_tests += occupied_lanes(block);
     if constexpr (kAnyHit) {
-      if (lanes) {
-        // A watertight float hit near either end of the interval is kept only where its refined distance
-        // lies in it (triangle_tests.h: WatertightTriangleTest::intersect_any).
-        if constexpr (kTri == TriangleTestKind::kWatertight) {
-          const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
-          if (!lane_range_holds(block, r, i, t[i], r.tmin, best_t)) [[unlikely]] {
-            lanes = refine_lanes<true>(block, r, r.tmin, best_t, lanes, t);
-            if (!lanes) continue;
-          }
-        }
-        best = {block.prim[__builtin_ctz(lanes)], t[__builtin_ctz(lanes)], 0.0f, 0.0f};
-        return true;
-      }
+      if (take_any_hit<kTri>(block, r, lanes, t, best_t, best)) return true;
     } else {
       // Closer, or as close with a lower primitive index (the tie rule of bvh2_traversal.h).
       for (; lanes; lanes &= lanes - 1) {

@@ -56,6 +56,8 @@ static_assert(sizeof(WideNode<4>) == 128 && sizeof(WideNode<8>) == 256, "node fo
 
 /// Triangles tested together by the 4-wide triangle kernels.
 inline constexpr uint32_t kBlockWidth = 4;
+/// A block's lanes as the low bits of a mask.
+inline constexpr uint32_t kBlockLanes = (1u << kBlockWidth) - 1;
 
 /// What a TriangleBlock's v1 and v2 hold. The Möller–Trumbore test starts from the edges v1 - v0 and
 /// v2 - v0; stored once at compile time (as Embree's Triangle4 stores e1 and e2), they are the same

@@ -407,7 +407,7 @@ inline uint32_t mtn_lanes_in_double(const NormalBlock* b, uint32_t mask, uint32_
 
 // The lanes of block b that the float test cannot answer: all when the ray is out of its range.
 SAHBENCH_KERNEL_INLINE uint32_t mtn_double_lanes(const NormalBlock& b, const WideRay& r) {
-  return r.mtn_in_double ? (1u << kBlockWidth) - 1 : b.in_double;
+  return r.mtn_in_double ? kBlockLanes : b.in_double;
 }
 
 // One lane of MollerTrumboreNormalTest: the scalar kernels' test, and the SSE kernels' (SSE has no fused
@@ -746,9 +746,9 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_mtn(const NormalBlock* b, c
   return hits;
 }
 
-// Two consecutive blocks, 8 lanes: intersect_block_watertight<true> lane for lane (watertight_in_lanes on
-// 256-bit registers, each lane the scalar test's operations), then each hit's distance refined in double.
-// Bits 0-3 are the first block's lanes, 4-7 the second's.
+// Two consecutive blocks, 8 lanes: intersect_block_watertight<kRefine> lane for lane (watertight_in_lanes
+// on 256-bit registers, each lane the scalar test's operations), both blocks against one tmax. Bits 0-3
+// are the first block's lanes, 4-7 the second's.
 template <bool kRefine>
 SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_watertight(const TriangleBlock* b, const WideRay& r,
                                                                 float tmin, float tmax, float* t_out,
@@ -773,8 +773,7 @@ SAHBENCH_KERNEL_INLINE uint32_t intersect_block_pair_watertight(const TriangleBl
       watertight_in_lanes<Ops256>(vertex, org, shear, pair_lanes_valid(b[0], b[1]), _mm256_set1_ps(tmin),
                                   _mm256_set1_ps(tmax), t_out, u_out, v_out, in_double);
   if (!kRefine || !mask) return mask;
-  constexpr uint32_t kLow = (1u << kBlockWidth) - 1;
-  return refine_lanes<false>(b[0], r, tmin, tmax, mask & kLow, t_out) |
+  return refine_lanes<false>(b[0], r, tmin, tmax, mask & kBlockLanes, t_out) |
          refine_lanes<false>(b[1], r, tmin, tmax, mask >> kBlockWidth, t_out + kBlockWidth) << kBlockWidth;
 }
 #endif
@@ -968,6 +967,20 @@ SAHBENCH_KERNEL_INLINE WideStackEntry descend(const WideNode<N>& node, uint32_t 
   return {node.child[i], node.count[i], t_entry[i]};
 }
 
+// Closest hit: the lanes of `lanes` (hits of `block` at t, u, v) that are closer than best_t, or as close
+// with a lower primitive index (the tie rule of bvh2_traversal.h), taken in lane order into `best`.
+SAHBENCH_KERNEL_INLINE void take_closest(const TriangleBlock& block, uint32_t lanes, const float* t,
+                                         const float* u, const float* v, Hit& best, float& best_t) {
+  for (; lanes; lanes &= lanes - 1) {
+    const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
+    const uint32_t prim = block.prim[i];
+    if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
+      best = {prim, t[i], u[i], v[i]};
+      best_t = t[i];
+    }
+  }
+}
+
 // Any hit: the first lane of `lanes` (hits of `block` at the float distances in t) that stands goes into
 // `best`; false when none does. A watertight float hit near either end of the interval is kept only where
 // its refined distance lies in it (triangle_tests.h: WatertightTriangleTest::intersect_any).
@@ -996,39 +1009,43 @@ SAHBENCH_KERNEL_INLINE bool intersect_leaf(const BlockOf<kTri>* blocks, uint32_t
   if constexpr (!kAnyHit && !kCount) {
     // Closest hit: two blocks at a time, 8 lanes. Möller–Trumbore compares t with tmax only at its end,
     // so testing the second block against the same tmax as the first finds the same closest hit (and tie)
-    // as testing it after the first. The watertight test refines each hit's distance, which the second
-    // block then does not meet: its eight lanes meet one tmax, as a block's four do, so where both blocks
-    // hit, the nearer refined distance wins (or the lower index at a tie), at most as far as block by
-    // block. Any hit keeps one block at a time: the first block often ends the ray, and the second's
-    // test was then wasted (-1% on two scenes).
+    // as testing it after the first. The watertight test lowers tmax to each hit's refined distance, so
+    // where the first block did and the second has hits, the second is tested again alone against the
+    // lowered tmax (both blocks of a leaf rarely hit): the hits are those of block by block.
     for (; b + 1 < count; b += 2) {
-      alignas(32) float t[8], u[8], v[8];
+      alignas(32) float t[2 * kBlockWidth], u[2 * kBlockWidth], v[2 * kBlockWidth];
       uint32_t lanes;
       if constexpr (kTri == TriangleTestKind::kWatertight) {
         lanes = intersect_block_pair_watertight<true>(blocks + b, r, r.tmin, best_t, t, u, v);
-      } else if constexpr (kTri == TriangleTestKind::kMollerTrumboreNormal) {
-        lanes = intersect_block_pair_mtn(blocks + b, r, r.tmin, best_t, t, u, v);
+        const float before = best_t;
+        take_closest(tri_part(blocks[b]), lanes & kBlockLanes, t, u, v, best, best_t);
+        lanes >>= kBlockWidth;
+        if (lanes && best_t != before)
+          lanes = intersect_block_watertight<true>(blocks[b + 1], r, r.tmin, best_t, t + kBlockWidth,
+                                                   u + kBlockWidth, v + kBlockWidth);
       } else {
-        const float eps = kTri == TriangleTestKind::kMollerTrumbore ? kWideMtEpsilon : 0.0f;
-        lanes = intersect_block_pair_mt(blocks + b, r, r.tmin, best_t, eps, t, u, v);
-      }
-      for (; lanes; lanes &= lanes - 1) {
-        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
-        const uint32_t prim = tri_part(blocks[b + i / 4]).prim[i % 4];
-        if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
-          best = {prim, t[i], u[i], v[i]};
-          best_t = t[i];
+        if constexpr (kTri == TriangleTestKind::kMollerTrumboreNormal) {
+          lanes = intersect_block_pair_mtn(blocks + b, r, r.tmin, best_t, t, u, v);
+        } else {
+          const float eps = kTri == TriangleTestKind::kMollerTrumbore ? kWideMtEpsilon : 0.0f;
+          lanes = intersect_block_pair_mt(blocks + b, r, r.tmin, best_t, eps, t, u, v);
         }
+        take_closest(tri_part(blocks[b]), lanes & kBlockLanes, t, u, v, best, best_t);
+        lanes >>= kBlockWidth;
       }
+      take_closest(tri_part(blocks[b + 1]), lanes, t + kBlockWidth, u + kBlockWidth, v + kBlockWidth, best,
+                   best_t);
     }
   }
   if constexpr (kAnyHit && kTri == TriangleTestKind::kWatertight && !kCount) {
     // Any hit with the watertight test: two blocks at a time, the first block's hits taken before the
-    // second's, so the same hit as block by block.
+    // second's, so the same hit as block by block. Möller–Trumbore keeps one block at a time: the first
+    // block often ends the ray, and its cheaper test made the second's wasted test cost more (-1% on two
+    // scenes).
     for (; b + 1 < count; b += 2) {
-      alignas(32) float t[8], u[8], v[8];
+      alignas(32) float t[2 * kBlockWidth], u[2 * kBlockWidth], v[2 * kBlockWidth];
       const uint32_t lanes = intersect_block_pair_watertight<false>(blocks + b, r, r.tmin, best_t, t, u, v);
-      if (take_any_hit<kTri>(tri_part(blocks[b]), r, lanes & 0xFu, t, best_t, best) ||
+      if (take_any_hit<kTri>(tri_part(blocks[b]), r, lanes & kBlockLanes, t, best_t, best) ||
           take_any_hit<kTri>(tri_part(blocks[b + 1]), r, lanes >> kBlockWidth, t + kBlockWidth, best_t, best))
         return true;
     }
@@ -1042,15 +1059,7 @@ SAHBENCH_KERNEL_INLINE bool intersect_leaf(const BlockOf<kTri>* blocks, uint32_t
     if constexpr (kAnyHit) {
       if (take_any_hit<kTri>(block, r, lanes, t, best_t, best)) return true;
     } else {
-      // Closer, or as close with a lower primitive index (the tie rule of bvh2_traversal.h).
-      for (; lanes; lanes &= lanes - 1) {
-        const uint32_t i = static_cast<uint32_t>(__builtin_ctz(lanes));
-        const uint32_t prim = block.prim[i];
-        if (t[i] < best_t || (t[i] == best_t && prim < best.prim)) {
-          best = {prim, t[i], u[i], v[i]};
-          best_t = t[i];
-        }
-      }
+      take_closest(block, lanes, t, u, v, best, best_t);
     }
   }
   return false;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <set>
 
@@ -121,8 +122,15 @@ ParamSet resolve_params_at(std::string_view builder, const std::vector<ParamSpec
     if (!seen.insert(key).second)
       throw Error(std::string(builder) + ": parameter '" + key + "' is given twice");
     if (it->spec.type == ParamType::kSource) source_names[name] = text;
+    if (it->spec.type == ParamType::kPath) {
+      // Absolute, so that builder_params and a run's fingerprint do not depend on the folder it was
+      // started from; the characters are checked on the path as recorded.
+      it->text = text.empty() ? text : std::filesystem::absolute(text).lexically_normal().string();
+      it->number = parse_value(builder, it->spec, it->text);
+      if (it->spec.path_identity) it->identity = it->spec.path_identity(it->text);
+      continue;
+    }
     it->number = parse_value(builder, it->spec, text);
-    if (it->spec.type == ParamType::kPath) it->text = text;
   }
   for (auto& value : values) {
     if (value.spec.type != ParamType::kSource) continue;
@@ -154,11 +162,16 @@ double ParamSet::get(std::string_view name) const {
 }
 
 std::string ParamSet::to_string() const {
+  const bool own_source = std::any_of(values_.begin(), values_.end(), [](const Value& v) {
+    return v.spec.type == ParamType::kSource && !v.source.shared();
+  });
   std::string out;
   for (const auto& value : values_) {
+    if (own_source && value.spec.shared_source_only) continue;
     out += (out.empty() ? "" : ";") + value.spec.name + "=";
     if (value.spec.type == ParamType::kPath) {
       out += value.text;
+      if (!value.identity.empty()) out += ";" + value.spec.name + "_hash=" + value.identity;
       continue;
     }
     if (value.spec.type != ParamType::kSource) {
@@ -203,8 +216,18 @@ const std::string& ParamSet::get_path(std::string_view name) const {
   return value.text;
 }
 
-ParamSpec path_param(std::string name, std::string help) {
-  return {std::move(name), ParamType::kPath, 0.0, 0.0, 0.0, std::move(help)};
+bool ParamSet::reads_files() const {
+  return std::any_of(values_.begin(), values_.end(), [](const Value& v) {
+    if (v.spec.type == ParamType::kPath) return !v.text.empty();
+    return v.spec.type == ParamType::kSource && !v.source.shared() && v.source.params->reads_files();
+  });
+}
+
+ParamSpec path_param(std::string name, std::string help,
+                     std::function<std::string(const std::string&)> identity) {
+  ParamSpec spec{std::move(name), ParamType::kPath, 0.0, 0.0, 0.0, std::move(help)};
+  spec.path_identity = std::move(identity);
+  return spec;
 }
 
 ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index,

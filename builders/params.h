@@ -11,6 +11,7 @@
 // `source=reinsert(iterations=2;...;source=binned_sah(bins=32;...))`.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -22,7 +23,8 @@ namespace sahbench {
 /// kChoice: one of a list of names, held as its index (min 0, max choices - 1) and written by name.
 /// kSource: a binary tree source, a registered builder or pass with its own parameters (SourceSpec).
 /// kPath: a file path, held as text and never opened here (builders do no file I/O); a config makes a
-/// relative one relative to the config's folder, the command line leaves it relative to the current one.
+/// relative one relative to the config's folder, the command line relative to the current one, and the
+/// resolved set holds it absolute, so that the same file is the same parameter from any folder.
 enum class ParamType { kInt, kFloat, kChoice, kSource, kPath };
 
 struct ParamSpec {
@@ -39,14 +41,22 @@ struct ParamSpec {
   /// (wide_collapse's bins and leaf sizes); their CSV form is the bare name. Any other source, or one of
   /// these given a nested parameter, is built with its own parameters over its own defaults.
   std::vector<std::string> shared_sources = {};
+  /// Applies only while the set's kSource parameter is a shared source (the pass's own binary build):
+  /// with any other source it is not recorded, and setting it away from its default is an error.
+  bool shared_source_only = false;
+  /// kPath: the file's identity (a hash of its contents) as text, given by whoever registers the
+  /// parameter, since builders do no file I/O. When set, the CSV form records it after the path as
+  /// NAME_hash, so that a run over a changed file is another run.
+  std::function<std::string(const std::string& path)> path_identity = {};
 };
 
 /// A kChoice parameter whose default is choices[default_index].
 ParamSpec choice_param(std::string name, std::vector<std::string> choices, uint32_t default_index,
                        std::string help);
 
-/// A kPath parameter, empty unless given.
-ParamSpec path_param(std::string name, std::string help);
+/// A kPath parameter, empty unless given; `identity` (if any) as ParamSpec::path_identity.
+ParamSpec path_param(std::string name, std::string help,
+                     std::function<std::string(const std::string&)> identity = {});
 
 /// A kSource parameter: the pass takes a binary tree from `default_source` unless another is named.
 ParamSpec source_param(std::string name, std::string default_source, std::string help,
@@ -71,12 +81,13 @@ struct SourceSpec {
 class ParamSet {
  public:
   /// One declared parameter and its value: a number (kChoice: the index), for kSource its source, for
-  /// kPath its text.
+  /// kPath its text and the file's identity (ParamSpec::path_identity, empty without one).
   struct Value {
     ParamSpec spec;
     double number = 0.0;
     SourceSpec source = {};
     std::string text = {};
+    std::string identity = {};
   };
 
   ParamSet() = default;
@@ -95,9 +106,12 @@ class ParamSet {
   const SourceSpec& get_source(std::string_view name) const;
   /// The text of a kPath parameter (empty when not given).
   const std::string& get_path(std::string_view name) const;
+  /// Whether any kPath parameter, here or in a source's parameters, names a file.
+  bool reads_files() const;
 
   /// "key=value;key=value" in declaration order, integers without a fraction, a source as
-  /// "NAME(its to_string())" unless shared: the CSV form.
+  /// "NAME(its to_string())" unless shared, a path followed by NAME_hash=IDENTITY where it has one, and
+  /// without the shared_source_only parameters where the source is not shared: the CSV form.
   std::string to_string() const;
 
  private:

@@ -122,24 +122,36 @@ void set_default(std::vector<ParamSpec>& params, const std::string& name, double
   it->default_value = value;
 }
 
-// The parameters that wide_collapse applies only to a shared source, its own binary build. Set away
-// from their defaults while the source has parameters of its own, they would be recorded but do nothing:
-// an error that says what to write instead.
+// The parameters that wide_collapse applies only to a shared source, its own binary build: with any other
+// source they are not recorded (ParamSpec::shared_source_only), and set away from their defaults they
+// would do nothing, so that is an error that says what to write instead.
+constexpr const char* kSharedSourceOnly[] = {"bins", "adaptive_bins", "min_leaf", "source_c_trav_scale",
+                                             "reinsert_iterations"};
+
 void check_unshared(const ParamSet& p, const char* builder) {
-  if (p.get_source("source").shared()) return;
-  for (const ParamSpec& spec : find_builder(builder).params)
-    for (const char* name :
-         {"bins", "adaptive_bins", "min_leaf", "source_c_trav_scale", "reinsert_iterations"})
-      if (spec.name == name && p.get(name) != spec.default_value) {
-        const std::string instead = spec.name == "source_c_trav_scale"
-                                        ? "give the source its own c_trav (source.c_trav=...)"
-                                    : spec.name == "reinsert_iterations"
-                                        ? "name the pass as the source (source=reinsert,source.source=...)"
-                                        : "give it to the source (source." + spec.name + "=...)";
-        throw Error(std::string(builder) + ": " + name +
-                    " applies only to a source named alone (binned_sah, sweep_sah or sbvh), not to source=" +
-                    p.get_source("source").name() + " with parameters of its own; " + instead);
-      }
+  const SourceSpec& source = p.get_source("source");
+  if (source.shared()) return;
+  for (const ParamSpec& spec : find_builder(builder).params) {
+    if (!spec.shared_source_only || p.get(spec.name) == spec.default_value) continue;
+    const bool source_has_it = source.params->has(spec.name);
+    const std::string instead =
+        spec.name == "source_c_trav_scale"
+            ? (source.params->has("c_trav") ? "give the source its own c_trav (source.c_trav=...)"
+                                            : "source=" + source.name() + " has no c_trav to scale")
+        : spec.name == "reinsert_iterations"
+            ? "name the pass as the source (source=reinsert,source.source=" + source.name() + ")"
+        : source_has_it ? "give it to the source (source." + spec.name + "=...)"
+                        : "source=" + source.name() + " has no such parameter";
+    throw Error(std::string(builder) + ": " + spec.name +
+                " applies only to binned_sah, sweep_sah or sbvh named alone as the source, not to source=" +
+                source.name() + "; " + instead);
+  }
+}
+
+void mark_shared_source_only(std::vector<ParamSpec>& params) {
+  for (ParamSpec& spec : params)
+    for (const char* name : kSharedSourceOnly)
+      if (spec.name == name) spec.shared_source_only = true;
 }
 
 BuilderInfo wide_collapse_info() {
@@ -162,6 +174,7 @@ BuilderInfo wide_collapse_info() {
        {"reinsert_iterations", ParamType::kInt, double(ReinsertParams{}.iterations), 0, 1000,
         "rounds of the reinsert pass on a source named alone before the collapse, stopping early once "
         "a round finds little to gain (0: that source's tree collapsed as built)"}});
+  mark_shared_source_only(params);
   return {"wide_collapse",
           "a binary SAH tree collapsed to `arity` children per node; build time includes the binary build",
           std::move(params),

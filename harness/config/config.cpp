@@ -378,6 +378,20 @@ void read_builders(const Source& src, const toml::table& root, ExperimentConfig&
       } catch (const Error& e) {
         src.fail(*table, "builder run '" + run.label() + "': " + e.what());
       }
+      if (!run.is_embree() && run.values.reads_files()) {
+        // A tree file holds one tree for one scene's triangles (its header's hash); any other scene, or
+        // another frame, would fail its build partway through the run.
+        const std::size_t scenes = config.scenes.size() + config.optional_scenes.size();
+        if (animation)
+          src.fail(*table, "builder run '" + run.label() +
+                               "' reads a tree file, which holds one tree for one set of triangles; an "
+                               "animation experiment builds a tree for every frame: measure the file in a "
+                               "static experiment");
+        if (scenes > 1)
+          src.fail(*table, "builder run '" + run.label() + "' reads a tree file, which fits one scene, but " +
+                               "this config has " + std::to_string(scenes) +
+                               " scenes: give the file a config of its own with its scene alone");
+      }
       const bool traced = run.is_embree() ||
                           std::any_of(config.layouts.begin(), config.layouts.end(), [&](const LayoutSpec& l) {
                             return find_layout(l.name).arity == run.arity;
@@ -572,10 +586,13 @@ BuilderRun parse_builder_run(std::string_view text) {
   run.name = std::string(text.substr(0, colon));
   if (run.name.empty()) throw Error("builder '" + std::string(text) + "' has no name");
   std::string_view rest = colon == std::string_view::npos ? "" : text.substr(colon + 1);
-  // "file:PATH" is short for "file:path=PATH".
-  if (run.name == "file" && !rest.empty() && rest.find('=') == std::string_view::npos) {
-    run.params.emplace_back("path", std::string(rest));
-    rest = {};
+  // "file:PATH" is short for "file:path=PATH", and "file:PATH,c_trav=2" for "file:path=PATH,c_trav=2".
+  if (run.name == "file" && !rest.empty()) {
+    const std::string_view first = rest.substr(0, rest.find(','));
+    if (first.find('=') == std::string_view::npos) {
+      run.params.emplace_back("path", std::string(first));
+      rest = first.size() == rest.size() ? std::string_view{} : rest.substr(first.size() + 1);
+    }
   }
   while (!rest.empty()) {
     const auto comma = rest.find(',');

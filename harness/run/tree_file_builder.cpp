@@ -1,5 +1,10 @@
 #include "harness/run/tree_file_builder.h"
 
+#include <array>
+#include <cstdint>
+#include <fstream>
+#include <string>
+
 #include "builders/registry.h"
 #include "core/error.h"
 #include "core/sah.h"
@@ -19,6 +24,23 @@ const std::string& path_of(const ParamSet& p) {
   return path;
 }
 
+// The file's contents as FNV-1a 64 of its bytes, so that a run over a changed file is another run (its
+// builder_params and fingerprint differ). Empty for a file that cannot be read: the header check, which
+// runs next, says why.
+std::string contents_hash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};
+  uint64_t hash = kFnv1aOffset;
+  std::array<char, 1 << 16> buffer;
+  while (in.read(buffer.data(), buffer.size()) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) {
+      hash ^= static_cast<unsigned char>(buffer[static_cast<std::size_t>(i)]);
+      hash *= kFnv1aPrime;
+    }
+  }
+  return hash_text(hash);
+}
+
 }  // namespace
 
 void register_tree_file_builder() {
@@ -31,7 +53,8 @@ void register_tree_file_builder() {
        "scene and validated; its build time is reading and checking the file",
        {path_param("path",
                    "the tree file: in a config relative to the config's folder, on the command line to the "
-                   "current one"),
+                   "current one; recorded absolute, with the file's hash as path_hash",
+                   contents_hash),
         {"c_trav", ParamType::kFloat, defaults.c_trav, 0, 1e6, "SAH cost of visiting an inner node"},
         {"c_isect", ParamType::kFloat, defaults.c_isect, 1e-6, 1e6, "SAH cost of one ray/triangle test"}},
        [](const BuildInput& input, const ParamSet& p) { return load_tree_file(path_of(p), input.triangles); },

@@ -180,11 +180,22 @@ TEST(Collapse, ASourceWithParametersOfItsOwnIsCollapsedAsGiven) {
     return "no error";
   };
   const std::string rounds = error_of({{"source", "ploc"}, {"reinsert_iterations", "0"}});
-  EXPECT_NE(rounds.find("reinsert_iterations applies only to a source named alone"), std::string::npos)
+  EXPECT_NE(rounds.find("reinsert_iterations applies only to binned_sah, sweep_sah or sbvh named alone"),
+            std::string::npos)
       << rounds;
   EXPECT_NE(rounds.find("source=reinsert"), std::string::npos) << rounds;
   const std::string scale = error_of({{"source", "ploc"}, {"source_c_trav_scale", "1"}});
   EXPECT_NE(scale.find("source.c_trav="), std::string::npos) << scale;
+  const std::string no_bins = error_of({{"source", "lbvh"}, {"bins", "4"}});
+  EXPECT_NE(no_bins.find("source=lbvh has no such parameter"), std::string::npos) << no_bins;
+  // Not recorded where they do nothing: the text after the source's own parameters holds none of them.
+  const std::string own = resolve_params(info.name, info.params, {{"source", "lbvh"}}).to_string();
+  const std::string after = own.substr(own.rfind(')') + 1);
+  for (const char* unused : {"bins=", "min_leaf=", "source_c_trav_scale=", "reinsert_iterations="})
+    EXPECT_EQ(after.find(unused), std::string::npos) << own;
+  EXPECT_NE(after.find("max_leaf="), std::string::npos) << own;
+  const std::string shared = resolve_params(info.name, info.params, {}).to_string();
+  EXPECT_NE(shared.find(";reinsert_iterations="), std::string::npos) << shared;
 }
 
 TEST(Collapse, OverflowingCostsKeepInnerNodesWhereLeavesWouldBeTooLarge) {

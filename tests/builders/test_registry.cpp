@@ -184,7 +184,7 @@ TEST(SourceChain, BadChainsAreErrorsThatNameThem) {
       [&] {
         collapse.check(resolve_named("wide_collapse", {{"source", "treelet"}, {"bins", "8"}}));
       },
-      {"bins applies only to a source named alone", "source.bins"});
+      {"bins applies only to binned_sah, sweep_sah or sbvh named alone", "source.bins"});
   collapse.check(resolve_named("wide_collapse", {{"source", "treelet"}, {"max_leaf", "4"}}));
   // A binary wide builder is a fine source.
   EXPECT_EQ(resolve_named("reinsert", {{"source", "wide_binned_sah"}, {"source.arity", "2"}})

@@ -432,7 +432,8 @@ TEST(HarnessConfigSource, BadSourcesNameKeyAndLine) {
   expect_error(wide("[builder.source]\nname = \"binned_sah\"\nmin_leaf = [1, 8]\nmax_leaf = 4\n"), 8,
                {"builder run", "below min_leaf = 8"});
   // wide_collapse's shared parameters mean nothing to a source with parameters of its own.
-  expect_error(wide("bins = 16\nsource = \"treelet\"\n"), 8, {"bins applies only to a source named alone"});
+  expect_error(wide("bins = 16\nsource = \"treelet\"\n"), 8,
+               {"bins applies only to binned_sah, sweep_sah or sbvh named alone"});
 }
 
 TEST(HarnessConfigEmbree, QualitySweepAndDefault) {

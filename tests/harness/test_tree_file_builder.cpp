@@ -140,11 +140,52 @@ TEST_F(TreeFileBuilder, CommandLinePathsAreRelativeToTheCurrentFolder) {
   std::filesystem::current_path(dir);
   BuilderRun shorthand = parse_builder_run("file:trees/t.sbt");
   BuilderRun keyed = parse_builder_run("file:path=trees/t.sbt,c_trav=2");
+  BuilderRun short_keyed = parse_builder_run("file:trees/t.sbt,c_trav=2");
   EXPECT_NO_THROW(resolve(shorthand));
   EXPECT_NO_THROW(resolve(keyed));
+  EXPECT_NO_THROW(resolve(short_keyed));
   std::filesystem::current_path(cwd);
-  EXPECT_EQ(shorthand.values.get_path("path"), "trees/t.sbt");
-  EXPECT_EQ(keyed.values.to_string(), "path=trees/t.sbt;c_trav=2;c_isect=1");
+  // Recorded absolute, so the same file reads the same from any folder, and with its contents' hash.
+  const std::string path = (dir / "trees" / "t.sbt").string();
+  EXPECT_EQ(shorthand.values.get_path("path"), path);
+  const std::string text = keyed.values.to_string();
+  EXPECT_EQ(text.find("path=" + path + ";path_hash=0x"), 0u) << text;
+  EXPECT_NE(text.find(";c_trav=2;c_isect=1"), std::string::npos) << text;
+  EXPECT_EQ(short_keyed.values.to_string(), text);
+}
+
+TEST_F(TreeFileBuilder, AnotherTreeInTheSameFileIsAnotherRun) {
+  const auto dir = fresh_dir("rewritten");
+  const auto path = dir / "t.sbt";
+  save_tree(kScene, "binned_sah", {}, path);
+  BuilderRun first = parse_builder_run("file:" + path.string());
+  resolve(first);
+  save_tree(kScene, "sweep_sah", {}, path);
+  BuilderRun second = parse_builder_run("file:" + path.string());
+  resolve(second);
+  EXPECT_NE(first.params_text(), second.params_text());
+  save_tree(kScene, "binned_sah", {}, path);
+  BuilderRun again = parse_builder_run("file:" + path.string());
+  resolve(again);
+  EXPECT_EQ(first.params_text(), again.params_text());
+}
+
+TEST_F(TreeFileBuilder, ConfigsWhereATreeFileCannotFitAreRefusedAsRead) {
+  const auto dir = fresh_dir("unfit");
+  save_tree(kScene, "binned_sah", {}, dir / "t.sbt");
+  const std::string head = "[experiment]\nname = \"t\"\nlayouts = [\"bvh2\"]\n";
+  const std::string builder = "[[builder]]\nname = \"file\"\npath = \"t.sbt\"\n";
+  const std::string rays = "[[ray_set]]\nkind = \"primary\"\nwidth = 8\nheight = 8\n";
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return dir / name;
+  };
+  const auto two = write("two.toml", head + "scenes = [\"" + std::string(kScene) +
+                                         "\", \"proc:soup:tris=100\"]\n" + builder + rays);
+  contains(error_of([&] { load_experiment_config(two); }), "two.toml:");
+  contains(error_of([&] { load_experiment_config(two); }), "fits one scene, but this config has 2 scenes");
+  const auto one = write("one.toml", head + "scenes = [\"" + std::string(kScene) + "\"]\n" + builder + rays);
+  EXPECT_NO_THROW(load_experiment_config(one));
 }
 
 TEST_F(TreeFileBuilder, BadPathsAreErrorsNamingThem) {
@@ -155,7 +196,7 @@ TEST_F(TreeFileBuilder, BadPathsAreErrorsNamingThem) {
   BuilderRun none = parse_builder_run("file");
   contains(error_of([&] { resolve(none); }), "file: parameter 'path' is required");
   BuilderRun separator = parse_builder_run("file:path=a;b.sbt");
-  contains(error_of([&] { resolve(separator); }), "file: parameter 'path' = 'a;b.sbt' has a character");
+  contains(error_of([&] { resolve(separator); }), "a;b.sbt' has a character a path parameter may not hold");
   std::ofstream(dir / "foreign.sbt") << "solid cube\n";
   BuilderRun foreign = parse_builder_run("file:" + (dir / "foreign.sbt").string());
   contains(error_of([&] { resolve(foreign); }), "not a sahbench tree file");

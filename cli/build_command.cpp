@@ -5,6 +5,7 @@
 #include <tbb/global_control.h>
 #include <unistd.h>
 
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <ostream>
@@ -60,7 +61,13 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
       throw Error(
           "--save writes one tree: give exactly one builder that makes a tree of the common format "
           "(not embree, whose rtcCommitScene keeps its tree to itself)");
-    require_file_path(options.save, "tree file");
+    require_file_path(options.save, "tree");
+    // The folder is made before the build, as `run --output` makes its own, so that a path that cannot
+    // be written fails before minutes of building rather than after.
+    const std::filesystem::path folder = std::filesystem::path(options.save).parent_path();
+    std::error_code ec;
+    if (!folder.empty()) std::filesystem::create_directories(folder, ec);
+    if (ec) throw Error(options.save + ": cannot make its folder " + folder.string() + ": " + ec.message());
   }
 
   Scene scene;

@@ -133,6 +133,7 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   const LayoutSpec layout_spec = parse_layout_spec(options.layout);
   if (const auto why = layout_unavailable(layout_spec))
     throw Error("--layout '" + layout_spec.text() + "': " + *why);
+  require_layout_of_arity(spec, layout_spec);
 
   if (options.eye.empty() != options.target.empty())
     throw Error("--eye and --target go together: give both, or neither for the scene's own view");

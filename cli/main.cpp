@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <iostream>
 
@@ -164,8 +165,23 @@ int main(int argc, char** argv) {
   compare_cmd
       ->add_option(
           "--margin", compare.min_timing_margin,
-          "smallest change of a timing ratio worth flagging (its 95% interval must also exclude no change)")
-      ->capture_default_str();
+          "smallest change of a timing ratio worth flagging, a fraction in [0, 1) (its 95% interval must "
+          "also exclude no change)")
+      ->capture_default_str()
+      // CLI::Range lets NaN through (every comparison with it is false), and a NaN margin gates nothing.
+      ->check(CLI::Validator(
+          [](const std::string& text) -> std::string {
+            double v = 0.0;
+            try {
+              v = std::stod(text);
+            } catch (const std::exception&) {
+              return "--margin: '" + text + "' is not a number";
+            }
+            return std::isfinite(v) && v >= 0.0 && v < 1.0
+                       ? ""
+                       : "--margin: " + text + " is not a fraction in [0, 1) (0.05 flags changes beyond 5%)";
+          },
+          "FRACTION"));
   compare_cmd->add_option(
       "--json", compare_json,
       "write smaller-is-better metrics here and bigger-is-better ones to NAME-bigger.json");

@@ -48,6 +48,7 @@ TraceAnswers trace_ours(const BuilderRun& run, std::string_view layout_text, con
                 "' traces Embree's own BVH: use it with --builder embree");
   const LayoutSpec spec = parse_layout_spec(layout_text);
   if (const auto why = layout_unavailable(spec)) throw Error("--layout '" + spec.text() + "': " + *why);
+  require_layout_of_arity(run, spec);
   const Bvh bvh = run.info->build(BuildInput::from_triangles(scene.triangles), run.values);
   const auto layout = compile_layout(spec, bvh, scene.triangles);
   TraceAnswers out{run.name + ":" + run.params_text(), spec.text(), layout->isa(), {}, {}};

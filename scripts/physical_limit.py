@@ -31,7 +31,9 @@ A CSV that holds several runs (a resumed or repeated `sahbench run`) gives the r
 as `sahbench report` does, or of `--run`. A builder whose rows differ in parameters is labelled with those
 that differ (binned_sah bins=8, binned_sah bins=32).
 
-Exits 2 with a message when a file lacks what is needed.
+Exits 2 with a message when a file lacks what is needed, when --threads is not a positive count, and
+when no row is left to price (the message says which filter left none) rather than print an empty
+table.
 """
 
 import argparse
@@ -127,6 +129,8 @@ def main():
     parser.add_argument("--threads", type=int, help="only rows of this thread count")
     parser.add_argument("--run", help="the rows of this run_id (default: the CSV's latest run)")
     args = parser.parse_args()
+    if args.threads is not None and args.threads < 1:
+        parser.error(f"--threads {args.threads}: a thread count is 1 or more")
 
     try:
         with open(args.bench) as f:
@@ -157,9 +161,18 @@ def main():
             fail(f"{args.results}: no run {run} (its runs: {', '.join(runs)})")
         rows = [row for row in rows if row["run_id"] == run]
         others = f"; {len(runs) - 1} other run(s) in the file, --run RUN_ID for one" if len(runs) > 1 else ""
-        print(f"Run {run}{others}.\n")
+        heading = f"Run {run}{others}.\n"
+        where = f"{args.results} (run {run})"
     elif args.run:
         fail(f"{args.results}: no run_id column to choose --run {args.run} by")
+    else:
+        heading, where = None, args.results
+    if not rows:
+        fail(f"{where}: no rows")
+    if args.threads is not None:
+        counts = sorted({int(row["threads"]) for row in rows})
+        if args.threads not in counts:
+            fail(f"{where}: no row of --threads {args.threads} (its thread counts: {', '.join(map(str, counts))})")
 
     # Embree medium's one-ray rows by (scene, threads, ray set, robust).
     embree = {}
@@ -170,20 +183,23 @@ def main():
                 key = (row["scene"], row["threads"], row["ray_set"], params.get("robust", "0") == "1")
                 embree[key] = 1000.0 * int(row["threads"]) / float(row["trace_mrays_median"])
 
-    print("| scene | builder | layout | threads | ray set | inner + leaves | prims | bound ns | measured ns | "
-          "bound / measured | Embree 1-ray ns | ceiling |")
-    print("| --- | --- | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-    missing_bench = set()
+    # The table is printed only once it has a row; the rows left out are counted by reason for the message
+    # that replaces an empty table.
+    table, missing_bench = [], set()
+    uncounted = unpriced = unbenched = 0
     for row, label in zip(rows, labels(rows)):
-        if args.threads and int(row["threads"]) != args.threads:
+        if args.threads is not None and int(row["threads"]) != args.threads:
             continue
         if not row["nodes_per_ray"] or not row["leaves_per_ray"] or not row["trace_mrays_median"]:
+            uncounted += 1
             continue
         names = benchmark_names(row)
         if names is None:
+            unpriced += 1
             continue
         if any(n not in ns_per_item for n in names):
             missing_bench.update(n for n in names if n not in ns_per_item)
+            unbenched += 1
             continue
         nodes, leaves = float(row["nodes_per_ray"]), float(row["leaves_per_ray"])
         prims = float(row["prims_per_ray"])
@@ -193,9 +209,24 @@ def main():
         exact = options.get("tri", "watertight") == "watertight" and options.get("box", "robust") == "robust"
         anchor = embree.get((row["scene"], row["threads"], row["ray_set"], exact))
         versus = f"{anchor:.0f} | {anchor / bound:.2f}" if anchor else "- | -"
-        print(f"| {row['scene']} | {label} | {row['layout']} | {row['threads']} | {row['ray_set']} | "
-              f"{nodes - leaves:.1f} + {leaves:.1f} | {prims:.1f} | {bound:.0f} | {measured:.0f} | "
-              f"{bound / measured:.2f} | {versus} |")
+        table.append(f"| {row['scene']} | {label} | {row['layout']} | {row['threads']} | {row['ray_set']} | "
+                     f"{nodes - leaves:.1f} + {leaves:.1f} | {prims:.1f} | {bound:.0f} | {measured:.0f} | "
+                     f"{bound / measured:.2f} | {versus} |")
+    if not table:
+        threads = f" of --threads {args.threads}" if args.threads is not None else ""
+        reasons = [f"{uncounted} without nodes_per_ray, leaves_per_ray or trace_mrays_median (Embree's rows have "
+                   "no counts)" if uncounted else "",
+                   f"{unpriced} of a layout without a bound (packets, Embree's)" if unpriced else "",
+                   f"{unbenched} whose benchmarks {args.bench} lacks: {', '.join(sorted(missing_bench))}"
+                   if unbenched else ""]
+        fail(f"{where}: no row{threads} to price: {'; '.join(r for r in reasons if r)}")
+
+    if heading:
+        print(heading)
+    print("| scene | builder | layout | threads | ray set | inner + leaves | prims | bound ns | measured ns | "
+          "bound / measured | Embree 1-ray ns | ceiling |")
+    print("| --- | --- | --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    print("\n".join(table))
     if missing_bench:
         print(f"\nNo figure in {args.bench} for: {', '.join(sorted(missing_bench))} (their rows are left out).")
 

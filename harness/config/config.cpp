@@ -637,6 +637,20 @@ void require_resolved(const BuilderRun& run) {
   if (!resolved) throw Error("builder run '" + run.label() + "' was not resolved against the registry");
 }
 
+void require_layout_of_arity(const BuilderRun& run, const LayoutSpec& layout) {
+  const uint32_t arity = find_layout(layout.name).arity;
+  if (run.is_embree() || arity == run.arity) return;
+  std::string instead;
+  for (const auto& l : layouts())
+    if (l.arity == run.arity) instead += (instead.empty() ? "" : " or ") + l.name;
+  std::string message = "--layout '" + layout.text() + "' traces " + std::to_string(arity) +
+                        "-wide trees, but " + run.label() + " builds " + std::to_string(run.arity) +
+                        "-wide ones: use " + (instead.empty() ? "another builder" : instead);
+  if (arity > 2)
+    message += ", or --builder wide_collapse:arity=" + std::to_string(arity) + " for a tree of its arity";
+  throw Error(message);
+}
+
 std::string BuilderRun::params_text() const {
   if (!is_embree()) return values.to_string();
   std::string quality = "medium", robust;

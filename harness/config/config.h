@@ -174,6 +174,11 @@ void resolve(BuilderRun& run);
 /// must resolve its runs before a runner sees them.
 void require_resolved(const BuilderRun& run);
 
+/// A layout traces the trees of its own arity: `sahbench run` pairs each builder run only with those, and
+/// `trace` and `image` keep the same rule. An Error naming the layout, the builder and what to use instead
+/// where `layout` is of another arity than `run`'s (resolved) trees.
+void require_layout_of_arity(const BuilderRun& run, const LayoutSpec& layout);
+
 /// A builder run as the command line writes it: "NAME" or "NAME:key=value,key=value", for one of our
 /// builders or Embree's own BVH ("embree:quality=high", "embree:quality=medium,robust=1"; "embree_low",
 /// "embree_medium" and "embree_high" are short for the three qualities in Embree's default mode).

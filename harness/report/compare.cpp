@@ -201,9 +201,10 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   CompareResult result;
   std::vector<Finding> findings;
   std::vector<JsonEntry> smaller, bigger;
-  std::vector<std::string> unanchored;   // cells with an anchor in the baseline only
-  std::vector<MetricRule> metrics;       // the deterministic metrics compared
-  std::vector<std::string> not_in_base;  // optional metrics the baseline predates
+  std::vector<std::string> unanchored;       // cells with an anchor in the baseline only
+  std::vector<std::string> unanchored_base;  // cells without an anchor in the baseline
+  std::vector<MetricRule> metrics;           // the deterministic metrics compared
+  std::vector<std::string> not_in_base;      // optional metrics the baseline predates
   for (const MetricRule& rule : deterministic_metrics()) {
     const bool in_base = bf.has_column(rule.column), in_cur = cf.has_column(rule.column);
     if (in_base && in_cur) {
@@ -251,6 +252,7 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
       ++result.missing_anchors;
       unanchored.push_back(key);
     }
+    if (!ab) unanchored_base.push_back(key);
     if (!ab || !ac) continue;
     for (const TimingMetric& t : kTimingMetrics) {
       const auto rb = ratio_to_anchor(bf, bi, *ab, t.prefix), rc = ratio_to_anchor(cf, ci, *ac, t.prefix);
@@ -270,6 +272,13 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
     }
   }
 
+  // A baseline without Embree's rows gates no timing: passing would say the timings were checked.
+  if (!unanchored_base.empty())
+    throw Error(fmt::format(
+        "{}: the baseline has no Embree anchor (embree [quality=medium], embree_1) for {} of its {} cells "
+        "(first: {}), so their timings cannot be compared; make the baseline with Embree in the run, or "
+        "compare with --deterministic-only",
+        options.baseline.string(), unanchored_base.size(), result.compared_cells, unanchored_base.front()));
   for (const auto& f : findings) (f.regression ? result.regressions : result.improvements) += 1;
   result.regressions += result.missing_cells + result.missing_anchors;
   fmt::print(out,

@@ -353,6 +353,7 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   auto mib = [&](std::optional<double> bytes) {
     return bytes ? std::optional<double>(*bytes / kMiB) : std::nullopt;
   };
+  bool any_wrong = false;
   for (const auto& [label, layout] : keys) {
     std::map<std::string, const CsvRow*> by_set;
     for (const CsvRow* r : group)
@@ -390,9 +391,19 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
       row.cells.push_back(timing_cell(
           mrays, timing_ratio(timings, *it->second, a == anchors_of_row.end() ? nullptr : a->second, mrays,
                               "trace_mrays_median", &RowTimings::trace_mrays)));
+      // A speed whose answers differ from the reference's is not the same work: said in the cell, and
+      // (a cell with a note) never marked best.
+      if (const auto wrong = csv_number(*it->second, "mismatches"); wrong && *wrong > 0) {
+        row.cells.back().note = fmt::format("{:.0f} wrong", *wrong);
+        any_wrong = true;
+      }
     }
     table.rows.push_back(std::move(row));
   }
+  if (any_wrong)
+    table.legend.push_back(
+        "[N wrong]: N rays of the set answered otherwise than the exact reference (the CSV's mismatches "
+        "column: another hit, distance or occlusion); such a cell is not marked best.");
   mark_best(table);
   return table;
 }
@@ -588,25 +599,30 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   const bool html = options.format == ReportFormat::kHtml;
   if (html)
     html_begin(fmt::format("sahbench report: run {}", run),
-               fmt::format("commit {}, {}, {}, {}; build reps {}, trace reps {}; config {}",
+               fmt::format("commit {}, {}, {}, {}; build reps {}, trace reps {}; config {}, seed {}; "
+                           "fingerprint {}",
                            field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
                            field(first, "embree_version"), field(first, "build_reps"),
-                           field(first, "trace_reps"), field(first, "config")),
+                           field(first, "trace_reps"), field(first, "config"), field(first, "seed", "?"),
+                           fingerprint.empty() ? "?" : fingerprint),
                out);
   else if (latex)
     fmt::print(
         out,
-        "% sahbench report: run {}, commit {}, {}, {}, {}; config {}\n% Needs \\usepackage{{booktabs}} "
-        "(\\textuparrow and \\textdownarrow are textcomp's, in the LaTeX kernel since 2020).\n\n",
+        "% sahbench report: run {}, commit {}, {}, {}, {}; config {}, seed {}; fingerprint {}\n% Needs "
+        "\\usepackage{{booktabs}} (\\textuparrow and \\textdownarrow are textcomp's, in the LaTeX kernel "
+        "since 2020).\n\n",
         run, field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
-        field(first, "embree_version"), field(first, "config"));
+        field(first, "embree_version"), field(first, "config"), field(first, "seed", "?"),
+        fingerprint.empty() ? "?" : fingerprint);
   else
     fmt::print(
         out,
-        "# sahbench report: run {}\n\ncommit {}, {}, {}, {}; build reps {}, trace reps {}; config {}\n\n",
+        "# sahbench report: run {}\n\ncommit {}, {}, {}, {}; build reps {}, trace reps {}; config {}, seed "
+        "{}; fingerprint {}\n\n",
         run, field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
         field(first, "embree_version"), field(first, "build_reps"), field(first, "trace_reps"),
-        field(first, "config"));
+        field(first, "config"), field(first, "seed", "?"), fingerprint.empty() ? "?" : fingerprint);
 
   // Group by (scene, threads, frame); keep first-seen order.
   std::vector<GroupKey> groups;

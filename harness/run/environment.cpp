@@ -7,16 +7,25 @@
 namespace sahbench {
 namespace {
 
+// The model name with its family and model numbers: the name alone ("AMD EPYC" in a VM) does not tell
+// one generation from another, and the kernels' speeds differ between them.
 std::string cpu_model() {
   std::ifstream in("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("model name", 0) == 0) {
-      const auto colon = line.find(':');
-      if (colon != std::string::npos) return line.substr(line.find_first_not_of(" \t", colon + 1));
-    }
+  std::string line, name, family, model;
+  auto value = [&] {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) return std::string();
+    const auto start = line.find_first_not_of(" \t", colon + 1);
+    return start == std::string::npos ? std::string() : line.substr(start);
+  };
+  while (std::getline(in, line) && !line.empty()) {
+    if (line.rfind("model name", 0) == 0) name = value();
+    if (line.rfind("cpu family", 0) == 0) family = value();
+    if (line.rfind("model", 0) == 0 && line.rfind("model name", 0) != 0) model = value();
   }
-  return "unknown";
+  if (name.empty()) return "unknown";
+  if (family.empty() || model.empty()) return name;
+  return name + " (family " + family + " model " + model + ")";
 }
 
 // The ISA the compiler was allowed to use for our code (set by -march). Runtime dispatch between

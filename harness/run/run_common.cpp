@@ -37,11 +37,16 @@ std::string format_duration(double seconds) {
 }
 
 std::vector<std::string> scenes_to_run(const ExperimentConfig& cfg, std::ostream& log) {
+  // Each scene is checked before any work: a procedural spec parsed, a file found. The errors name the
+  // scene (and the search path); the config is named before them.
   for (const auto& name : cfg.scenes) {
-    if (is_procedural_spec(name)) {
-      parse_proc_spec(name, procedural_kinds());
-    } else if (!std::filesystem::is_regular_file(name) && !find_scene_file(name)) {
-      load_scene(name);  // throws the loader's error, which names the scene and the search path
+    try {
+      if (is_procedural_spec(name))
+        parse_proc_spec(name, procedural_kinds());
+      else if (!std::filesystem::is_regular_file(name) && !find_scene_file(name))
+        load_scene(name);
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: experiment.scenes: {}", cfg.path.string(), e.what()));
     }
   }
   std::vector<std::string> out = cfg.scenes;

@@ -129,7 +129,8 @@ TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
             "arity=8;method=sah;source=binned_sah;source_c_trav_scale=0.0625;reinsert_iterations=8;bins=32;"
             "adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=3;c_isect=1;sah_block=4");
   EXPECT_TRUE(resolve_named("wide_collapse", {{"source", "sbvh"}}).get_source("source").shared());
-  // Any source with a parameter of its own, and any other source, is written with all of its values.
+  // Any source with a parameter of its own, and any other source, is written with all of its values,
+  // and the collapse without the parameters it applies only to its own binary build.
   const ParamSet chain = resolve_named("wide_collapse", {{"source", "reinsert"},
                                                          {"source.iterations", "2"},
                                                          {"source.source", "binned_sah"},
@@ -137,8 +138,7 @@ TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
   EXPECT_EQ(chain.to_string(),
             "arity=8;method=sah;source=reinsert(source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;"
             "max_leaf=4;c_trav=1;c_isect=1;sah_block=1);iterations=2;batch=0.05;min_gain=0.001;c_trav=1;"
-            "c_isect=1);source_c_trav_scale=0.0625;reinsert_iterations=8;bins=32;adaptive_bins=1;"
-            "min_leaf=1;max_leaf=8;c_trav=3;c_isect=1;sah_block=4");
+            "c_isect=1);max_leaf=8;c_trav=3;c_isect=1;sah_block=4");
   const SourceSpec& reinsert = chain.get_source("source");
   ASSERT_FALSE(reinsert.shared());
   EXPECT_EQ(reinsert.name(), "reinsert");
@@ -184,7 +184,14 @@ TEST(SourceChain, BadChainsAreErrorsThatNameThem) {
       [&] {
         collapse.check(resolve_named("wide_collapse", {{"source", "treelet"}, {"bins", "8"}}));
       },
-      {"bins applies only to binned_sah, sweep_sah or sbvh named alone", "source.bins"});
+      {"bins applies only to binned_sah, sweep_sah or sbvh named alone",
+       "source=treelet has no such parameter"});
+  expect_error(
+      [&] {
+        collapse.check(resolve_named("wide_collapse",
+                                     {{"source", "binned_sah"}, {"source.max_leaf", "8"}, {"bins", "8"}}));
+      },
+      {"not to source=binned_sah", "give it to the source (source.bins=...)"});
   collapse.check(resolve_named("wide_collapse", {{"source", "treelet"}, {"max_leaf", "4"}}));
   // A binary wide builder is a fine source.
   EXPECT_EQ(resolve_named("reinsert", {{"source", "wide_binned_sah"}, {"source.arity", "2"}})

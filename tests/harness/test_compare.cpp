@@ -396,6 +396,12 @@ TEST(HarnessCompare, ANewRunWithoutItsEmbreeAnchorIsARegressionNotAPass) {
   EXPECT_NE(text.find("Cells whose new run has no Embree anchor"), std::string::npos) << text;
   // Deterministic metrics alone need no anchor.
   EXPECT_EQ(run_compare(write("no_anchor_det", rows), true).regressions, 0);
+  // Nor does a baseline without anchors pass: its timings were never compared.
+  const auto unanchored = write("no_anchor_base", rows);
+  const std::string message = compare_error(baseline(), false, unanchored);
+  EXPECT_NE(message.find("the baseline has no Embree anchor"), std::string::npos) << message;
+  EXPECT_NE(message.find("--deterministic-only"), std::string::npos) << message;
+  EXPECT_EQ(run_compare(baseline(), true, unanchored).regressions, 0);
 }
 
 TEST(HarnessCompare, JsonForDashboards) {

@@ -364,6 +364,38 @@ TEST(Report, NotesOfARaySetOrOfEveryRowArePrintedUnderTheTable) {
   EXPECT_EQ(out.str().find("ray set 'primary'"), std::string::npos) << out.str();
 }
 
+TEST(Report, CellsWithWrongAnswersSaySoAndAreNotMarkedBest) {
+  // The fastest row answers 3 rays otherwise than the reference: its speed is printed with the count and
+  // the bold goes to the fastest row that answers right.
+  const auto path = temp_csv("wrong.csv");
+  {
+    std::vector<std::string> columns = columns_with_samples();
+    columns.push_back("mismatches");
+    CsvWriter w(path, columns);
+    auto with_wrong = [](CsvRow row, const std::string& wrong) {
+      row["mismatches"] = wrong;
+      return row;
+    };
+    w.append(
+        with_wrong(make_row("embree", "quality=medium", "embree_1", "primary", 10.0, 1 << 20, "", 8.0), "0"));
+    w.append(with_wrong(make_row("binned_sah", "bins=8", "bvh2", "primary", 5.0, 1 << 20, "40", 9.0), "3"));
+    w.append(with_wrong(make_row("binned_sah", "bins=8", "bvh8", "primary", 5.0, 1 << 20, "40", 6.0), "0"));
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("9.00 [3 wrong] (1.12 [1.12, 1.12] \u25B2) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("**8.00**"), std::string::npos) << md;
+  EXPECT_EQ(md.find("**9.00"), std::string::npos) << md;
+  EXPECT_NE(md.find("[N wrong]: N rays of the set answered otherwise than the exact reference"),
+            std::string::npos)
+      << md;
+  // Without wrong answers, no such sentence.
+  std::ostringstream plain;
+  print_report({{write_results("all_right.csv")}, ""}, plain);
+  EXPECT_EQ(plain.str().find("wrong"), std::string::npos) << plain.str();
+}
+
 TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {
   // Two rows costed with c_trav = 1 and one with c_trav = 2, whose larger constants make its cost
   // incomparable (here it is even the lowest): it gets its constants as a note and no bold.

@@ -2,7 +2,9 @@
 """scripts/physical_limit.py on a hand-made CSV and benchmark JSON: the bound of each row from its counts
 and the benchmarks of its layout, box test, triangle test and ISA; Embree and packet rows left out; a row
 whose benchmark is missing named; the ceiling against Embree medium 1-ray in the row's mode; exit 2 for
-a CSV without leaves_per_ray.
+a CSV without leaves_per_ray, for --threads 0 or below, for a thread count the CSV lacks (naming those it
+has) and for filters that leave no row to price, with no empty table. The script runs as an executable,
+as the README calls it.
 
     test_physical_limit.py PATH/TO/physical_limit.py
 """
@@ -76,7 +78,8 @@ def main():
             w.writerow(COLUMNS)
             w.writerows(ROWS)
         bench.write_text(json.dumps(BENCH))
-        out = subprocess.run([sys.executable, script, str(results), str(bench)], capture_output=True, text=True)
+        # Run as the README writes it: the script itself, through its shebang.
+        out = subprocess.run([script, str(results), str(bench)], capture_output=True, text=True)
         check(out.returncode == 0, f"exit {out.returncode}: {out.stderr}")
         text = out.stdout
         # The ceiling: Embree robust's 40 ns over the exact row's bound of 28 ns.
@@ -113,6 +116,37 @@ def main():
         only = subprocess.run([sys.executable, script, str(results), str(bench), "--threads", "2"],
                               capture_output=True, text=True)
         check("| 1 | primary" not in only.stdout and "| 2 | primary" in only.stdout, only.stdout)
+        for threads in ("0", "-1"):
+            refused = subprocess.run([sys.executable, script, str(results), str(bench), "--threads", threads],
+                                     capture_output=True, text=True)
+            check(refused.returncode == 2 and f"--threads {threads}" in refused.stderr and not refused.stdout,
+                  f"--threads {threads}: exit {refused.returncode}: {refused.stdout}{refused.stderr}")
+        absent = subprocess.run([sys.executable, script, str(results), str(bench), "--threads", "3"],
+                                capture_output=True, text=True)
+        check(absent.returncode == 2 and "no row of --threads 3 (its thread counts: 1, 2)" in absent.stderr
+              and "| scene |" not in absent.stdout, f"--threads 3: exit {absent.returncode}: {absent.stderr}")
+        # Run r1 has 1-thread rows only.
+        absent = subprocess.run([sys.executable, script, str(results), str(bench), "--run", "r1", "--threads", "2"],
+                                capture_output=True, text=True)
+        check(absent.returncode == 2 and "(run r1): no row of --threads 2 (its thread counts: 1)" in absent.stderr,
+              f"--run r1 --threads 2: exit {absent.returncode}: {absent.stderr}")
+
+        # Rows, but none to price: Embree's and a packet row, or rows whose benchmarks are all missing.
+        unpriced = Path(tmp) / "unpriced.csv"
+        with unpriced.open("w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(COLUMNS)
+            w.writerows(row for row in ROWS if row[2] in ("embree_1", "bvh8:packet=8", "bvh8:tri=mtn"))
+        none = subprocess.run([sys.executable, script, str(unpriced), str(bench)], capture_output=True, text=True)
+        check(none.returncode == 2 and "no row to price" in none.stderr and "4 without nodes_per_ray" in none.stderr
+              and "1 of a layout without a bound" in none.stderr and "ray_triangle/block4/avx512/mtn" in none.stderr
+              and "| scene |" not in none.stdout,
+              f"no row to price: exit {none.returncode}: {none.stdout}{none.stderr}")
+        empty = Path(tmp) / "empty.csv"
+        empty.write_text(",".join(COLUMNS) + "\n")
+        none = subprocess.run([sys.executable, script, str(empty), str(bench)], capture_output=True, text=True)
+        check(none.returncode == 2 and "no rows" in none.stderr and not none.stdout,
+              f"a CSV without rows: exit {none.returncode}: {none.stdout}{none.stderr}")
 
         old = Path(tmp) / "old.csv"
         old.write_text("scene,layout,isa,threads,ray_set,nodes_per_ray,prims_per_ray,trace_mrays_median\n"

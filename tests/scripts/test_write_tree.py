@@ -2,7 +2,10 @@
 """scripts/write_tree.py end to end: it writes a tree file for an OBJ (with quads, negative indices and
 invalid triangles that sahbench removes), and sahbench reads it as the `file` builder: `build` validates
 it, a config run (path relative to the config) traces it with no mismatch against brute force, and the
-same tree for a moved vertex is refused as another scene's.
+same tree for a moved vertex is refused as another scene's. On an OBJ of malformed lines (short and
+unparsable vertices, faces with missing, zero, unparsable or too few indices) the script keeps and removes
+the triangles sahbench does, so that sahbench accepts its tree; a missing OBJ is an exit 2, not a
+traceback. The script runs as an executable, as the README calls it.
 
     test_write_tree.py scripts/write_tree.py path/to/sahbench
 """
@@ -40,6 +43,46 @@ def write_obj(path, nudge=False):
         f.write("\n".join(lines) + "\n")
 
 
+# Malformed lines, each with what sahbench makes of it (scenes/obj_loader.cpp): 8 triangles kept, 15 removed.
+MALFORMED = """\
+v 0 0 0
+v 1 0 0
+v 0 1 0
+v 1 1 0
+v 2 2
+v 1 banana 3
+v +-1 0 1
+v 0e500 0 0
+v 0 0 1e-400
+f 1 2 3
+f 2 4 3
+# Vertex 5 has 2 coordinates, 6 a word, 8 reads as NaN and 9 underflows: non-finite, removed.
+f 1 2 5
+f 1 6 3
+f 2 3 8
+f 1 2 9
+# "+-1" passes sahbench's strict pass and tinyobjloader reads it as 0: vertex 7 is (0, 0, 1), kept.
+f 1 2 7
+# A vertex past the end, before the first, 0, a word, "+-1" (0 to atoi): bad indices.
+f 1 2 99
+f -1 -2 -99
+f 0 1 2
+f 1 x 3
+f +-1 2 3
+# Fewer than 3 corners: zero area.
+f 1 2
+# tinyobjloader reads 1/1/1/1 as two corners, so no corner of the face is trusted: 2 bad indices.
+f 1/1/1/1 2 3
+# Kept: "+N" indices and negative ones from the last vertex.
+f +1 +2 +4
+f -9 -8 -7
+# Fans: (2 3 4) kept, (2 4 5) non-finite, (2 5 99999999999) a bad index, beyond int; (1 2 3) and
+# (1 3 4) kept, (1 4 5) non-finite.
+f 2 3 4 5 99999999999
+f 1 2 3 4 5
+"""
+
+
 def run(cmd, expect_rc=0):
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != expect_rc:
@@ -47,9 +90,29 @@ def run(cmd, expect_rc=0):
     return p
 
 
+def check_malformed(script, sahbench, tmp):
+    """The malformed OBJ: the script, run as the executable its shebang names, keeps sahbench's triangles
+    and sahbench accepts the tree; a missing OBJ is named in an exit 2."""
+    obj = os.path.join(tmp, "malformed.obj")
+    with open(obj, "w") as f:
+        f.write(MALFORMED)
+    tree = os.path.join(tmp, "malformed.sbt")
+    p = run([script, obj, tree])
+    assert "for 8 triangles (15 removed)" in p.stdout and "Traceback" not in p.stderr, p.stdout + p.stderr
+    built = run([sahbench, "build", "--scene", obj, "--builder", "file:" + tree, "--reps", "1", "--warmup", "0"])
+    assert "8 triangles, 15 removed" in built.stdout, built.stdout
+    rows = [line for line in built.stdout.splitlines() if line.strip().startswith("1 ")]
+    assert len(rows) == 1 and rows[0].endswith(" ok"), built.stdout
+
+    missing = os.path.join(tmp, "none.obj")
+    p = run([sys.executable, script, missing, tree], expect_rc=2)
+    assert missing in p.stderr and "Traceback" not in p.stderr, p.stderr
+
+
 def main():
     script, sahbench = sys.argv[1], sys.argv[2]
     with tempfile.TemporaryDirectory() as tmp:
+        check_malformed(script, sahbench, tmp)
         obj = os.path.join(tmp, "scene.obj")
         write_obj(obj)
         os.makedirs(os.path.join(tmp, "trees"))
@@ -90,7 +153,8 @@ def main():
         err = run([sahbench, "build", "--scene", obj, "--builder", "file:" + tree, "--reps", "1"],
                   expect_rc=2).stderr
         assert "was built for a scene with hash" in err and "this scene has hash" in err, err
-    print("write_tree.py: tree written, validated and traced with no mismatches; another scene refused")
+    print("write_tree.py: tree written, validated and traced with no mismatches; another scene refused; "
+          "malformed lines read as sahbench reads them")
 
 
 if __name__ == "__main__":

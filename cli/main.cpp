@@ -262,6 +262,11 @@ int main(int argc, char** argv) {
     if (*report_cmd) {
       report.format = parse_report_format(report_format);
       report.width = parse_page_width(report_width);
+      // An option of another format would be ignored: a user who gave it expects it to act.
+      if (report_cmd->count("--width") && report.format != ReportFormat::kLatex)
+        throw Error("--width " + report_width + " sets the page width of LaTeX tables; add --format latex");
+      if (report_cmd->count("--figures") && report.format != ReportFormat::kHtml)
+        throw Error("--figures embeds the figures in the HTML report; add --format html");
       run_report_command(report, std::cout);
     }
     if (*compare_cmd) {

@@ -63,8 +63,14 @@ TraceAnswers trace_ours(const BuilderRun& run, std::string_view layout_text, con
 }
 
 TraceAnswers trace_embree(const BuilderRun& run, std::string_view layout_text, const Scene& scene,
-                          const std::vector<Ray>& rays, TraceQuery query, const std::string& ray_file) {
-  check_embree_range(rays, ray_file);
+                          const std::vector<Ray>& rays, TraceQuery query, const std::string& ray_file,
+                          const std::vector<std::size_t>& lines) {
+  // Named by its line, as read_rays names the rays it refuses.
+  if (const auto far = std::find_if_not(rays.begin(), rays.end(), embree_accepts); far != rays.end())
+    throw Error(
+        fmt::format("{}:{}: an origin or direction component beyond {:g}, outside the range Embree "
+                    "traces (its assertion would stop the process)",
+                    ray_file, lines.at(static_cast<std::size_t>(far - rays.begin())), kEmbreeLargeFloat));
   const EmbreeLayout* layout = find_embree_layout(layout_text);
   if (!layout) {
     std::string known;
@@ -91,16 +97,17 @@ TraceAnswers trace_embree(const BuilderRun& run, std::string_view layout_text, c
 }  // namespace
 
 void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
-  const std::vector<Ray> rays = read_rays(options.rays);
+  std::vector<std::size_t> lines;
+  const std::vector<Ray> rays = read_rays(options.rays, &lines);
   const Scene scene = load_scene(options.scene);
   BuilderRun run = parse_builder_run(options.builder);
   resolve(run);
   const std::string layout_text = !options.layout.empty() ? options.layout
                                   : run.is_embree()       ? kEmbreeLayouts[0].name
                                                           : "bvh2";
-  const TraceAnswers answers =
-      run.is_embree() ? trace_embree(run, layout_text, scene, rays, options.query, options.rays.string())
-                      : trace_ours(run, layout_text, scene, rays, options.query);
+  const TraceAnswers answers = run.is_embree() ? trace_embree(run, layout_text, scene, rays, options.query,
+                                                              options.rays.string(), lines)
+                                               : trace_ours(run, layout_text, scene, rays, options.query);
   const std::string what = fmt::format("builder={} layout={} isa={} query={}", answers.builder,
                                        answers.layout, answers.isa, to_string(options.query));
 

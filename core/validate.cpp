@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -27,10 +28,17 @@ bool has_nan(const Aabb& b) {
   return false;
 }
 
+// Nine significant digits read back as the same float: a box one rounding too small must print as
+// another number than the box it fails to enclose.
+std::string float_text(float v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", static_cast<double>(v));
+  return text;
+}
+
 std::string box_string(const Aabb& b) {
-  return "[(" + std::to_string(b.min.x) + ", " + std::to_string(b.min.y) + ", " + std::to_string(b.min.z) +
-         ") .. (" + std::to_string(b.max.x) + ", " + std::to_string(b.max.y) + ", " +
-         std::to_string(b.max.z) + ")]";
+  return "[(" + float_text(b.min.x) + ", " + float_text(b.min.y) + ", " + float_text(b.min.z) + ") .. (" +
+         float_text(b.max.x) + ", " + float_text(b.max.y) + ", " + float_text(b.max.z) + ")]";
 }
 
 class Checker {

@@ -84,7 +84,7 @@ bool is_word(std::string_view token) {
 
 }  // namespace
 
-std::vector<Ray> read_rays(const std::filesystem::path& path) {
+std::vector<Ray> read_rays(const std::filesystem::path& path, std::vector<std::size_t>* lines) {
   std::istringstream in(read_text_file(path, "ray file"));
   std::vector<Ray> rays;
   std::string line;
@@ -117,6 +117,7 @@ std::vector<Ray> read_rays(const std::filesystem::path& path) {
                                       ray.tmin));
     if (ray.dir == Vec3{0, 0, 0}) throw Error(where + ": the direction is zero");
     rays.push_back(ray);
+    if (lines) lines->push_back(number);
   }
   if (rays.empty()) throw Error(path.string() + ": no rays in the ray file");
   return rays;

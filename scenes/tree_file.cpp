@@ -131,6 +131,21 @@ uint64_t size_of(const std::filesystem::path& path) {
   return size;
 }
 
+// The file's size against what its header's counts make: checked before anything is allocated, so a
+// header that claims 2^32 nodes costs nothing, and with the header, so that a config names a truncated
+// file as it is read.
+void check_size(const TreeFileHeader& h, const std::filesystem::path& path, uint64_t file_size) {
+  const uint64_t expected = expected_size(h);
+  const std::string counts =
+      std::to_string(h.node_count) + " nodes and " + std::to_string(h.ref_count) + " references";
+  if (file_size < expected)
+    throw Error(path.string() + ": tree file is truncated: its header's " + counts + " make " +
+                std::to_string(expected) + " bytes, the file has " + std::to_string(file_size));
+  if (file_size > expected)
+    throw Error(path.string() + ": tree file has " + std::to_string(file_size - expected) +
+                " bytes after the end of its " + counts + " (" + std::to_string(expected) + " bytes)");
+}
+
 }  // namespace
 
 uint64_t triangle_hash(std::span<const Triangle> triangles) {
@@ -181,23 +196,18 @@ void write_tree_file(const std::filesystem::path& path, const Bvh& bvh, std::spa
 
 TreeFileHeader read_tree_file_header(const std::filesystem::path& path) {
   std::ifstream in = open_tree_file(path);
-  return read_header(in, path, size_of(path));
+  const uint64_t file_size = size_of(path);
+  const TreeFileHeader h = read_header(in, path, file_size);
+  check_size(h, path, file_size);
+  return h;
 }
 
 TreeFile read_tree_file(const std::filesystem::path& path) {
   std::ifstream in = open_tree_file(path);
   const uint64_t file_size = size_of(path);
   const TreeFileHeader h = read_header(in, path, file_size);
-  // Sizes are checked before anything is allocated, so a header that claims 2^32 nodes costs nothing.
+  check_size(h, path, file_size);
   const uint64_t expected = expected_size(h);
-  const std::string counts =
-      std::to_string(h.node_count) + " nodes and " + std::to_string(h.ref_count) + " references";
-  if (file_size < expected)
-    throw Error(path.string() + ": tree file is truncated: its header's " + counts + " make " +
-                std::to_string(expected) + " bytes, the file has " + std::to_string(file_size));
-  if (file_size > expected)
-    throw Error(path.string() + ": tree file has " + std::to_string(file_size - expected) +
-                " bytes after the end of its " + counts + " (" + std::to_string(expected) + " bytes)");
 
   std::vector<unsigned char> bytes(expected - kTreeFileHeaderBytes);
   if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())))

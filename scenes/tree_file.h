@@ -58,8 +58,9 @@ struct TreeFile {
 void write_tree_file(const std::filesystem::path& path, const Bvh& bvh, std::span<const Triangle> triangles);
 
 /// The header of the tree file at `path`, checked: magic, version, arity 2, 4 or 8, node and reference
-/// counts in range (1 to 2^32 nodes, at most 2^32 references and triangles), reserved bytes zero. Each
-/// failure is an Error naming the file and why.
+/// counts in range (1 to 2^32 nodes, at most 2^32 references and triangles), reserved bytes zero, and
+/// the file's size what the counts make (as read_tree_file says). Each failure is an Error naming the
+/// file and why.
 TreeFileHeader read_tree_file_header(const std::filesystem::path& path);
 
 /// The whole file: its header checked as read_tree_file_header does, and its size exactly what the

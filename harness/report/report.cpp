@@ -354,6 +354,7 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     return bytes ? std::optional<double>(*bytes / kMiB) : std::nullopt;
   };
   bool any_wrong = false;
+  std::set<std::string> unanchored;  // the anchors rows were to be compared with and the run lacks
   for (const auto& [label, layout] : keys) {
     std::map<std::string, const CsvRow*> by_set;
     for (const CsvRow* r : group)
@@ -370,6 +371,11 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     const auto shard_anchors = anchors_by_shard.find(field(any, "shard"));
     const auto& anchors_of_row = shard_anchors == anchors_by_shard.end() ? kNone : shard_anchors->second;
     const CsvRow* any_anchor = anchors_of_row.empty() ? nullptr : anchors_of_row.begin()->second;
+    if (anchors_of_row.empty())
+      unanchored.insert(row.against_packets ? (row.marked ? "Embree's packets in its robust mode"
+                                                          : "Embree's packets in its default mode")
+                        : row.marked        ? "Embree 1-ray in its robust mode"
+                                            : "Embree medium 1-ray in its default mode");
     row.cells.push_back(cell(csv_number(any, "build_ms_median"), std::nullopt));
     // Build plus layout compile against Embree's build, whose rtcCommitScene does both: round r's sum
     // (build_layout_ms_samples) against Embree's build r.
@@ -400,6 +406,11 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
     }
     table.rows.push_back(std::move(row));
   }
+  if (!unanchored.empty())
+    table.legend.push_back(fmt::format(
+        "Rows without ratios: this run has no {} to compare them with (a row is compared only with Embree "
+        "in the mode of its kernels).",
+        fmt::join(unanchored, ", nor ")));
   if (any_wrong)
     table.legend.push_back(
         "[N wrong]: N rays of the set answered otherwise than the exact reference (the CSV's mismatches "

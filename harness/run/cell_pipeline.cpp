@@ -86,7 +86,7 @@ TreeSource embree_refit(std::string label, std::shared_ptr<EmbreeBuild> embree,
 }
 
 void time_sources(std::span<TreeSource* const> sources, const Repetitions& reps, uint64_t seed,
-                  const std::function<void()>& before_each) {
+                  const std::function<void()>& before_each, const std::function<void(int round)>& on_round) {
   if (!reps.interleave) {
     // Each source warmed right before its own timed makes, as time_cells does for traces.
     for (TreeSource* source : sources) {
@@ -103,8 +103,10 @@ void time_sources(std::span<TreeSource* const> sources, const Repetitions& reps,
       if (source->release) source->release();
       source->make();
     }
-  for (int r = 0; r < reps.build; ++r)
+  for (int r = 0; r < reps.build; ++r) {
+    if (on_round) on_round(r);
     for (const std::size_t k : round_order(seed, sources.size(), r)) make_timed(*sources[k], before_each);
+  }
 }
 
 CheckedTree check_tree(const Bvh& bvh, std::span<const Triangle> triangles, const ParamSet& params,

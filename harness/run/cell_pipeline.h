@@ -85,9 +85,10 @@ TreeSource embree_refit(std::string label, std::shared_ptr<EmbreeBuild> embree,
 /// `reps.build` rounds. Interleaved (reps.interleave), each round makes every source once, in the
 /// round's own shuffle of `seed` (round_order.h), so that a slow spell of the machine falls on all of
 /// them alike; otherwise each source's warm-ups and rounds run back to back. `before_each` runs before every
-/// timed make (an interrupt check).
+/// timed make (an interrupt check), `on_round` (if any) before each interleaved round (progress).
 void time_sources(std::span<TreeSource* const> sources, const Repetitions& reps, uint64_t seed,
-                  const std::function<void()>& before_each);
+                  const std::function<void()>& before_each,
+                  const std::function<void(int round)>& on_round = {});
 
 /// A tree of ours, checked: the validator's report first, and the statistics only of a valid tree
 /// (compute_stats walks nodes[] unchecked, so a child index out of range must not reach it).

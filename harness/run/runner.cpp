@@ -237,8 +237,15 @@ class ExperimentRunner {
     std::vector<TreeSource*> sources;
     for (auto& job : jobs) sources.push_back(&job.source);
     const auto interrupt = [&] { check_interrupt(progress); };
+    // Builds of a large scene take seconds each: each round says so, as the trace rounds do.
+    log_ << fmt::format("{} t={}: building {} trees, {} warm-up and {} timed builds each\n", group.scene.name,
+                        group.threads, sources.size(), cfg_.reps.build_warmup, cfg_.reps.build);
     time_sources(sources, cfg_.reps, order_seed(cfg_.seed, group.scene.name, group.threads, "build"),
-                 interrupt);
+                 interrupt, [&](int r) {
+                   log_ << fmt::format("{} t={}: build repetition {} of {}, {} trees in shuffled turns\n",
+                                       group.scene.name, group.threads, r + 1, cfg_.reps.build,
+                                       sources.size());
+                 });
     std::vector<TraceCell> cells;
     for (auto& job : jobs) {
       check_interrupt(progress);

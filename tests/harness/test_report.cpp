@@ -240,6 +240,32 @@ TEST(Report, ExactKernelsAreComparedWithEmbreeRobustAndFastOnesWithItsDefault) {
   EXPECT_EQ(tex.str().find("\u2020"), std::string::npos) << "LaTeX gets \\textdagger\n" << tex.str();
 }
 
+TEST(Report, RowsWhoseEmbreeModeTheRunLacksSaySo) {
+  // Embree's robust mode alone: the exact kernels have their ratios, the fast variants none, and the
+  // legend says why.
+  const auto path = temp_csv("robust_only.csv");
+  {
+    CsvWriter w(path, columns_with_samples());
+    w.append(
+        make_row("embree", "quality=medium;robust=1", "embree_1", "primary", 20.0, 8.0 * (1 << 20), "", 2.0));
+    w.append(make_row("wide_collapse", "c_trav=1", "bvh8", "primary", 5.0, 2.0 * (1 << 20), "30.0", 3.0));
+    w.append(make_row("wide_collapse", "c_trav=1", "bvh8:tri=mtn,box=fma", "primary", 5.0, 2.0 * (1 << 20),
+                      "30.0", 3.0));
+  }
+  std::ostringstream out;
+  print_report({{path}, ""}, out);
+  const std::string md = out.str();
+  EXPECT_NE(md.find("| **3.00** (1.50 [1.50, 1.50] \u25B2) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("Rows without ratios: this run has no Embree medium 1-ray in its default mode to compare "
+                    "them with"),
+            std::string::npos)
+      << md;
+  // With both modes, no such sentence.
+  std::ostringstream both;
+  print_report({{write_like_for_like("both_modes.csv", true)}, ""}, both);
+  EXPECT_EQ(both.str().find("Rows without ratios"), std::string::npos) << both.str();
+}
+
 TEST(Report, WithoutEmbreeRobustEveryRowKeepsEmbreesDefaultMode) {
   std::ostringstream out;
   print_report({{write_like_for_like("default_only.csv", false)}, ""}, out);

@@ -230,6 +230,8 @@ TEST(HarnessRun, InterleavedAndBackToBackRepetitionsGiveTheSameCellsAndCounts) {
     std::ostringstream log;
     ASSERT_EQ(run_experiment({config, false, "", std::nullopt}, log), 0) << log.str();
     EXPECT_EQ(log.str().find("trace repetition") != std::string::npos, interleave == 1) << log.str();
+    EXPECT_EQ(log.str().find("build repetition 1 of") != std::string::npos, interleave == 1) << log.str();
+    EXPECT_NE(log.str().find(" trees, 0 warm-up and "), std::string::npos) << log.str();
     for (const auto& row : read_csv(temp_dir() / (name + ".csv"))) {
       const std::string key = row.at("scene") + "|" + row.at("builder") + "|" + row.at("builder_params") +
                               "|" + row.at("layout") + "|" + row.at("threads") + "|" + row.at("ray_set");
@@ -713,11 +715,12 @@ TEST(HarnessTrace, EmbreeLayoutsMatchBruteForceOrAreRefusedByName) {
   }
   EXPECT_GE(traced, 4u) << "embree_1 runs on every CPU, in both modes";
   // A ray beyond Embree's range would stop the process in its assertion: refused by name, not traced.
-  std::ofstream(rays_path) << "0 0 5 0 0 -1\n0 0 1e20 0 0 -1\n";
+  // Named by its line: here the fourth, after a header and a comment.
+  std::ofstream(rays_path) << "ox oy oz dx dy dz\n0 0 5 0 0 -1\n# far\n0 0 1e20 0 0 -1\n";
   const TraceCommandOptions far{scene_spec, "embree", "embree_1", rays_path, out_path, TraceQuery::kClosest};
   std::ostringstream log;
   const std::string what = test::error_of([&] { run_trace_command(far, log); });
-  EXPECT_NE(what.find("embree_rays.txt: ray 1 has an origin or direction component beyond 1.844e+18"),
+  EXPECT_NE(what.find("embree_rays.txt:4: an origin or direction component beyond 1.844e+18"),
             std::string::npos)
       << what;
 }

@@ -186,6 +186,11 @@ TEST_F(TreeFileBuilder, ConfigsWhereATreeFileCannotFitAreRefusedAsRead) {
   contains(error_of([&] { load_experiment_config(two); }), "fits one scene, but this config has 2 scenes");
   const auto one = write("one.toml", head + "scenes = [\"" + std::string(kScene) + "\"]\n" + builder + rays);
   EXPECT_NO_THROW(load_experiment_config(one));
+  // A truncated file is named as the config is read, with the config's line, not after the run began.
+  std::filesystem::resize_file(dir / "t.sbt", std::filesystem::file_size(dir / "t.sbt") - 4);
+  const std::string cut = error_of([&] { load_experiment_config(one); });
+  contains(cut, "one.toml:5:");
+  contains(cut, "t.sbt: tree file is truncated");
 }
 
 TEST_F(TreeFileBuilder, BadPathsAreErrorsNamingThem) {

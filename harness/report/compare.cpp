@@ -288,6 +288,12 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
              result.missing_cells + result.missing_anchors,
              result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
              options.deterministic_only ? " (deterministic metrics only)" : "");
+  for (const ResultFile* f : {&bf, &cf})
+    if (f->cut_last_line)
+      fmt::print(out,
+                 "Note: {}: its last line is incomplete (a run stopped while writing it); that row is "
+                 "left out.\n\n",
+                 f->path.string());
   if (!not_in_base.empty())
     fmt::print(out, "Not compared: {}, which the baseline {} has no column for (a CSV from before it).\n\n",
                fmt::join(not_in_base, ", "), options.baseline.string());

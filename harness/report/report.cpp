@@ -570,6 +570,12 @@ void print_report(const ReportOptions& options, std::ostream& out) {
         throw Error(path.string() + ":1: not a sahbench result CSV: the header has no column '" + column +
                     "'");
   }
+  std::vector<std::string> cut_notes;
+  for (const auto& f : files)
+    if (f.cut_last_line)
+      cut_notes.push_back(
+          f.path.string() +
+          ": its last line is incomplete (a run stopped while writing it); that row is left out");
   std::vector<Located> all;
   for (const auto& f : files)
     for (std::size_t i = 0; i < f.rows.size(); ++i) all.push_back({&f, i});
@@ -634,6 +640,12 @@ void print_report(const ReportOptions& options, std::ostream& out) {
         run, field(first, "git_commit"), field(first, "cpu"), field(first, "compiler"),
         field(first, "embree_version"), field(first, "build_reps"), field(first, "trace_reps"),
         field(first, "config"), field(first, "seed", "?"), fingerprint.empty() ? "?" : fingerprint);
+  for (const std::string& note : cut_notes) {
+    if (html)
+      html_paragraph("Note: " + note + ".", out);
+    else
+      fmt::print(out, "{}Note: {}.\n\n", latex ? "% " : "", note);
+  }
 
   // Group by (scene, threads, frame); keep first-seen order.
   std::vector<GroupKey> groups;

@@ -144,7 +144,9 @@ const std::string& ResultFile::field(std::size_t i, const std::string& column) c
 
 ResultFile read_result_file(const std::filesystem::path& path) {
   ResultFile file{path, read_csv(path), {}};
-  file.lines = record_lines(read_text_file(path, "result CSV"));
+  const std::string text = read_text_file(path, "result CSV");
+  file.lines = record_lines(text);
+  file.cut_last_line = !text.empty() && text.back() != '\n';
   // Both read the same text by the same rules; a difference is a bug here, not bad input.
   if (file.lines.size() != file.rows.size())
     throw std::logic_error(fmt::format("{}: {} rows read, but {} found by line", path.string(),

@@ -55,6 +55,9 @@ struct ResultFile {
   std::filesystem::path path;
   std::vector<CsvRow> rows;
   std::vector<std::size_t> lines;  ///< lines[i]: the line rows[i] starts on
+  /// Its last line has no newline: a row cut off mid-write (a run killed while writing), which read_csv
+  /// leaves out; readers say so rather than lose the cell silently.
+  bool cut_last_line = false;
 
   /// "PATH:LINE" of row i.
   std::string where(std::size_t i) const;

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "core/error.h"
@@ -240,6 +241,24 @@ TEST(Report, ExactKernelsAreComparedWithEmbreeRobustAndFastOnesWithItsDefault) {
   EXPECT_EQ(tex.str().find("\u2020"), std::string::npos) << "LaTeX gets \\textdagger\n" << tex.str();
 }
 
+TEST(Report, ARowCutOffMidWriteIsLeftOutWithANote) {
+  const auto whole = write_results("whole.csv");
+  std::string text;
+  {
+    std::ifstream in(whole);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const auto cut = temp_csv("cut.csv");
+  std::ofstream(cut) << text.substr(0, text.size() - 10);
+  std::ostringstream out;
+  print_report({{cut}, ""}, out);
+  EXPECT_NE(out.str().find("Note: " + cut.string() + ": its last line is incomplete"), std::string::npos)
+      << out.str();
+  std::ostringstream plain;
+  print_report({{whole}, ""}, plain);
+  EXPECT_EQ(plain.str().find("incomplete"), std::string::npos) << plain.str();
+}
+
 TEST(Report, RowsWhoseEmbreeModeTheRunLacksSaySo) {
   // Embree's robust mode alone: the exact kernels have their ratios, the fast variants none, and the
   // legend says why.
@@ -420,6 +439,31 @@ TEST(Report, CellsWithWrongAnswersSaySoAndAreNotMarkedBest) {
   std::ostringstream plain;
   print_report({{write_results("all_right.csv")}, ""}, plain);
   EXPECT_EQ(plain.str().find("wrong"), std::string::npos) << plain.str();
+
+  // Over two tables, the standing counts the cells with wrong answers in a column of their own.
+  const auto two = temp_csv("wrong_two.csv");
+  {
+    std::vector<std::string> columns = columns_with_samples();
+    columns.push_back("mismatches");
+    CsvWriter w(two, columns);
+    for (const std::string scene : {"proc:soup", "proc:sphere"}) {
+      auto row = [&](const std::string& layout, double mrays, const std::string& wrong) {
+        CsvRow r = make_row(layout == "embree_1" ? "embree" : "binned_sah",
+                            layout == "embree_1" ? "quality=medium" : "bins=8", layout, "primary", 5.0,
+                            1 << 20, layout == "embree_1" ? "" : "40", mrays);
+        r["scene"] = scene;
+        r["mismatches"] = wrong;
+        return r;
+      };
+      w.append(row("embree_1", 8.0, "0"));
+      w.append(row("bvh2", 9.0, scene == "proc:soup" ? "3" : "0"));
+    }
+  }
+  std::ostringstream standing;
+  print_report({{two}, ""}, standing);
+  EXPECT_NE(standing.str().find("| with wrong answers |"), std::string::npos) << standing.str();
+  EXPECT_NE(standing.str().find("| binned_sah | 2 | 2 | 2 | 0 | 0 | 1 | 1.12 | 1.12 |"), std::string::npos)
+      << standing.str();
 }
 
 TEST(Report, SahCostsUnderOtherConstantsAreNotedAndNotCompared) {

@@ -32,6 +32,14 @@ std::string known_names(const std::vector<ParamSpec>& specs) {
   return out.empty() ? "none" : out;
 }
 
+// What the CSV form records of a path: with an identity (a hash of the file's contents), the file's name
+// beside it, so that builder_params and a run's fingerprint follow the file, not the folder the run or
+// its checkout happens to be in; without one, the whole path.
+std::string recorded_path(const ParamSet::Value& value) {
+  if (!value.spec.path_identity || value.text.empty()) return value.text;
+  return std::filesystem::path(value.text).filename().string();
+}
+
 // Sources nest only as deep as someone writes them; a default source that names its own pass would recurse
 // forever, and this guards against such a registration.
 constexpr int kMaxSourceDepth = 16;
@@ -123,10 +131,10 @@ ParamSet resolve_params_at(std::string_view builder, const std::vector<ParamSpec
       throw Error(std::string(builder) + ": parameter '" + key + "' is given twice");
     if (it->spec.type == ParamType::kSource) source_names[name] = text;
     if (it->spec.type == ParamType::kPath) {
-      // Absolute, so that builder_params and a run's fingerprint do not depend on the folder it was
-      // started from; the characters are checked on the path as recorded.
+      // Held absolute, so that the file is found whatever the current folder later is; the characters
+      // are checked on the text the CSV form records (recorded_path).
       it->text = text.empty() ? text : std::filesystem::absolute(text).lexically_normal().string();
-      it->number = parse_value(builder, it->spec, it->text);
+      it->number = parse_value(builder, it->spec, recorded_path(*it));
       if (it->spec.path_identity) it->identity = it->spec.path_identity(it->text);
       continue;
     }
@@ -170,7 +178,7 @@ std::string ParamSet::to_string() const {
     if (own_source && value.spec.shared_source_only) continue;
     out += (out.empty() ? "" : ";") + value.spec.name + "=";
     if (value.spec.type == ParamType::kPath) {
-      out += value.text;
+      out += recorded_path(value);
       if (!value.identity.empty()) out += ";" + value.spec.name + "_hash=" + value.identity;
       continue;
     }
@@ -214,6 +222,13 @@ const std::string& ParamSet::get_path(std::string_view name) const {
   if (value.spec.type != ParamType::kPath)
     throw Error(builder_ + ": parameter '" + std::string(name) + "' is not a path");
   return value.text;
+}
+
+const std::string& ParamSet::get_path_identity(std::string_view name) const {
+  const Value& value = find(name);
+  if (value.spec.type != ParamType::kPath)
+    throw Error(builder_ + ": parameter '" + std::string(name) + "' is not a path");
+  return value.identity;
 }
 
 bool ParamSet::reads_files() const {

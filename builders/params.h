@@ -24,7 +24,8 @@ namespace sahbench {
 /// kSource: a binary tree source, a registered builder or pass with its own parameters (SourceSpec).
 /// kPath: a file path, held as text and never opened here (builders do no file I/O); a config makes a
 /// relative one relative to the config's folder, the command line relative to the current one, and the
-/// resolved set holds it absolute, so that the same file is the same parameter from any folder.
+/// resolved set holds it absolute. Where the parameter has an identity (ParamSpec::path_identity), the
+/// CSV form records the file's name and that identity rather than the folder it lies in.
 enum class ParamType { kInt, kFloat, kChoice, kSource, kPath };
 
 struct ParamSpec {
@@ -42,11 +43,12 @@ struct ParamSpec {
   /// these given a nested parameter, is built with its own parameters over its own defaults.
   std::vector<std::string> shared_sources = {};
   /// Applies only while the set's kSource parameter is a shared source (the pass's own binary build):
-  /// with any other source it is not recorded, and setting it away from its default is an error.
+  /// with any other source it is not recorded (the builder's check refuses it set away from its default).
   bool shared_source_only = false;
   /// kPath: the file's identity (a hash of its contents) as text, given by whoever registers the
-  /// parameter, since builders do no file I/O. When set, the CSV form records it after the path as
-  /// NAME_hash, so that a run over a changed file is another run.
+  /// parameter, since builders do no file I/O. When set, the CSV form records the file's name and then
+  /// the identity as NAME_hash, so that a run over a changed file is another run and a run over the same
+  /// file in another folder the same run.
   std::function<std::string(const std::string& path)> path_identity = {};
 };
 
@@ -106,6 +108,8 @@ class ParamSet {
   const SourceSpec& get_source(std::string_view name) const;
   /// The text of a kPath parameter (empty when not given).
   const std::string& get_path(std::string_view name) const;
+  /// The identity a kPath parameter's file had when the set was resolved (empty without one).
+  const std::string& get_path_identity(std::string_view name) const;
   /// Whether any kPath parameter, here or in a source's parameters, names a file.
   bool reads_files() const;
 

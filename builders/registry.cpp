@@ -131,20 +131,29 @@ constexpr const char* kSharedSourceOnly[] = {"bins", "adaptive_bins", "min_leaf"
 void check_unshared(const ParamSet& p, const char* builder) {
   const SourceSpec& source = p.get_source("source");
   if (source.shared()) return;
-  for (const ParamSpec& spec : find_builder(builder).params) {
+  const auto& params = find_builder(builder).params;
+  const auto source_spec =
+      std::find_if(params.begin(), params.end(), [](const ParamSpec& s) { return s.name == "source"; });
+  std::string own_builds;
+  for (const std::string& name : source_spec->shared_sources)
+    own_builds += (own_builds.empty() ? "" : ", ") + name;
+  for (const ParamSpec& spec : params) {
     if (!spec.shared_source_only || p.get(spec.name) == spec.default_value) continue;
-    const bool source_has_it = source.params->has(spec.name);
-    const std::string instead =
-        spec.name == "source_c_trav_scale"
-            ? (source.params->has("c_trav") ? "give the source its own c_trav (source.c_trav=...)"
-                                            : "source=" + source.name() + " has no c_trav to scale")
-        : spec.name == "reinsert_iterations"
-            ? "name the pass as the source (source=reinsert,source.source=" + source.name() + ")"
-        : source_has_it ? "give it to the source (source." + spec.name + "=...)"
-                        : "source=" + source.name() + " has no such parameter";
+    const bool source_has = source.params->has(spec.name);
+    std::string instead;
+    if (spec.name == "source_c_trav_scale")
+      instead = source.params->has("c_trav") ? "give the source its own c_trav (source.c_trav=...)"
+                                             : "source=" + source.name() + " has no c_trav to scale";
+    else if (spec.name == "reinsert_iterations")
+      instead = source.name() == "reinsert"
+                    ? "give the source its own iterations (source.iterations=...)"
+                    : "name the pass as the source (source=reinsert,source.source=" + source.name() + ")";
+    else
+      instead = source_has ? "give it to the source (source." + spec.name + "=...)"
+                           : "source=" + source.name() + " has no such parameter";
     throw Error(std::string(builder) + ": " + spec.name +
-                " applies only to binned_sah, sweep_sah or sbvh named alone as the source, not to source=" +
-                source.name() + "; " + instead);
+                " applies only to the collapse's own build of a source named alone (" + own_builds +
+                "), not to source=" + source.name() + "; " + instead);
   }
 }
 

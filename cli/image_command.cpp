@@ -130,7 +130,8 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   resolve(spec);
   const BuilderInfo& info = *spec.info;
   const ParamSet& params = spec.values;
-  const LayoutSpec layout_spec = parse_layout_spec(options.layout);
+  const LayoutSpec layout_spec =
+      parse_layout_spec(options.layout.empty() ? default_layout(spec) : options.layout);
   if (const auto why = layout_unavailable(layout_spec))
     throw Error("--layout '" + layout_spec.text() + "': " + *why);
   require_layout_of_arity(spec, layout_spec);

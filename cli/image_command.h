@@ -27,8 +27,8 @@ namespace sahbench {
 struct ImageCommandOptions {
   std::string scene;
   std::string builder =
-      "binned_sah";             ///< NAME or NAME:key=value,... (a registered builder: ours or embree_bvh)
-  std::string layout = "bvh2";  ///< a layout spec, NAME[:key=value,...]
+      "binned_sah";         ///< NAME or NAME:key=value,... (a registered builder: ours or embree_bvh)
+  std::string layout = {};  ///< a layout spec, NAME[:key=value,...]; empty: default_layout of the builder
   uint32_t width = 512, height = 512;
   std::string ray_set = "primary";  ///< only primary rays map one to one onto pixels
   /// A view in place of the scene's camera (scenes/camera.h: look_at_camera), as "x,y,z" texts; eye and

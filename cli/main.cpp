@@ -144,7 +144,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   trace_cmd->add_option(
       "--layout", trace.layout,
-      "layout spec (default bvh2); with --builder embree: embree_1 (default), embree_8 or embree_16");
+      "layout spec (default: bvh2 for binary trees, bvh4 or bvh8 for wide ones); with --builder embree: "
+      "embree_1 (default), embree_8 or embree_16");
   trace_cmd->add_option("--query", trace_query, "closest | any (any: only the hit column is filled)")
       ->capture_default_str();
   trace_cmd->add_option("--rays", trace.rays, "ray file: 'ox oy oz dx dy dz [tmin tmax]' per line")
@@ -175,11 +176,11 @@ int main(int argc, char** argv) {
             try {
               v = std::stod(text);
             } catch (const std::exception&) {
-              return "--margin: '" + text + "' is not a number";
+              return "'" + text + "' is not a number";
             }
             return std::isfinite(v) && v >= 0.0 && v < 1.0
                        ? ""
-                       : "--margin: " + text + " is not a fraction in [0, 1) (0.05 flags changes beyond 5%)";
+                       : text + " is not a fraction in [0, 1) (0.05 flags changes beyond 5%)";
           },
           "FRACTION"));
   compare_cmd->add_option(
@@ -192,7 +193,8 @@ int main(int argc, char** argv) {
   image_cmd->add_option("--scene", image.scene, "scene file, shared-scene name or procedural spec")
       ->required();
   image_cmd->add_option("--builder", image.builder, "NAME or NAME:key=value,...")->capture_default_str();
-  image_cmd->add_option("--layout", image.layout, "layout spec")->capture_default_str();
+  image_cmd->add_option("--layout", image.layout,
+                        "layout spec (default: bvh2 for binary trees, bvh4 or bvh8 for wide ones)");
   image_cmd->add_option("--width", image.width, "pixels")->capture_default_str();
   image_cmd->add_option("--height", image.height, "pixels")->capture_default_str();
   image_cmd->add_option("--ray-set", image.ray_set, "ray set (primary)")->capture_default_str();

@@ -104,7 +104,7 @@ void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
   resolve(run);
   const std::string layout_text = !options.layout.empty() ? options.layout
                                   : run.is_embree()       ? kEmbreeLayouts[0].name
-                                                          : "bvh2";
+                                                          : default_layout(run);
   const TraceAnswers answers = run.is_embree() ? trace_embree(run, layout_text, scene, rays, options.query,
                                                               options.rays.string(), lines)
                                                : trace_ours(run, layout_text, scene, rays, options.query);

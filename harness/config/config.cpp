@@ -389,8 +389,9 @@ void read_builders(const Source& src, const toml::table& root, ExperimentConfig&
                                "static experiment");
         if (scenes > 1)
           src.fail(*table, "builder run '" + run.label() + "' reads a tree file, which fits one scene, but " +
-                               "this config has " + std::to_string(scenes) +
-                               " scenes: give the file a config of its own with its scene alone");
+                               "this config names " + std::to_string(scenes) +
+                               " scenes (scenes and optional_scenes): give the file a config of its own "
+                               "with its scene alone");
       }
       const bool traced = run.is_embree() ||
                           std::any_of(config.layouts.begin(), config.layouts.end(), [&](const LayoutSpec& l) {
@@ -649,6 +650,12 @@ void require_layout_of_arity(const BuilderRun& run, const LayoutSpec& layout) {
   if (arity > 2)
     message += ", or --builder wide_collapse:arity=" + std::to_string(arity) + " for a tree of its arity";
   throw Error(message);
+}
+
+std::string default_layout(const BuilderRun& run) {
+  for (const auto& l : layouts())
+    if (l.arity == run.arity) return l.name;
+  throw Error("no layout traces the " + std::to_string(run.arity) + "-wide trees of " + run.label());
 }
 
 std::string BuilderRun::params_text() const {

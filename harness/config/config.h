@@ -179,6 +179,10 @@ void require_resolved(const BuilderRun& run);
 /// where `layout` is of another arity than `run`'s (resolved) trees.
 void require_layout_of_arity(const BuilderRun& run, const LayoutSpec& layout);
 
+/// The layout `trace` and `image` use when none is given: the first registered layout of the arity of
+/// `run`'s (resolved, ours) trees, bvh2 for binary ones.
+std::string default_layout(const BuilderRun& run);
+
 /// A builder run as the command line writes it: "NAME" or "NAME:key=value,key=value", for one of our
 /// builders or Embree's own BVH ("embree:quality=high", "embree:quality=medium,robust=1"; "embree_low",
 /// "embree_medium" and "embree_high" are short for the three qualities in Embree's default mode).

@@ -413,8 +413,9 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
         fmt::join(unanchored, ", nor ")));
   if (any_wrong)
     table.legend.push_back(
-        "[N wrong]: N rays of the set answered otherwise than the exact reference (the CSV's mismatches "
-        "column: another hit, distance or occlusion); such a cell is not marked best.");
+        "[N wrong]: N rays of the set answered otherwise than the run's reference (the CSV's reference and "
+        "mismatches columns: brute force, or Embree's robust mode on large scenes; another hit, distance "
+        "or occlusion); such a cell is not marked best.");
   mark_best(table);
   return table;
 }

@@ -129,7 +129,7 @@ ReportTable standing_table(const std::vector<ReportTable>& tables, const std::st
       fmt::format("{:.1f}", kStandingTarget) + " or more as printed." +
       (any_bare ? " No interval: a ratio from one round or from medians, counted in no other verdict." : "") +
       (any_wrong ? " With wrong answers: cells (counted in their verdict too) where some rays answered "
-                   "otherwise than the exact reference."
+                   "otherwise than the run's reference."
                  : "") +
       " Lowest and highest are the ratios themselves.");
   return out;

@@ -180,12 +180,17 @@ TEST(Collapse, ASourceWithParametersOfItsOwnIsCollapsedAsGiven) {
     return "no error";
   };
   const std::string rounds = error_of({{"source", "ploc"}, {"reinsert_iterations", "0"}});
-  EXPECT_NE(rounds.find("reinsert_iterations applies only to binned_sah, sweep_sah or sbvh named alone"),
+  EXPECT_NE(rounds.find("reinsert_iterations applies only to the collapse's own build of a source named "
+                        "alone (binned_sah, sweep_sah, sbvh)"),
             std::string::npos)
       << rounds;
   EXPECT_NE(rounds.find("source=reinsert"), std::string::npos) << rounds;
   const std::string scale = error_of({{"source", "ploc"}, {"source_c_trav_scale", "1"}});
   EXPECT_NE(scale.find("source.c_trav="), std::string::npos) << scale;
+  const std::string own_rounds =
+      error_of({{"source", "reinsert"}, {"source.iterations", "2"}, {"reinsert_iterations", "3"}});
+  EXPECT_NE(own_rounds.find("give the source its own iterations (source.iterations=...)"), std::string::npos)
+      << own_rounds;
   const std::string no_bins = error_of({{"source", "lbvh"}, {"bins", "4"}});
   EXPECT_NE(no_bins.find("source=lbvh has no such parameter"), std::string::npos) << no_bins;
   // Not recorded where they do nothing: the text after the source's own parameters holds none of them.

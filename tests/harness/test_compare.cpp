@@ -399,9 +399,26 @@ TEST(HarnessCompare, ANewRunWithoutItsEmbreeAnchorIsARegressionNotAPass) {
   // Nor does a baseline without anchors pass: its timings were never compared.
   const auto unanchored = write("no_anchor_base", rows);
   const std::string message = compare_error(baseline(), false, unanchored);
-  EXPECT_NE(message.find("the baseline has no Embree anchor"), std::string::npos) << message;
+  EXPECT_NE(
+      message.find("the baseline has no Embree anchor (embree [quality=medium], embree_1) for any of its"),
+      std::string::npos)
+      << message;
   EXPECT_NE(message.find("--deterministic-only"), std::string::npos) << message;
   EXPECT_EQ(run_compare(baseline(), true, unanchored).regressions, 0);
+  // One whose anchors cover some cells compares those and lists the others, which are no regression.
+  std::vector<CsvRow> partly = make_run({});
+  const auto first_embree =
+      std::find_if(partly.begin(), partly.end(), [](const CsvRow& r) { return r.at("builder") == "embree"; });
+  ASSERT_NE(first_embree, partly.end());
+  const std::string lost_set = first_embree->at("ray_set");
+  partly.erase(first_embree);
+  std::string partial_text;
+  const CompareResult partial =
+      run_compare(baseline(), false, write("partly_anchored", partly), &partial_text);
+  EXPECT_EQ(partial.regressions, 0) << partial_text;
+  EXPECT_NE(partial_text.find("Cells whose baseline has no Embree anchor"), std::string::npos)
+      << partial_text;
+  EXPECT_NE(partial_text.find(lost_set), std::string::npos) << partial_text;
 }
 
 TEST(HarnessCompare, JsonForDashboards) {

@@ -433,7 +433,8 @@ TEST(HarnessConfigSource, BadSourcesNameKeyAndLine) {
                {"builder run", "below min_leaf = 8"});
   // wide_collapse's shared parameters mean nothing to a source with parameters of its own.
   expect_error(wide("bins = 16\nsource = \"treelet\"\n"), 8,
-               {"bins applies only to binned_sah, sweep_sah or sbvh named alone"});
+               {"bins applies only to the collapse's own build of a source named alone (binned_sah, "
+                "sweep_sah, sbvh)"});
 }
 
 TEST(HarnessConfigEmbree, QualitySweepAndDefault) {

@@ -432,7 +432,7 @@ TEST(Report, CellsWithWrongAnswersSaySoAndAreNotMarkedBest) {
   EXPECT_NE(md.find("9.00 [3 wrong] (1.12 [1.12, 1.12] \u25B2) |"), std::string::npos) << md;
   EXPECT_NE(md.find("**8.00**"), std::string::npos) << md;
   EXPECT_EQ(md.find("**9.00"), std::string::npos) << md;
-  EXPECT_NE(md.find("[N wrong]: N rays of the set answered otherwise than the exact reference"),
+  EXPECT_NE(md.find("[N wrong]: N rays of the set answered otherwise than the run's reference"),
             std::string::npos)
       << md;
   // Without wrong answers, no such sentence.

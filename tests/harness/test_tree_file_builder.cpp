@@ -91,11 +91,11 @@ TEST_F(TreeFileBuilder, ConfigRunTracesSavedTreesWithNoMismatches) {
     }
     EXPECT_FALSE(row.at("sah_cost").empty());
     const std::string params = row.at("builder_params");
-    if (params.find("path=" + (dir / "trees" / "binary.sbt").string() + ";") == 0) {
+    if (params.find("path=binary.sbt;path_hash=0x") == 0) {
       ++binary;
       EXPECT_EQ(row.at("arity"), "2");
     } else {
-      EXPECT_EQ(params.find("path=" + (dir / "trees" / "wide.sbt").string() + ";"), 0u) << params;
+      EXPECT_EQ(params.find("path=wide.sbt;path_hash=0x"), 0u) << params;
       EXPECT_EQ(row.at("layout"), "bvh8");
       ++wide;
     }
@@ -121,8 +121,7 @@ TEST_F(TreeFileBuilder, RelativePathsAreRelativeToTheConfigsFolder) {
   ASSERT_EQ(c.builders.size(), 2u);
   EXPECT_EQ(c.builders[0].values.get_path("path"), (dir / "trees" / "t.sbt").string());
   // An absolute path is kept; and a pass takes a saved binary tree as its source.
-  EXPECT_NE(c.builders[1].params_text().find("source=file(path=" + (dir / "trees" / "t.sbt").string()),
-            std::string::npos)
+  EXPECT_NE(c.builders[1].params_text().find("source=file(path=t.sbt;path_hash=0x"), std::string::npos)
       << c.builders[1].params_text();
   // The same path relative to the current folder is not found from the config's.
   std::ofstream(config) << "[experiment]\nname = \"c\"\nscenes = [\"" << kScene << "\"]\n"
@@ -145,11 +144,12 @@ TEST_F(TreeFileBuilder, CommandLinePathsAreRelativeToTheCurrentFolder) {
   EXPECT_NO_THROW(resolve(keyed));
   EXPECT_NO_THROW(resolve(short_keyed));
   std::filesystem::current_path(cwd);
-  // Recorded absolute, so the same file reads the same from any folder, and with its contents' hash.
+  // Held absolute, so the file is found whatever the current folder later is, and recorded by its name
+  // and its contents' hash.
   const std::string path = (dir / "trees" / "t.sbt").string();
   EXPECT_EQ(shorthand.values.get_path("path"), path);
   const std::string text = keyed.values.to_string();
-  EXPECT_EQ(text.find("path=" + path + ";path_hash=0x"), 0u) << text;
+  EXPECT_EQ(text.find("path=t.sbt;path_hash=0x"), 0u) << text;
   EXPECT_NE(text.find(";c_trav=2;c_isect=1"), std::string::npos) << text;
   EXPECT_EQ(short_keyed.values.to_string(), text);
 }
@@ -168,6 +168,17 @@ TEST_F(TreeFileBuilder, AnotherTreeInTheSameFileIsAnotherRun) {
   BuilderRun again = parse_builder_run("file:" + path.string());
   resolve(again);
   EXPECT_EQ(first.params_text(), again.params_text());
+  // The same file in another folder (another checkout) is the same run.
+  std::filesystem::create_directories(dir / "elsewhere");
+  std::filesystem::copy_file(path, dir / "elsewhere" / "t.sbt");
+  BuilderRun moved = parse_builder_run("file:" + (dir / "elsewhere" / "t.sbt").string());
+  resolve(moved);
+  EXPECT_EQ(first.params_text(), moved.params_text());
+  // Written over after the run was resolved: its build refuses to measure the new tree under the old hash.
+  save_tree(kScene, "sweep_sah", {}, path);
+  const Scene scene = load_scene(kScene);
+  contains(error_of([&] { again.info->build(BuildInput::from_triangles(scene.triangles), again.values); }),
+           "the tree file changed since the run was planned");
 }
 
 TEST_F(TreeFileBuilder, ConfigsWhereATreeFileCannotFitAreRefusedAsRead) {
@@ -183,7 +194,7 @@ TEST_F(TreeFileBuilder, ConfigsWhereATreeFileCannotFitAreRefusedAsRead) {
   const auto two = write("two.toml", head + "scenes = [\"" + std::string(kScene) +
                                          "\", \"proc:soup:tris=100\"]\n" + builder + rays);
   contains(error_of([&] { load_experiment_config(two); }), "two.toml:");
-  contains(error_of([&] { load_experiment_config(two); }), "fits one scene, but this config has 2 scenes");
+  contains(error_of([&] { load_experiment_config(two); }), "fits one scene, but this config names 2 scenes");
   const auto one = write("one.toml", head + "scenes = [\"" + std::string(kScene) + "\"]\n" + builder + rays);
   EXPECT_NO_THROW(load_experiment_config(one));
   // A truncated file is named as the config is read, with the config's line, not after the run began.

@@ -353,7 +353,7 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   auto mib = [&](std::optional<double> bytes) {
     return bytes ? std::optional<double>(*bytes / kMiB) : std::nullopt;
   };
-  bool any_wrong = false;
+  bool any_mismatch = false;
   std::set<std::string> unanchored;  // the anchors rows were to be compared with and the run lacks
   for (const auto& [label, layout] : keys) {
     std::map<std::string, const CsvRow*> by_set;
@@ -397,11 +397,11 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
       row.cells.push_back(timing_cell(
           mrays, timing_ratio(timings, *it->second, a == anchors_of_row.end() ? nullptr : a->second, mrays,
                               "trace_mrays_median", &RowTimings::trace_mrays)));
-      // A speed whose answers differ from the reference's is not the same work: said in the cell, and
-      // (a cell with a note) never marked best.
-      if (const auto wrong = csv_number(*it->second, "mismatches"); wrong && *wrong > 0) {
-        row.cells.back().note = fmt::format("{:.0f} wrong", *wrong);
-        any_wrong = true;
+      // A speed whose answers differ from the reference's may not be the same work: said in the cell,
+      // and (a cell with a note) never marked best.
+      if (const auto count = csv_number(*it->second, "mismatches"); count && *count > 0) {
+        row.cells.back().note = fmt::format("{:.0f} {}", *count, *count == 1 ? "mismatch" : "mismatches");
+        any_mismatch = true;
       }
     }
     table.rows.push_back(std::move(row));
@@ -411,11 +411,11 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
         "Rows without ratios: this run has no {} to compare them with (a row is compared only with Embree "
         "in the mode of its kernels).",
         fmt::join(unanchored, ", nor ")));
-  if (any_wrong)
+  if (any_mismatch)
     table.legend.push_back(
-        "[N wrong]: N rays of the set answered otherwise than the run's reference (the CSV's reference and "
-        "mismatches columns: brute force, or Embree's robust mode on large scenes; another hit, distance "
-        "or occlusion); such a cell is not marked best.");
+        "[N mismatches]: N rays of the set answered otherwise than the run's reference (the CSV's reference "
+        "and mismatches columns: brute force, or Embree's robust mode above brute_force_max_triangles, "
+        "itself not exact; another hit, distance or occlusion); such a cell is not marked best.");
   mark_best(table);
   return table;
 }

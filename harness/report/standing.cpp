@@ -23,7 +23,7 @@ ReportTable standing_table(const std::vector<ReportTable>& tables, const std::st
                            const std::map<std::string, std::string>& labels) {
   struct Tally {
     const ReportRow* first;  // the row it was first seen as
-    int cells = 0, ahead = 0, at_target = 0, noise = 0, behind = 0, bare = 0, wrong = 0;
+    int cells = 0, ahead = 0, at_target = 0, noise = 0, behind = 0, bare = 0, mismatched = 0;
     double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
   };
   // Keyed by label, layout and anchor: a row compared with another anchor in some table (a scene whose
@@ -45,8 +45,9 @@ ReportTable standing_table(const std::vector<ReportTable>& tables, const std::st
         Tally& t = it->second;
         counted = true;
         ++t.cells;
-        // A rays/s cell's note is its count of wrong answers (report.cpp): a speed that is not the same work.
-        if (!row.cells[c].note.empty()) ++t.wrong;
+        // A rays/s cell's note is its count of mismatches (report.cpp): a speed that may not be the same
+        // work.
+        if (!row.cells[c].note.empty()) ++t.mismatched;
         t.lowest = std::min(t.lowest, ratio->estimate);
         t.highest = std::max(t.highest, ratio->estimate);
         // Judged as printed: "1.10 [1.02, 1.19]" is at 1.1.
@@ -81,9 +82,9 @@ ReportTable standing_table(const std::vector<ReportTable>& tables, const std::st
                  {"within noise", "Within\nnoise", 0, false, "noise"},
                  {"behind", "Behind", 0, false, "behind"}};
   if (any_bare) out.columns.push_back({"no interval", "No\ninterval", 0, false, "bare"});
-  const bool any_wrong =
-      std::any_of(tallies.begin(), tallies.end(), [](const auto& t) { return t.second.wrong; });
-  if (any_wrong) out.columns.push_back({"with wrong answers", "With wrong\nanswers", 0, false, "wrong"});
+  const bool any_mismatched =
+      std::any_of(tallies.begin(), tallies.end(), [](const auto& t) { return t.second.mismatched; });
+  if (any_mismatched) out.columns.push_back({"with mismatches", "With\nmismatches", 0, false, "mismatches"});
   out.columns.push_back({"lowest", "Lowest", 2, false, "lowest"});
   out.columns.push_back({"highest", "Highest", 2, false, "highest"});
 
@@ -106,7 +107,7 @@ ReportTable standing_table(const std::vector<ReportTable>& tables, const std::st
     for (const int count : {t.cells, t.ahead, t.at_target, t.noise, t.behind})
       row.cells.push_back({double(count), std::nullopt, false});
     if (any_bare) row.cells.push_back({double(t.bare), std::nullopt, false});
-    if (any_wrong) row.cells.push_back({double(t.wrong), std::nullopt, false});
+    if (any_mismatched) row.cells.push_back({double(t.mismatched), std::nullopt, false});
     row.cells.push_back({t.lowest, std::nullopt, false});
     row.cells.push_back({t.highest, std::nullopt, false});
     out.rows.push_back(std::move(row));
@@ -128,9 +129,9 @@ ReportTable standing_table(const std::vector<ReportTable>& tables, const std::st
       fmt::format("{:.1f}", kStandingTarget) + ": ahead with a ratio of " +
       fmt::format("{:.1f}", kStandingTarget) + " or more as printed." +
       (any_bare ? " No interval: a ratio from one round or from medians, counted in no other verdict." : "") +
-      (any_wrong ? " With wrong answers: cells (counted in their verdict too) where some rays answered "
-                   "otherwise than the run's reference."
-                 : "") +
+      (any_mismatched ? " With mismatches: cells (counted in their verdict too) where some rays answered "
+                        "otherwise than the run's reference."
+                      : "") +
       " Lowest and highest are the ratios themselves.");
   return out;
 }

@@ -409,7 +409,7 @@ TEST(Report, NotesOfARaySetOrOfEveryRowArePrintedUnderTheTable) {
   EXPECT_EQ(out.str().find("ray set 'primary'"), std::string::npos) << out.str();
 }
 
-TEST(Report, CellsWithWrongAnswersSaySoAndAreNotMarkedBest) {
+TEST(Report, CellsWithMismatchesSaySoAndAreNotMarkedBest) {
   // The fastest row answers 3 rays otherwise than the reference: its speed is printed with the count and
   // the bold goes to the fastest row that answers right.
   const auto path = temp_csv("wrong.csv");
@@ -429,16 +429,16 @@ TEST(Report, CellsWithWrongAnswersSaySoAndAreNotMarkedBest) {
   std::ostringstream out;
   print_report({{path}, ""}, out);
   const std::string md = out.str();
-  EXPECT_NE(md.find("9.00 [3 wrong] (1.12 [1.12, 1.12] \u25B2) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("9.00 [3 mismatches] (1.12 [1.12, 1.12] \u25B2) |"), std::string::npos) << md;
   EXPECT_NE(md.find("**8.00**"), std::string::npos) << md;
   EXPECT_EQ(md.find("**9.00"), std::string::npos) << md;
-  EXPECT_NE(md.find("[N wrong]: N rays of the set answered otherwise than the run's reference"),
+  EXPECT_NE(md.find("[N mismatches]: N rays of the set answered otherwise than the run's reference"),
             std::string::npos)
       << md;
   // Without wrong answers, no such sentence.
   std::ostringstream plain;
   print_report({{write_results("all_right.csv")}, ""}, plain);
-  EXPECT_EQ(plain.str().find("wrong"), std::string::npos) << plain.str();
+  EXPECT_EQ(plain.str().find("mismatch"), std::string::npos) << plain.str();
 
   // Over two tables, the standing counts the cells with wrong answers in a column of their own.
   const auto two = temp_csv("wrong_two.csv");
@@ -461,7 +461,7 @@ TEST(Report, CellsWithWrongAnswersSaySoAndAreNotMarkedBest) {
   }
   std::ostringstream standing;
   print_report({{two}, ""}, standing);
-  EXPECT_NE(standing.str().find("| with wrong answers |"), std::string::npos) << standing.str();
+  EXPECT_NE(standing.str().find("| with mismatches |"), std::string::npos) << standing.str();
   EXPECT_NE(standing.str().find("| binned_sah | 2 | 2 | 2 | 0 | 0 | 1 | 1.12 | 1.12 |"), std::string::npos)
       << standing.str();
 }

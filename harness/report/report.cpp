@@ -414,8 +414,9 @@ ReportTable make_table(const GroupKey& key, const std::vector<const CsvRow*>& gr
   if (any_mismatch)
     table.legend.push_back(
         "[N mismatches]: N rays of the set answered otherwise than the run's reference (the CSV's reference "
-        "and mismatches columns: brute force, or Embree's robust mode above brute_force_max_triangles, "
-        "itself not exact; another hit, distance or occlusion); such a cell is not marked best.");
+        "and mismatches columns: brute force, or above brute_force_max_triangles Embree's robust mode with "
+        "each disagreement settled exactly; another hit, distance or occlusion); such a cell is not marked "
+        "best.");
   mark_best(table);
   return table;
 }

@@ -4,6 +4,7 @@
 // that differ from it (traversal/hit_compare.h says what counts as the same answer).
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -16,12 +17,18 @@
 
 namespace sahbench {
 
+class ExactSettler;
+
 /// The reference answers for one ray set: closest hits, or occlusion flags for any-hit sets. `name` is
-/// the CSV's `reference` column: "brute_force", "embree_robust", or "none" (no answers, no check).
+/// the CSV's `reference` column: "brute_force", "embree_robust+exact", or "none" (no answers, no check).
 struct Reference {
   std::string name = "none";
   std::vector<Hit> hits;
   std::vector<uint8_t> occluded;
+  /// Above the brute-force limit: Embree's robust mode answers first, and where a cell disagrees with
+  /// it the exact reference (traversal/exact_reference.h) settles the ray, so that a mismatch is a
+  /// wrong answer, not a rounding of Embree's. Each settled ray is kept for the set's other cells.
+  std::shared_ptr<ExactSettler> settler;
 };
 
 /// The answers of `policy` for `rs` on `scene`. kAuto is brute force up to `brute_force_max_triangles`
@@ -37,7 +44,9 @@ float scene_diagonal(std::span<const Triangle> triangles);
 
 /// Answers in `hits` (closest-hit sets) or `occluded` (any-hit sets) that differ from `ref`'s: a different
 /// hit/miss answer, or a different primitive at a different distance (same_hit, with the tolerance scaled
-/// by `scene_diagonal` in units of each ray's t).
+/// by `scene_diagonal` in units of each ray's t). With a settler, each such answer counts only if it also
+/// differs from the exact one (a miss where the exact segment meets a triangle, or the reverse; another
+/// primitive than the exact closest ones at another distance).
 uint64_t count_mismatches(const Reference& ref, const RaySet& rs, float scene_diagonal,
                           std::span<const Hit> hits, std::span<const uint8_t> occluded);
 

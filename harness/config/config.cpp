@@ -237,6 +237,25 @@ void resolve_paths(const Source& src, const BuilderInfo& info, const std::string
   }
 }
 
+// A number written as a string, or a boolean where the parameter is no 0/1 switch, is a mistake TOML's
+// types can name: `radius = "16"` or `radius = true` would otherwise read as 16 and 1.
+void check_value_types(const Source& src, const BuilderInfo& info, const std::string& key,
+                       const SweepKey& sweep) {
+  const auto spec =
+      std::find_if(info.params.begin(), info.params.end(), [&](const ParamSpec& p) { return p.name == key; });
+  if (spec == info.params.end()) return;  // resolve_params names the unknown key
+  const bool number = spec->type == ParamType::kInt || spec->type == ParamType::kFloat;
+  const bool switch01 = spec->type == ParamType::kInt && spec->min_value == 0 && spec->max_value == 1;
+  for (const auto& [text, node] : sweep.values) {
+    if (number && node->is_string())
+      src.fail(*node, info.name + ": parameter '" + key + "' takes a number, not the string \"" + text +
+                          "\" (write it without quotes)");
+    if (node->is_boolean() && !switch01)
+      src.fail(*node, info.name + ": parameter '" + key + "' takes " + (number ? "a number" : "a name") +
+                          ", not " + (text == "1" ? "true" : "false"));
+  }
+}
+
 // Whether parameter `key` of `info` is a tree source, whose value may be a table.
 bool is_source_param(const BuilderInfo& info, const std::string& key) {
   return std::any_of(info.params.begin(), info.params.end(),
@@ -269,6 +288,7 @@ void read_source_table(const Source& src, const toml::table& table, const Builde
     }
     SweepKey sweep = read_sweep(src, nested, *node);
     resolve_paths(src, *info, key, sweep);
+    check_value_types(src, *info, key, sweep);
     for (const auto& [text, at] : sweep.values) {
       try {
         resolve_params(info->name, info->params, {{key, text}});
@@ -318,7 +338,10 @@ std::vector<BuilderRun> read_builder(const Source& src, const toml::table& table
       continue;
     }
     SweepKey sweep = read_sweep(src, key, *node);
-    if (!embree) resolve_paths(src, *info, key, sweep);
+    if (!embree) {
+      resolve_paths(src, *info, key, sweep);
+      check_value_types(src, *info, key, sweep);
+    }
     for (const auto& [text, at] : sweep.values) {
       try {
         if (embree && text == "refit" && !animation)

@@ -34,7 +34,8 @@
 //   [[builder]]                       # one table per builder; at least one
 //   name = "binned_sah"               # a registered builder, or "embree" (rtcCommitScene's own BVH)
 //   bins = [8, 16, 32]                # any parameter given as a list expands into a sweep
-//   max_leaf = 8                      # integers, floats, strings and booleans (true = 1) are accepted
+//   max_leaf = 8                      # numbers as numbers (a quoted "8" is an error), names and paths
+//                                     # as strings, booleans (true = 1) for 0/1 switches only
 //
 //   [[builder]]
 //   name = "reinsert"                 # a pass: `source` names the binary builder or pass it takes its

@@ -326,7 +326,7 @@ name = "binned_sah"
 adaptive_bins = [true, false]
 c_trav = 0.1
 c_isect = 2.0
-bins = "32"
+bins = 32
 max_leaf = 1e1
 )");
   ASSERT_EQ(config.builders.size(), 3u);
@@ -350,7 +350,7 @@ bins = [8,
   expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nmax_leaf = 2.5\n", 12,
                {"max_leaf", "2.5", "not an integer"});
   expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = \"many\"\n", 12,
-               {"bins", "many", "not a number"});
+               {"bins", "many", "takes a number, not the string"});
   expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = []\n", 12, {"bins", "empty list"});
   expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = [[8]]\n", 12, {"bins", "nest"});
   expect_error(kBase + "[[builder]]\nname = \"binned_sah\"\nbins = 1979-05-27\n", 12, {"bins", "a date"});
@@ -407,6 +407,24 @@ source = "sweep_sah"
   EXPECT_EQ(plain.builders[0].params, (ParamOverrides{{"source", "sweep_sah"}}));
   EXPECT_TRUE(plain.builders[0].values.get_source("source").shared());
   EXPECT_NE(plain.builders[0].params_text().find(";source=sweep_sah;"), std::string::npos);
+}
+
+TEST(HarnessConfigSource, NumbersAreNumbersAndBooleansOnlySwitch) {
+  auto ploc = [](const std::string& extra) {
+    return kWideBase +
+           "[[builder]]\nname = \"wide_collapse\"\nsource = \"ploc\"\n[[builder]]\nname = "
+           "\"ploc\"\n" +
+           extra;
+  };
+  // Lines: 8 and 11 [[builder]], 12 name, 13 the extra.
+  expect_error(ploc("radius = \"16\"\n"), 13,
+               {"ploc: parameter 'radius' takes a number, not the string \"16\""});
+  expect_error(ploc("radius = true\n"), 13, {"ploc: parameter 'radius' takes a number, not true"});
+  expect_error(ploc("radius = [8, \"16\"]\n"), 13, {"not the string \"16\""});
+  // A 0/1 switch takes a boolean, and names stay strings.
+  const auto ok = parse_experiment_config(
+      kWideBase + "[[builder]]\nname = \"binned_sah\"\nadaptive_bins = false\n", "test.toml");
+  EXPECT_NE(ok.builders[0].params_text().find("adaptive_bins=0"), std::string::npos);
 }
 
 TEST(HarnessConfigSource, BadSourcesNameKeyAndLine) {

@@ -170,12 +170,23 @@ double ParamSet::get(std::string_view name) const {
 }
 
 std::string ParamSet::to_string() const {
-  const bool own_source = std::any_of(values_.begin(), values_.end(), [](const Value& v) {
-    return v.spec.type == ParamType::kSource && !v.source.shared();
-  });
+  // The source the pass builds itself (named alone and shared), if any: only_with_sources is read
+  // against it.
+  const Value* shared = nullptr;
+  bool any_source = false;
+  for (const auto& v : values_)
+    if (v.spec.type == ParamType::kSource) {
+      any_source = true;
+      if (v.source.shared()) shared = &v;
+    }
+  auto applies = [&](const ParamSpec& spec) {
+    if (spec.only_with_sources.empty() || !any_source) return true;
+    return shared && std::find(spec.only_with_sources.begin(), spec.only_with_sources.end(),
+                               shared->source.name()) != spec.only_with_sources.end();
+  };
   std::string out;
   for (const auto& value : values_) {
-    if (own_source && value.spec.shared_source_only) continue;
+    if (!applies(value.spec)) continue;
     out += (out.empty() ? "" : ";") + value.spec.name + "=";
     if (value.spec.type == ParamType::kPath) {
       out += recorded_path(value);

@@ -42,9 +42,10 @@ struct ParamSpec {
   /// (wide_collapse's bins and leaf sizes); their CSV form is the bare name. Any other source, or one of
   /// these given a nested parameter, is built with its own parameters over its own defaults.
   std::vector<std::string> shared_sources = {};
-  /// Applies only while the set's kSource parameter is a shared source (the pass's own binary build):
-  /// with any other source it is not recorded (the builder's check refuses it set away from its default).
-  bool shared_source_only = false;
+  /// Non-empty: applies only while the set's kSource parameter is a shared source named one of these (the
+  /// pass's own binary build of it); otherwise it is not recorded (and the builder's check refuses it set
+  /// away from its default).
+  std::vector<std::string> only_with_sources = {};
   /// kPath: the file's identity (a hash of its contents) as text, given by whoever registers the
   /// parameter, since builders do no file I/O. When set, the CSV form records the file's name and then
   /// the identity as NAME_hash, so that a run over a changed file is another run and a run over the same
@@ -115,7 +116,7 @@ class ParamSet {
 
   /// "key=value;key=value" in declaration order, integers without a fraction, a source as
   /// "NAME(its to_string())" unless shared, a path followed by NAME_hash=IDENTITY where it has one, and
-  /// without the shared_source_only parameters where the source is not shared: the CSV form.
+  /// without the parameters whose only_with_sources the source is not among: the CSV form.
   std::string to_string() const;
 
  private:

@@ -122,26 +122,33 @@ void set_default(std::vector<ParamSpec>& params, const std::string& name, double
   it->default_value = value;
 }
 
-// The parameters that wide_collapse applies only to a shared source, its own binary build: with any other
-// source they are not recorded (ParamSpec::shared_source_only), and set away from their defaults they
-// would do nothing, so that is an error that says what to write instead.
-constexpr const char* kSharedSourceOnly[] = {"bins", "adaptive_bins", "min_leaf", "source_c_trav_scale",
-                                             "reinsert_iterations"};
+// The parameters that wide_collapse applies only to its own binary build of a source named alone, and to
+// which of those sources (ParamSpec::only_with_sources): the sweep has no bins. With any other source they
+// are not recorded, and set away from their defaults they would do nothing, so that is an error that says
+// what to write instead.
+const std::vector<std::pair<std::string, std::vector<std::string>>>& own_build_params() {
+  static const std::vector<std::pair<std::string, std::vector<std::string>>> params = {
+      {"bins", {"binned_sah", "sbvh"}},
+      {"adaptive_bins", {"binned_sah", "sbvh"}},
+      {"min_leaf", {"binned_sah", "sweep_sah", "sbvh"}},
+      {"source_c_trav_scale", {"binned_sah", "sweep_sah", "sbvh"}},
+      {"reinsert_iterations", {"binned_sah", "sweep_sah", "sbvh"}}};
+  return params;
+}
 
-void check_unshared(const ParamSet& p, const char* builder) {
+void check_own_build_params(const ParamSet& p, const char* builder) {
   const SourceSpec& source = p.get_source("source");
-  if (source.shared()) return;
-  const auto& params = find_builder(builder).params;
-  const auto source_spec =
-      std::find_if(params.begin(), params.end(), [](const ParamSpec& s) { return s.name == "source"; });
-  std::string own_builds;
-  for (const std::string& name : source_spec->shared_sources)
-    own_builds += (own_builds.empty() ? "" : ", ") + name;
-  for (const ParamSpec& spec : params) {
-    if (!spec.shared_source_only || p.get(spec.name) == spec.default_value) continue;
-    const bool source_has = source.params->has(spec.name);
+  for (const ParamSpec& spec : find_builder(builder).params) {
+    if (spec.only_with_sources.empty() || p.get(spec.name) == spec.default_value) continue;
+    const auto& takers = spec.only_with_sources;
+    if (source.shared() && std::find(takers.begin(), takers.end(), source.name()) != takers.end()) continue;
+    std::string names;
+    for (const std::string& name : takers) names += (names.empty() ? "" : ", ") + name;
+    const bool source_has = !source.shared() && source.params->has(spec.name);
     std::string instead;
-    if (spec.name == "source_c_trav_scale")
+    if (source.shared())
+      instead = source.name() + " has no " + spec.name;
+    else if (spec.name == "source_c_trav_scale")
       instead = source.params->has("c_trav") ? "give the source its own c_trav (source.c_trav=...)"
                                              : "source=" + source.name() + " has no c_trav to scale";
     else if (spec.name == "reinsert_iterations")
@@ -152,15 +159,15 @@ void check_unshared(const ParamSet& p, const char* builder) {
       instead = source_has ? "give it to the source (source." + spec.name + "=...)"
                            : "source=" + source.name() + " has no such parameter";
     throw Error(std::string(builder) + ": " + spec.name +
-                " applies only to the collapse's own build of a source named alone (" + own_builds +
+                " applies only to the collapse's own build of a source named alone (" + names +
                 "), not to source=" + source.name() + "; " + instead);
   }
 }
 
-void mark_shared_source_only(std::vector<ParamSpec>& params) {
+void mark_own_build_params(std::vector<ParamSpec>& params) {
   for (ParamSpec& spec : params)
-    for (const char* name : kSharedSourceOnly)
-      if (spec.name == name) spec.shared_source_only = true;
+    for (const auto& [name, sources] : own_build_params())
+      if (spec.name == name) spec.only_with_sources = sources;
 }
 
 BuilderInfo wide_collapse_info() {
@@ -183,7 +190,7 @@ BuilderInfo wide_collapse_info() {
        {"reinsert_iterations", ParamType::kInt, double(ReinsertParams{}.iterations), 0, 1000,
         "rounds of the reinsert pass on a source named alone before the collapse, stopping early once "
         "a round finds little to gain (0: that source's tree collapsed as built)"}});
-  mark_shared_source_only(params);
+  mark_own_build_params(params);
   return {"wide_collapse",
           "a binary SAH tree collapsed to `arity` children per node; build time includes the binary build",
           std::move(params),
@@ -231,7 +238,7 @@ BuilderInfo wide_collapse_info() {
             TopDownConfig config = top_down_config(p);
             config.arity = arity_of(p);
             check_config(config, "wide_collapse");
-            check_unshared(p, "wide_collapse");
+            check_own_build_params(p, "wide_collapse");
           },
           arity_of};
 }

@@ -62,6 +62,8 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
           "--save writes one tree: give exactly one builder that makes a tree of the common format "
           "(not embree, whose rtcCommitScene keeps its tree to itself)");
     require_file_path(options.save, "tree");
+    if (std::filesystem::path(options.save).filename().empty())
+      throw Error("--save " + options.save + ": give the path of a tree file, not of a folder");
     // The folder is made before the build, as `run --output` makes its own, so that a path that cannot
     // be written fails before minutes of building rather than after.
     const std::filesystem::path folder = std::filesystem::path(options.save).parent_path();

@@ -167,7 +167,7 @@ std::string hash_text(uint64_t hash) {
 }
 
 void write_tree_file(const std::filesystem::path& path, const Bvh& bvh, std::span<const Triangle> triangles) {
-  require_file_path(path, "tree file");
+  require_file_path(path, "tree");
   TreeFileHeader h;
   h.arity = bvh.arity;
   h.node_count = bvh.nodes.size();

@@ -275,20 +275,25 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   // A baseline without any of Embree's rows gates no timing at all: passing would say they were checked.
   // One that lacks some anchors leaves those cells' timings out, and says which.
   if (!unanchored_base.empty() && unanchored_base.size() == static_cast<std::size_t>(result.compared_cells))
-    throw Error(fmt::format(
-        "{}: the baseline has no Embree anchor (embree [quality=medium], embree_1) for any of its {} cells, "
-        "so no timing can be compared; make the baseline with Embree in the run, or compare with "
-        "--deterministic-only",
-        options.baseline.string(), result.compared_cells));
+    throw Error(
+        fmt::format("{}: the baseline has no Embree anchor (embree [quality=medium] in its default mode, "
+                    "embree_1) for any of its {} cells, "
+                    "so no timing can be compared; make the baseline with Embree in the run, or compare with "
+                    "--deterministic-only",
+                    options.baseline.string(), result.compared_cells));
   for (const auto& f : findings) (f.regression ? result.regressions : result.improvements) += 1;
   result.regressions += result.missing_cells + result.missing_anchors;
-  fmt::print(out,
-             "# sahbench compare\n\nbaseline {} vs {}: {} cells compared, {} missing (each a regression), {} "
-             "other regressions, {} improvements{}\n\n",
-             options.baseline.string(), options.current.string(), result.compared_cells,
-             result.missing_cells + result.missing_anchors,
-             result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
-             options.deterministic_only ? " (deterministic metrics only)" : "");
+  fmt::print(
+      out,
+      "# sahbench compare\n\nbaseline {} vs {}: {} cells compared, {} missing (each a regression{}), {} "
+      "other regressions, {} improvements{}\n\n",
+      options.baseline.string(), options.current.string(), result.compared_cells,
+      result.missing_cells + result.missing_anchors,
+      result.missing_anchors
+          ? fmt::format("; {} of them cells whose Embree anchor alone is missing", result.missing_anchors)
+          : "",
+      result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
+      options.deterministic_only ? " (deterministic metrics only)" : "");
   for (const ResultFile* f : {&bf, &cf})
     if (f->cut_last_line)
       fmt::print(out,
@@ -327,7 +332,8 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   }
   if (result.missing_anchors) {
     fmt::print(out,
-               "\nCells whose new run has no Embree anchor (embree [quality=medium], embree_1), so their "
+               "\nCells whose new run has no Embree anchor (embree [quality=medium] in its default mode, "
+               "embree_1), so their "
                "timings were not compared (counted as regressions):\n");
     for (const auto& key : unanchored) fmt::print(out, "- {}\n", key);
   }

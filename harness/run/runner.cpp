@@ -137,7 +137,14 @@ class ExperimentRunner {
                  Progress& progress) {
     check_interrupt(progress);
     Scene scene;
-    const double load_ms = time_ms([&] { scene = load_scene(scene_name); });
+    // A malformed file is found only as it is read: its error names the config before the loader's.
+    const double load_ms = time_ms([&] {
+      try {
+        scene = load_scene(scene_name);
+      } catch (const Error& e) {
+        throw Error(fmt::format("{}: experiment.scenes: {}", cfg_.path.string(), e.what()));
+      }
+    });
     load_ms_ += load_ms;
     diagonal_ = scene_diagonal(scene.triangles);
     log_ << fmt::format("scene {}: {} triangles ({} removed), {}, from {} in {:.0f} ms\n", scene_name,

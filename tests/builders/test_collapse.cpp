@@ -201,6 +201,13 @@ TEST(Collapse, ASourceWithParametersOfItsOwnIsCollapsedAsGiven) {
   EXPECT_NE(after.find("max_leaf="), std::string::npos) << own;
   const std::string shared = resolve_params(info.name, info.params, {}).to_string();
   EXPECT_NE(shared.find(";reinsert_iterations="), std::string::npos) << shared;
+  // The full sweep has no bins: not recorded for it, and refused where set.
+  const std::string sweep = resolve_params(info.name, info.params, {{"source", "sweep_sah"}}).to_string();
+  EXPECT_EQ(sweep.find("bins="), std::string::npos) << sweep;
+  EXPECT_NE(sweep.find(";min_leaf="), std::string::npos) << sweep;
+  const std::string sweep_bins = error_of({{"source", "sweep_sah"}, {"bins", "4"}});
+  EXPECT_NE(sweep_bins.find("not to source=sweep_sah; sweep_sah has no bins"), std::string::npos)
+      << sweep_bins;
 }
 
 TEST(Collapse, OverflowingCostsKeepInnerNodesWhereLeavesWouldBeTooLarge) {

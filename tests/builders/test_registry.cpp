@@ -184,7 +184,7 @@ TEST(SourceChain, BadChainsAreErrorsThatNameThem) {
       [&] {
         collapse.check(resolve_named("wide_collapse", {{"source", "treelet"}, {"bins", "8"}}));
       },
-      {"bins applies only to the collapse's own build of a source named alone (binned_sah, sweep_sah, sbvh)",
+      {"bins applies only to the collapse's own build of a source named alone (binned_sah, sbvh)",
        "source=treelet has no such parameter"});
   expect_error(
       [&] {

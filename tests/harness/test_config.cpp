@@ -452,7 +452,7 @@ TEST(HarnessConfigSource, BadSourcesNameKeyAndLine) {
   // wide_collapse's shared parameters mean nothing to a source with parameters of its own.
   expect_error(wide("bins = 16\nsource = \"treelet\"\n"), 8,
                {"bins applies only to the collapse's own build of a source named alone (binned_sah, "
-                "sweep_sah, sbvh)"});
+                "sbvh)"});
 }
 
 TEST(HarnessConfigEmbree, QualitySweepAndDefault) {

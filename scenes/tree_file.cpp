@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <string_view>
 #include <vector>
 
 #include "core/error.h"
@@ -154,10 +155,9 @@ uint64_t triangle_hash(std::span<const Triangle> triangles) {
     for (const Vec3& v : {t.v0, t.v1, t.v2})
       for (const float c : {v.x, v.y, v.z}) {
         const uint32_t bits = std::bit_cast<uint32_t>(c);
-        for (int i = 0; i < 4; ++i) {
-          hash ^= (bits >> (8 * i)) & 0xFFu;
-          hash *= kFnv1aPrime;
-        }
+        const char bytes[4] = {static_cast<char>(bits & 0xFFu), static_cast<char>((bits >> 8) & 0xFFu),
+                               static_cast<char>((bits >> 16) & 0xFFu), static_cast<char>(bits >> 24)};
+        hash = fnv1a(std::string_view(bytes, sizeof bytes), hash);
       }
   return hash;
 }

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "core/bvh.h"
+#include "core/fnv1a.h"
 #include "core/triangle.h"
 
 namespace sahbench {
@@ -25,10 +26,6 @@ inline constexpr uint32_t kTreeFileVersion = 1;
 inline constexpr uint64_t kTreeFileHeaderBytes = 64;
 inline constexpr uint64_t kTreeFileNodeBytes = 32;
 inline constexpr uint64_t kTreeFileRefBytes = 4;
-
-/// FNV-1a, 64-bit (Fowler, Noll and Vo): offset basis and prime.
-inline constexpr uint64_t kFnv1aOffset = 0xcbf29ce484222325ull;
-inline constexpr uint64_t kFnv1aPrime = 0x100000001b3ull;
 
 /// The scene's identity in a tree file: FNV-1a 64 over the IEEE-754 binary32 bit patterns of every
 /// triangle's nine coordinates (v0.x, v0.y, v0.z, v1.x, ..., v2.z), each as 4 little-endian bytes, in

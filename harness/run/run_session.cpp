@@ -15,6 +15,7 @@
 #include <ostream>
 #include <random>
 
+#include "core/fnv1a.h"
 #include "core/text_file.h"
 #include "harness/run/csv.h"
 #include "harness/run/result_row.h"
@@ -24,18 +25,6 @@
 
 namespace sahbench {
 namespace {
-
-// FNV-1a, 64 bits: a fingerprint tells runs apart, it guards against no adversary.
-constexpr uint64_t kFnvOffset = 14695981039346656037ull;
-constexpr uint64_t kFnvPrime = 1099511628211ull;
-
-uint64_t fnv1a(std::string_view bytes, uint64_t h = kFnvOffset) {
-  for (const char c : bytes) {
-    h ^= static_cast<unsigned char>(c);
-    h *= kFnvPrime;
-  }
-  return h;
-}
 
 // A scene's source: a procedural spec stands for itself; a file, for its path, size and contents.
 std::string scene_source(const std::string& name) {
@@ -134,7 +123,7 @@ Fingerprint fingerprint_of(const ExperimentConfig& cfg, const std::vector<std::s
   if (cfg.epo) text.emplace_back("metrics", "epo");
 
   Fingerprint fp;
-  uint64_t whole = kFnvOffset;
+  uint64_t whole = kFnv1aOffset;
   for (const auto& [name, value] : text) {
     fp.parts.emplace_back(name, fmt::format("{:08x}", fnv1a(value) >> 32));
     whole = fnv1a(name + "=" + value + "\n", whole);

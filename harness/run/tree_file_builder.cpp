@@ -12,6 +12,7 @@
 
 #include "builders/registry.h"
 #include "core/error.h"
+#include "core/fnv1a.h"
 #include "core/sah.h"
 #include "scenes/tree_file.h"
 
@@ -49,12 +50,8 @@ std::string contents_hash(const std::string& path) {
   if (!in) return {};
   uint64_t hash = kFnv1aOffset;
   std::array<char, 1 << 16> buffer;
-  while (in.read(buffer.data(), buffer.size()) || in.gcount() > 0) {
-    for (std::streamsize i = 0; i < in.gcount(); ++i) {
-      hash ^= static_cast<unsigned char>(buffer[static_cast<std::size_t>(i)]);
-      hash *= kFnv1aPrime;
-    }
-  }
+  while (in.read(buffer.data(), buffer.size()) || in.gcount() > 0)
+    hash = fnv1a(std::string_view(buffer.data(), static_cast<std::size_t>(in.gcount())), hash);
   known[path] = {size, written, hash_text(hash)};
   return hash_text(hash);
 }

@@ -32,7 +32,9 @@ void check_arity(const Bvh& bvh, uint32_t arity, const char* pass) {
 // leaf holding every reference under it, or an inner node whose own slots `slots_of` chooses.
 class WideWriter {
  public:
-  explicit WideWriter(const Bvh& in, uint32_t arity) : in_(in) {
+  // `distinct`: a leaf that merges input leaves keeps each reference once (a spatial-split source
+  // repeats a triangle in the leaves of neighbouring nodes).
+  explicit WideWriter(const Bvh& in, uint32_t arity, bool distinct = false) : in_(in), distinct_(distinct) {
     out_.arity = arity;
     out_.nodes.reserve(in.nodes.size());
     out_.prim_refs.reserve(in.prim_refs.size());
@@ -54,6 +56,7 @@ class WideWriter {
       if (is_leaf(n)) {
         const uint32_t first = static_cast<uint32_t>(out_.prim_refs.size());
         append_refs(n);
+        if (distinct_ && !in_.nodes[n].is_leaf()) keep_first_of_each(first);
         const uint32_t count = static_cast<uint32_t>(out_.prim_refs.size()) - first;
         if (count > kMaxLeafPrims)
           throw Error("collapse: a merged leaf of " + std::to_string(count) + " references exceeds " +
@@ -87,9 +90,33 @@ class WideWriter {
     for (uint32_t c = 0; c < node.child_count; ++c) append_refs(node.first + c);
   }
 
+  // Drops the references from `first` on that repeat an earlier one of them, keeping the depth-first
+  // order of the rest. Merged leaves are small (max_leaf distinct references), so a quadratic scan.
+  void keep_first_of_each(uint32_t first) {
+    auto begin = out_.prim_refs.begin() + first;
+    auto kept = begin;
+    for (auto it = begin; it != out_.prim_refs.end(); ++it)
+      if (std::find(begin, kept, *it) == kept) *kept++ = *it;
+    out_.prim_refs.erase(kept, out_.prim_refs.end());
+  }
+
   const Bvh& in_;
+  bool distinct_;
   Bvh out_;
 };
+
+// Whether some scene index appears more than once among the tree's references (spatial splits,
+// presplitting): then a leaf merged from several input leaves may hold a triangle twice.
+bool repeats_references(const Bvh& bvh) {
+  if (bvh.prim_refs.empty()) return false;
+  const uint32_t top = *std::max_element(bvh.prim_refs.begin(), bvh.prim_refs.end());
+  std::vector<bool> seen(std::size_t{top} + 1);
+  for (uint32_t r : bvh.prim_refs) {
+    if (seen[r]) return true;
+    seen[r] = true;
+  }
+  return false;
+}
 
 // The SAH-optimal collapse for a fixed arity (a template parameter, so that the loops over subtree
 // counts unroll). C(n, i), the least cost of binary subtree n as at most i subtrees (Ylitie et al.), is
@@ -105,7 +132,11 @@ template <uint32_t kArity>
 class SahCollapse {
  public:
   SahCollapse(const Bvh& bvh, const SahCost& cost, uint32_t max_leaf)
-      : bvh_(bvh), cost_(cost), max_leaf_(max_leaf), choice_(bvh.nodes.size() * kArity) {
+      : bvh_(bvh),
+        cost_(cost),
+        max_leaf_(max_leaf),
+        repeats_(repeats_references(bvh)),
+        choice_(bvh.nodes.size() * kArity) {
     // The top levels in parallel, each node's two subtrees as two tasks, down to the depth where a
     // balanced tree has kTasksPerThread subtrees per thread (as refit() spawns); none with one thread.
     // Every node's values depend on its subtree alone, so the result is the serial one. Serial, this
@@ -126,7 +157,7 @@ class SahCollapse {
       take(node.first + 1, kArity - k, slots);
     };
     auto is_leaf = [&](uint32_t n) { return bvh_.nodes[n].is_leaf() || choice(n, 1) == kAsLeaf; };
-    return WideWriter(bvh_, kArity).write(slots_of, is_leaf);
+    return WideWriter(bvh_, kArity, repeats_).write(slots_of, is_leaf);
   }
 
  private:
@@ -137,9 +168,17 @@ class SahCollapse {
   static constexpr uint8_t kAsLeaf = 0, kFewer = 0;
   static constexpr double kInf = std::numeric_limits<double>::infinity();
 
+  // Most distinct references a subtree's set carries; beyond it a merged leaf is costed by its
+  // references with repeats (an upper bound), which only max_leaf above it can reach.
+  static constexpr uint32_t kSetCap = 16;
+
   struct Subtree {
     std::array<double, kArity> cost;  // cost[i - 1] = C(n, i)
-    uint32_t refs;                    // references under n
+    uint32_t refs;                    // references a leaf of n would hold
+    // With repeats_: n's distinct references, sorted, while there are at most kSetCap of them
+    // (set_size > kSetCap once there are more); refs is then set_size.
+    uint32_t set_size = kSetCap + 1;
+    std::array<uint32_t, kSetCap> set;
   };
 
   uint8_t& choice(uint32_t n, uint32_t i) { return choice_[std::size_t{n} * kArity + i - 1]; }
@@ -153,6 +192,13 @@ class SahCollapse {
       Subtree s;
       s.cost.fill(cost_.leaf_cost(node.prim_count) * double(node.bounds.half_area()));
       s.refs = node.prim_count;
+      if (repeats_ && node.prim_count <= kSetCap) {
+        const auto refs = bvh_.prim_refs.begin() + node.first;
+        std::copy(refs, refs + node.prim_count, s.set.begin());
+        std::sort(s.set.begin(), s.set.begin() + node.prim_count);
+        s.set_size = static_cast<uint32_t>(std::unique(s.set.begin(), s.set.begin() + node.prim_count) -
+                                           s.set.begin());
+      }
       return s;
     }
     Subtree l, r;
@@ -186,6 +232,7 @@ class SahCollapse {
     const double area = node.bounds.half_area();
     Subtree s;
     s.refs = l.refs + r.refs;
+    if (repeats_) merge_sets(l, r, s);
     const double as_leaf = s.refs <= max_leaf_ ? cost_.leaf_cost(s.refs) * area : kInf;
     const double as_node = cost_.c_trav * area + distribute[kArity];
     s.cost[0] = as_leaf <= as_node ? as_leaf : as_node;
@@ -199,6 +246,26 @@ class SahCollapse {
       choice(n, i) = fewer ? kFewer : split_at[i];
     }
     return s;
+  }
+
+  // s's set as the union of l's and r's, and s.refs as its size where it is known.
+  static void merge_sets(const Subtree& l, const Subtree& r, Subtree& s) {
+    if (l.set_size > kSetCap || r.set_size > kSetCap) return;
+    uint32_t a = 0, b = 0, n = 0;
+    while (a < l.set_size || b < r.set_size) {
+      const bool take_l = b == r.set_size || (a < l.set_size && l.set[a] <= r.set[b]);
+      const uint32_t id = take_l ? l.set[a] : r.set[b];
+      if (take_l) {
+        b += b < r.set_size && r.set[b] == id;
+        ++a;
+      } else {
+        ++b;
+      }
+      if (n == kSetCap) return;  // more than kSetCap distinct: unknown, s.refs stays the sum
+      s.set[n++] = id;
+    }
+    s.set_size = n;
+    s.refs = n;
   }
 
   // Reconstruction: appends the slots of subtree n represented as at most i subtrees.
@@ -217,6 +284,7 @@ class SahCollapse {
   const Bvh& bvh_;
   const SahCost& cost_;
   uint32_t max_leaf_;
+  bool repeats_;  // the input repeats a reference: merged leaves count and keep each once
   uint32_t spawn_depth_;
   // Every entry is written by the bottom-up pass before it is read, so it starts uninitialised.
   HugePageArray<uint8_t> choice_;

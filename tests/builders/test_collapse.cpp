@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <iostream>
 #include <limits>
 
@@ -233,6 +234,40 @@ TEST(Collapse, OverflowingCostsKeepInnerNodesWhereLeavesWouldBeTooLarge) {
       references += node.prim_count;
     }
     EXPECT_EQ(references, 4u) << "arity " << arity;
+  }
+}
+
+TEST(Collapse, AMergedLeafHoldsEachReferenceOnce) {
+  // Two leaves that share reference 1, as a spatial split leaves a triangle in both children: merged,
+  // they are one leaf of three references, which max_leaf = 3 allows only if the repeat is dropped.
+  const Aabb box{{0, 0, 0}, {1, 1, 1}};
+  Bvh binary;
+  binary.nodes = {{box, 1, 2, 0}, {box, 0, 0, 2}, {box, 2, 0, 2}};
+  binary.prim_refs = {0, 1, 1, 2};
+  for (uint32_t arity : {2u, 4u, 8u}) {
+    const Bvh wide = collapse_sah(binary, arity, SahCost{}, 3);
+    ASSERT_EQ(wide.nodes.size(), 1u) << "arity " << arity;
+    EXPECT_EQ(wide.nodes[0].prim_count, 3u);
+    EXPECT_EQ(wide.prim_refs, (std::vector<uint32_t, HugePageAllocator<uint32_t>>{0, 1, 2}));
+  }
+}
+
+TEST(Collapse, LeavesOverASplittingSourceRepeatNoReference) {
+  for (const auto& scene : test::scene_cases()) {
+    SCOPED_TRACE(scene.name);
+    const BuildInput input = BuildInput::from_triangles(scene.triangles);
+    const Bvh wide = build("wide_collapse", {{"source", "presplit"}, {"source.split_budget", "4"}}, input);
+    ASSERT_TRUE(validate(wide, input.bounds).ok()) << validate(wide, input.bounds).summary();
+    std::vector<bool> referenced(scene.triangles.size());
+    for (const Node& node : wide.nodes) {
+      if (!node.is_leaf()) continue;
+      std::vector<uint32_t> refs(wide.prim_refs.begin() + node.first,
+                                 wide.prim_refs.begin() + node.first + node.prim_count);
+      for (uint32_t r : refs) referenced[r] = true;
+      std::sort(refs.begin(), refs.end());
+      ASSERT_EQ(std::adjacent_find(refs.begin(), refs.end()), refs.end());
+    }
+    EXPECT_EQ(std::count(referenced.begin(), referenced.end(), false), 0);
   }
 }
 

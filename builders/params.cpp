@@ -129,6 +129,7 @@ ParamSet resolve_params_at(std::string_view builder, const std::vector<ParamSpec
     }
     if (!seen.insert(key).second)
       throw Error(std::string(builder) + ": parameter '" + key + "' is given twice");
+    it->given = true;
     if (it->spec.type == ParamType::kSource) source_names[name] = text;
     if (it->spec.type == ParamType::kPath) {
       // Held absolute, so that the file is found whatever the current folder later is; the characters

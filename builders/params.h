@@ -91,6 +91,7 @@ class ParamSet {
     SourceSpec source = {};
     std::string text = {};
     std::string identity = {};
+    bool given = false;  ///< set by an override rather than left at its default
   };
 
   ParamSet() = default;
@@ -103,6 +104,8 @@ class ParamSet {
   float get_float(std::string_view name) const { return static_cast<float>(get(name)); }
   /// Whether a parameter of that name is declared.
   bool has(std::string_view name) const;
+  /// Whether a declared parameter was given (by an override, even one equal to its default).
+  bool given(std::string_view name) const { return find(name).given; }
   /// The name chosen for a kChoice parameter.
   const std::string& get_choice(std::string_view name) const;
   /// The source of a kSource parameter.

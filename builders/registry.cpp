@@ -124,8 +124,8 @@ void set_default(std::vector<ParamSpec>& params, const std::string& name, double
 
 // The parameters that wide_collapse applies only to its own binary build of a source named alone, and to
 // which of those sources (ParamSpec::only_with_sources): the sweep has no bins. With any other source they
-// are not recorded, and set away from their defaults they would do nothing, so that is an error that says
-// what to write instead.
+// are not recorded, and given they would do nothing (even at their defaults), so that is an error that
+// says what to write instead.
 const std::vector<std::pair<std::string, std::vector<std::string>>>& own_build_params() {
   static const std::vector<std::pair<std::string, std::vector<std::string>>> params = {
       {"bins", {"binned_sah", "sbvh"}},
@@ -139,7 +139,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>>& own_build_p
 void check_own_build_params(const ParamSet& p, const char* builder) {
   const SourceSpec& source = p.get_source("source");
   for (const ParamSpec& spec : find_builder(builder).params) {
-    if (spec.only_with_sources.empty() || p.get(spec.name) == spec.default_value) continue;
+    if (spec.only_with_sources.empty() || !p.given(spec.name)) continue;
     const auto& takers = spec.only_with_sources;
     if (source.shared() && std::find(takers.begin(), takers.end(), source.name()) != takers.end()) continue;
     std::string names;

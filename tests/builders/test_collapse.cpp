@@ -194,6 +194,11 @@ TEST(Collapse, ASourceWithParametersOfItsOwnIsCollapsedAsGiven) {
       << own_rounds;
   const std::string no_bins = error_of({{"source", "lbvh"}, {"bins", "4"}});
   EXPECT_NE(no_bins.find("source=lbvh has no such parameter"), std::string::npos) << no_bins;
+  // Given, a parameter that does nothing is an error even at its default value.
+  const std::string default_bins = error_of({{"source", "lbvh"}, {"bins", "32"}});
+  EXPECT_NE(default_bins.find("source=lbvh has no such parameter"), std::string::npos) << default_bins;
+  const std::string default_rounds = error_of({{"source", "ploc"}, {"reinsert_iterations", "8"}});
+  EXPECT_NE(default_rounds.find("not to source=ploc"), std::string::npos) << default_rounds;
   // Not recorded where they do nothing: the text after the source's own parameters holds none of them.
   const std::string own = resolve_params(info.name, info.params, {{"source", "lbvh"}}).to_string();
   const std::string after = own.substr(own.rfind(')') + 1);

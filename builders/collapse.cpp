@@ -90,13 +90,20 @@ class WideWriter {
     for (uint32_t c = 0; c < node.child_count; ++c) append_refs(node.first + c);
   }
 
-  // Drops the references from `first` on that repeat an earlier one of them, keeping the depth-first
-  // order of the rest. Merged leaves are small (max_leaf distinct references), so a quadratic scan.
+  // Drops the references from `first` on that repeat an earlier one of them. A merged leaf holds at
+  // most max_leaf references, usually a few: those keep their depth-first order by a quadratic scan;
+  // a large one is sorted instead.
   void keep_first_of_each(uint32_t first) {
+    constexpr std::size_t kScanned = 32;
     auto begin = out_.prim_refs.begin() + first;
     auto kept = begin;
-    for (auto it = begin; it != out_.prim_refs.end(); ++it)
-      if (std::find(begin, kept, *it) == kept) *kept++ = *it;
+    if (out_.prim_refs.size() - first > kScanned) {
+      std::sort(begin, out_.prim_refs.end());
+      kept = std::unique(begin, out_.prim_refs.end());
+    } else {
+      for (auto it = begin; it != out_.prim_refs.end(); ++it)
+        if (std::find(begin, kept, *it) == kept) *kept++ = *it;
+    }
     out_.prim_refs.erase(kept, out_.prim_refs.end());
   }
 
@@ -110,17 +117,21 @@ class WideWriter {
 bool repeats_references(const Bvh& bvh) {
   if (bvh.prim_refs.empty()) return false;
   const uint32_t top = *std::max_element(bvh.prim_refs.begin(), bvh.prim_refs.end());
-  std::vector<bool> seen(std::size_t{top} + 1);
+  // More references than indices up to the largest: some index repeats, without a scan.
+  if (bvh.prim_refs.size() > std::size_t{top} + 1) return true;
+  std::vector<uint8_t> seen(std::size_t{top} + 1);
   for (uint32_t r : bvh.prim_refs) {
     if (seen[r]) return true;
-    seen[r] = true;
+    seen[r] = 1;
   }
   return false;
 }
 
 // The SAH-optimal collapse for a fixed arity (a template parameter, so that the loops over subtree
-// counts unroll). C(n, i), the least cost of binary subtree n as at most i subtrees (Ylitie et al.), is
-// computed bottom-up in area-weighted units (divided by the root's area only in the statistics), in
+// counts unroll). kDistinct: the input repeats a reference, so merged leaves count and keep each once;
+// without repeats the subtrees carry no sets (a parameter, so that the common case copies no more than
+// its costs up the recursion). C(n, i), the least cost of binary subtree n as at most i subtrees (Ylitie et
+// al.), is computed bottom-up in area-weighted units (divided by the root's area only in the statistics), in
 // double, since a million-node sum in float would round differently along different paths.
 //
 // Each node's costs are returned to its parent rather than stored: a node's C(., i) is read only by its
@@ -128,15 +139,11 @@ bool repeats_references(const Bvh& bvh) {
 // one byte per node and subtree count, for the reconstruction. (A table of every node's costs had been
 // 25-33 MB on the 1M-triangle terrain, written once and read once, and its first touch alone cost
 // more than the arithmetic.)
-template <uint32_t kArity>
+template <uint32_t kArity, bool kDistinct>
 class SahCollapse {
  public:
   SahCollapse(const Bvh& bvh, const SahCost& cost, uint32_t max_leaf)
-      : bvh_(bvh),
-        cost_(cost),
-        max_leaf_(max_leaf),
-        repeats_(repeats_references(bvh)),
-        choice_(bvh.nodes.size() * kArity) {
+      : bvh_(bvh), cost_(cost), max_leaf_(max_leaf), choice_(bvh.nodes.size() * kArity) {
     // The top levels in parallel, each node's two subtrees as two tasks, down to the depth where a
     // balanced tree has kTasksPerThread subtrees per thread (as refit() spawns); none with one thread.
     // Every node's values depend on its subtree alone, so the result is the serial one. Serial, this
@@ -157,7 +164,7 @@ class SahCollapse {
       take(node.first + 1, kArity - k, slots);
     };
     auto is_leaf = [&](uint32_t n) { return bvh_.nodes[n].is_leaf() || choice(n, 1) == kAsLeaf; };
-    return WideWriter(bvh_, kArity, repeats_).write(slots_of, is_leaf);
+    return WideWriter(bvh_, kArity, kDistinct).write(slots_of, is_leaf);
   }
 
  private:
@@ -174,11 +181,11 @@ class SahCollapse {
 
   struct Subtree {
     std::array<double, kArity> cost;  // cost[i - 1] = C(n, i)
-    uint32_t refs;                    // references a leaf of n would hold
-    // With repeats_: n's distinct references, sorted, while there are at most kSetCap of them
-    // (set_size > kSetCap once there are more); refs is then set_size.
+    uint32_t refs;                    // references a leaf merging n would hold
+    // kDistinct: n's distinct references, sorted, while there are at most kSetCap of them
+    // (set_size > kSetCap once there are more); for an inner node refs is then set_size.
     uint32_t set_size = kSetCap + 1;
-    std::array<uint32_t, kSetCap> set;
+    std::array<uint32_t, kDistinct ? kSetCap : 0> set;
   };
 
   uint8_t& choice(uint32_t n, uint32_t i) { return choice_[std::size_t{n} * kArity + i - 1]; }
@@ -192,7 +199,8 @@ class SahCollapse {
       Subtree s;
       s.cost.fill(cost_.leaf_cost(node.prim_count) * double(node.bounds.half_area()));
       s.refs = node.prim_count;
-      if (repeats_ && node.prim_count <= kSetCap) {
+      if constexpr (kDistinct) {
+        if (node.prim_count > kSetCap) return s;
         const auto refs = bvh_.prim_refs.begin() + node.first;
         std::copy(refs, refs + node.prim_count, s.set.begin());
         std::sort(s.set.begin(), s.set.begin() + node.prim_count);
@@ -232,7 +240,7 @@ class SahCollapse {
     const double area = node.bounds.half_area();
     Subtree s;
     s.refs = l.refs + r.refs;
-    if (repeats_) merge_sets(l, r, s);
+    if constexpr (kDistinct) merge_sets(l, r, s);
     const double as_leaf = s.refs <= max_leaf_ ? cost_.leaf_cost(s.refs) * area : kInf;
     const double as_node = cost_.c_trav * area + distribute[kArity];
     s.cost[0] = as_leaf <= as_node ? as_leaf : as_node;
@@ -284,7 +292,6 @@ class SahCollapse {
   const Bvh& bvh_;
   const SahCost& cost_;
   uint32_t max_leaf_;
-  bool repeats_;  // the input repeats a reference: merged leaves count and keep each once
   uint32_t spawn_depth_;
   // Every entry is written by the bottom-up pass before it is read, so it starts uninitialised.
   HugePageArray<uint8_t> choice_;
@@ -324,13 +331,17 @@ Bvh collapse_sah(const Bvh& bvh, uint32_t arity, const SahCost& cost, uint32_t m
   if (bvh.arity != 2)
     throw Error("collapse_sah: needs a binary tree, got arity " + std::to_string(bvh.arity));
   if (bvh.nodes.empty()) return Bvh{{}, {}, arity};
+  auto run = [&]<uint32_t kArity>() {
+    return repeats_references(bvh) ? SahCollapse<kArity, true>(bvh, cost, max_leaf).run()
+                                   : SahCollapse<kArity, false>(bvh, cost, max_leaf).run();
+  };
   switch (arity) {
     case 2:
-      return SahCollapse<2>(bvh, cost, max_leaf).run();
+      return run.template operator()<2>();
     case 4:
-      return SahCollapse<4>(bvh, cost, max_leaf).run();
+      return run.template operator()<4>();
     default:
-      return SahCollapse<8>(bvh, cost, max_leaf).run();
+      return run.template operator()<8>();
   }
 }
 

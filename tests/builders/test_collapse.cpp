@@ -261,18 +261,25 @@ TEST(Collapse, LeavesOverASplittingSourceRepeatNoReference) {
   for (const auto& scene : test::scene_cases()) {
     SCOPED_TRACE(scene.name);
     const BuildInput input = BuildInput::from_triangles(scene.triangles);
-    const Bvh wide = build("wide_collapse", {{"source", "presplit"}, {"source.split_budget", "4"}}, input);
-    ASSERT_TRUE(validate(wide, input.bounds).ok()) << validate(wide, input.bounds).summary();
-    std::vector<bool> referenced(scene.triangles.size());
-    for (const Node& node : wide.nodes) {
-      if (!node.is_leaf()) continue;
-      std::vector<uint32_t> refs(wide.prim_refs.begin() + node.first,
-                                 wide.prim_refs.begin() + node.first + node.prim_count);
-      for (uint32_t r : refs) referenced[r] = true;
-      std::sort(refs.begin(), refs.end());
-      ASSERT_EQ(std::adjacent_find(refs.begin(), refs.end()), refs.end());
+    // max_leaf 32: subtrees of more distinct references than the collapse tracks exactly.
+    for (const char* max_leaf : {"8", "32"}) {
+      SCOPED_TRACE(max_leaf);
+      const Bvh wide =
+          build("wide_collapse",
+                {{"source", "presplit"}, {"source.split_budget", "4"}, {"max_leaf", max_leaf}}, input);
+      ASSERT_TRUE(validate(wide, input.bounds).ok()) << validate(wide, input.bounds).summary();
+      std::vector<bool> referenced(scene.triangles.size());
+      for (const Node& node : wide.nodes) {
+        if (!node.is_leaf()) continue;
+        EXPECT_LE(node.prim_count, std::stoul(max_leaf));
+        std::vector<uint32_t> refs(wide.prim_refs.begin() + node.first,
+                                   wide.prim_refs.begin() + node.first + node.prim_count);
+        for (uint32_t r : refs) referenced[r] = true;
+        std::sort(refs.begin(), refs.end());
+        ASSERT_EQ(std::adjacent_find(refs.begin(), refs.end()), refs.end());
+      }
+      EXPECT_EQ(std::count(referenced.begin(), referenced.end(), false), 0);
     }
-    EXPECT_EQ(std::count(referenced.begin(), referenced.end(), false), 0);
   }
 }
 

@@ -26,6 +26,8 @@ TEST(BuilderDeterminism, SameTreeForAnyThreadCount) {
                    {"source.iterations", "1"},
                    {"source.source", "reinsert"},
                    {"source.source.iterations", "2"}}});
+  // A source that repeats references: the collapse's sets of distinct references merge in its tasks.
+  runs.push_back({"wide_collapse", {{"source", "presplit"}, {"source.split_budget", "1"}}});
   runs.push_back({"reinsert", {{"batch", "1"}, {"iterations", "1"}}});
   runs.push_back({"treelet", {{"treelet_size", "9"}, {"iterations", "1"}}});
   for (const auto& [name, overrides] : runs) {

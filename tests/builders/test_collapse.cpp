@@ -199,6 +199,11 @@ TEST(Collapse, ASourceWithParametersOfItsOwnIsCollapsedAsGiven) {
   EXPECT_NE(default_bins.find("source=lbvh has no such parameter"), std::string::npos) << default_bins;
   const std::string default_rounds = error_of({{"source", "ploc"}, {"reinsert_iterations", "8"}});
   EXPECT_NE(default_rounds.find("not to source=ploc"), std::string::npos) << default_rounds;
+  // Left out, they are no error with any source; given, they are where the source takes them.
+  for (const char* source : {"lbvh", "ploc", "reinsert", "presplit", "sweep_sah", "sbvh"})
+    EXPECT_EQ(error_of({{"source", source}}), "no error") << source;
+  EXPECT_EQ(error_of({{"source", "sweep_sah"}, {"min_leaf", "2"}, {"reinsert_iterations", "0"}}), "no error");
+  EXPECT_EQ(error_of({{"source", "sbvh"}, {"bins", "16"}, {"adaptive_bins", "0"}}), "no error");
   // Not recorded where they do nothing: the text after the source's own parameters holds none of them.
   const std::string own = resolve_params(info.name, info.params, {{"source", "lbvh"}}).to_string();
   const std::string after = own.substr(own.rfind(')') + 1);

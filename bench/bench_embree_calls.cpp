@@ -56,33 +56,33 @@ RTCRay miss_ray(unsigned i) {
   return r;
 }
 
-void BM_Occluded1(benchmark::State& state) {
-  const MissScene& s = miss_scene();
+// One ray per call: `query(i)` traces the i-th miss ray through `context` and returns a value to keep.
+template <class Query>
+void one_ray_per_call(benchmark::State& state, Query query) {
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   unsigned i = 0;
-  for (auto _ : state) {
-    RTCRay r = miss_ray(i++);
-    rtcOccluded1(s.scene, &context, &r);
-    benchmark::DoNotOptimize(r.tfar);
-  }
+  for (auto _ : state) benchmark::DoNotOptimize(query(context, i++));
   state.SetItemsProcessed(state.iterations());
+}
+
+void BM_Occluded1(benchmark::State& state) {
+  one_ray_per_call(state, [scene = miss_scene().scene](RTCIntersectContext& context, unsigned i) {
+    RTCRay r = miss_ray(i);
+    rtcOccluded1(scene, &context, &r);
+    return r.tfar;
+  });
 }
 BENCHMARK(BM_Occluded1)->Name("embree_call/occluded1");
 
 void BM_Intersect1(benchmark::State& state) {
-  const MissScene& s = miss_scene();
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  unsigned i = 0;
-  for (auto _ : state) {
+  one_ray_per_call(state, [scene = miss_scene().scene](RTCIntersectContext& context, unsigned i) {
     RTCRayHit h{};
-    h.ray = miss_ray(i++);
+    h.ray = miss_ray(i);
     h.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(s.scene, &context, &h);
-    benchmark::DoNotOptimize(h.hit.geomID);
-  }
-  state.SetItemsProcessed(state.iterations());
+    rtcIntersect1(scene, &context, &h);
+    return h.hit.geomID;
+  });
 }
 BENCHMARK(BM_Intersect1)->Name("embree_call/intersect1");
 

@@ -219,8 +219,9 @@ GeneratedRaySets generate_ray_sets(const Scene& scene, std::span<const RaySetCon
 
   for (std::size_t set_index = 0; set_index < configs.size(); ++set_index) {
     const RaySetConfig& cfg = configs[set_index];
-    RaySet set{
-        cfg.name, cfg.kind, cfg.kind == RayKind::kShadow || cfg.kind == RayKind::kAmbientOcclusion, {}};
+    RaySet set{.name = cfg.name,
+               .kind = cfg.kind,
+               .occlusion = cfg.kind == RayKind::kShadow || cfg.kind == RayKind::kAmbientOcclusion};
     if (cfg.kind == RayKind::kPrimary) {
       set.rays = primary_rays(scene, cfg, box);
       out.sets.push_back(std::move(set));

@@ -161,7 +161,7 @@ class StressRunner {
     const double gen_ms = time_ms([&] { c = generate_stress_case(spec); });
     ctx.c = &c;
     ctx.triangles = std::make_shared<const std::vector<Triangle>>(c.scene.triangles);
-    ctx.rays = {"stress", RayKind::kRandom, false, c.rays};
+    ctx.rays = {.name = "stress", .kind = RayKind::kRandom, .rays = c.rays};
     ctx.guaranteed = c.closed && within_watertight_range(c);
     ctx.reference_ms = time_ms([&] { ctx.exact = ExactReference(*ctx.triangles).closest(c.rays); });
     uint64_t exact_hits = 0, ties = 0, must_hit_missed = 0;
@@ -414,7 +414,7 @@ class StressRunner {
     row["isa"] = "embree:" + embree_isa(*embree.device);
     row["mem_bytes"] = std::to_string(embree.scene->bytes());
     // Rays Embree's kernels reject: they are reported as misses without being traced.
-    RaySet accepted{"stress", RayKind::kRandom, false, {}};
+    RaySet accepted{.name = "stress", .kind = RayKind::kRandom};
     std::vector<std::size_t> accepted_index;
     for (std::size_t i = 0; i < ctx.c->rays.size(); ++i)
       if (embree_accepts(ctx.c->rays[i])) {

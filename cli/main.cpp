@@ -158,7 +158,9 @@ int main(int argc, char** argv) {
   CompareOptions compare;
   std::string compare_json;
   auto* compare_cmd = app.add_subcommand(
-      "compare", "Regression check of a result CSV against a baseline (exit 1 on a regression)");
+      "compare",
+      "Regression check of a result CSV against a baseline (exit 1 on a regression or an out-of-date "
+      "baseline, 2 on runs of different inputs)");
   compare_cmd->add_option("baseline", compare.baseline, "baseline CSV")->required();
   compare_cmd->add_option("current", compare.current, "new CSV")->required();
   compare_cmd->add_flag("--deterministic-only", compare.deterministic_only,
@@ -185,7 +187,8 @@ int main(int argc, char** argv) {
           "FRACTION"));
   compare_cmd->add_option(
       "--json", compare_json,
-      "write smaller-is-better metrics here and bigger-is-better ones to NAME-bigger.json");
+      "write smaller-is-better metrics to F and bigger-is-better ones beside it (bench.json: "
+      "bench-bigger.json)");
 
   ImageCommandOptions image;
   auto* image_cmd = app.add_subcommand(
@@ -273,7 +276,7 @@ int main(int argc, char** argv) {
     }
     if (*compare_cmd) {
       if (!compare_json.empty()) compare.json = compare_json;
-      return compare_results(compare, std::cout).regressions > 0 ? 1 : 0;
+      return compare_results(compare, std::cout).failed() ? 1 : 0;
     }
     if (*trace_cmd) {
       trace.query = parse_trace_query(trace_query);

@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 packages=(
   cmake ninja-build g++ git pkg-config ccache
   libembree-dev libtbb-dev libtinygltf-dev libtinyobjloader-dev nlohmann-json3-dev
-  libopenimageio-dev libcgal-dev libgmp-dev libmpfr-dev
+  libopenimageio-dev libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   libbenchmark-dev libgtest-dev libtomlplusplus-dev libcli11-dev libfmt-dev
   python3-matplotlib python3-pandas
   # The report's tests: pdflatex with booktabs compiles the LaTeX tables, in IEEEtran too

@@ -8,12 +8,16 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <ostream>
+#include <set>
+#include <string_view>
 
 #include "core/error.h"
 #include "harness/report/ratio_stats.h"
 #include "harness/report/result_cells.h"
 #include "harness/run/result_row.h"
+#include "harness/run/run_session.h"
 
 namespace sahbench {
 namespace {
@@ -141,6 +145,15 @@ struct Finding {
   double baseline, current;
   bool regression;
   std::optional<RatioInterval> change;  ///< timings: the change of the ratio, with its interval
+  double holm_p = 1.0;                  ///< timings: Holm's adjusted p-value of no change
+};
+
+// A timing change with an interval, before Holm's procedure decides which are flagged.
+struct TimingChange {
+  std::string cell, metric;
+  double baseline, current;
+  RatioInterval change;
+  bool larger_is_better;
 };
 
 // A cell key in a Markdown table: its '|' separators escaped, or they would split the cell (GitHub
@@ -163,11 +176,77 @@ struct JsonEntry {
 void write_json(const std::filesystem::path& path, const std::vector<JsonEntry>& entries) {
   std::ofstream out(path);
   if (!out) throw Error(path.string() + ": cannot open for writing");
-  out << "[\n";
-  for (std::size_t i = 0; i < entries.size(); ++i)
-    out << fmt::format("  {{\"name\": \"{}\", \"unit\": \"{}\", \"value\": {:.9g}}}{}\n", entries[i].name,
-                       entries[i].unit, entries[i].value, i + 1 < entries.size() ? "," : "");
-  out << "]\n";
+  // Through a JSON library: cell names hold scene paths, which may hold quotes and backslashes.
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const JsonEntry& e : entries) list.push_back({{"name", e.name}, {"unit", e.unit}, {"value", e.value}});
+  out << list.dump(2) << "\n";
+}
+
+// The parts of a run's fingerprint (harness/run/run_session.h) that decide what its cells measure: two
+// runs that differ in one of them measure other inputs under the same cell names. The build (what a
+// comparison is for), the repetitions, and the lists of builders, layouts and threads (which add or
+// remove cells, each named by its key) may differ. Scenes are a part of their own: the list may differ
+// too, so their part is held to only where both runs have the same scenes.
+constexpr std::string_view kInputParts[] = {"seed", "ray_sets", "cameras", "reference", "animation"};
+
+std::optional<std::vector<std::pair<std::string, std::string>>> input_parts(const Run& run) {
+  const ResultFile& f = run.file;
+  if (!f.has_column("fingerprint_parts")) return std::nullopt;
+  const std::string& text = f.field(run.cells.begin()->second, "fingerprint_parts");
+  if (text.empty()) return std::nullopt;
+  return Fingerprint::parse_parts(text);
+}
+
+std::set<std::string> scenes_of(const Run& run) {
+  std::set<std::string> out;
+  for (const auto& [key, i] : run.cells) out.insert(run.file.field(i, "scene"));
+  return out;
+}
+
+// Refuses two runs whose cells measure different inputs, naming what differs; returns a note for the
+// summary where the inputs could not be checked (a CSV from before fingerprint_parts).
+std::string check_same_inputs(const Run& base, const Run& cur) {
+  const auto bp = input_parts(base), cp = input_parts(cur);
+  if (!bp || !cp)
+    return fmt::format(
+        "Inputs not checked: {} has no fingerprint_parts (a CSV from before them); only each "
+        "cell's scene_triangles and ray_count are held to its baseline's.",
+        (!bp ? base : cur).file.path.string());
+  auto part = [](const std::vector<std::pair<std::string, std::string>>& parts, std::string_view name) {
+    const auto it = std::find_if(parts.begin(), parts.end(), [&](const auto& p) { return p.first == name; });
+    return it == parts.end() ? std::string() : it->second;
+  };
+  std::vector<std::string> differ;
+  for (const std::string_view name : kInputParts)
+    if (part(*bp, name) != part(*cp, name)) differ.emplace_back(name);
+  if (scenes_of(base) == scenes_of(cur) && part(*bp, "scenes") != part(*cp, "scenes"))
+    differ.emplace_back("scenes (a scene file's path, size or contents)");
+  if (!differ.empty())
+    throw Error(fmt::format(
+        "{} (run {}) and {} (run {}) measure different inputs, so their cells are not comparable: their "
+        "fingerprint_parts differ in {}; make the baseline from the same config and scenes",
+        base.file.path.string(), base.id, cur.file.path.string(), cur.id, fmt::join(differ, ", ")));
+  return "";
+}
+
+// A cell's input, as far as its own row tells it: the same scene size and number of rays in both runs.
+void check_same_cell_input(const Run& base, std::size_t bi, const Run& cur, std::size_t ci) {
+  for (const char* column : {"scene_triangles", "ray_count"}) {
+    if (!base.file.has_column(column) || !cur.file.has_column(column)) continue;
+    const std::string &b = base.file.field(bi, column), &c = cur.file.field(ci, column);
+    if (b != c)
+      throw Error(
+          fmt::format("{}: column '{}' is '{}', where {} has '{}': the cell measures another input "
+                      "than its baseline, and is not comparable",
+                      cur.file.where(ci), column, c, base.file.where(bi), b));
+  }
+}
+
+// A deterministic metric's change in the summary: relative, or the difference where the baseline is 0
+// (0 to 1 mismatches is no percentage).
+std::string deterministic_change(double baseline, double current) {
+  if (baseline == 0.0) return fmt::format("{:+.6g}", current - baseline);
+  return fmt::format("{:+.2f}%", 100.0 * (current - baseline) / std::fabs(baseline));
 }
 
 }  // namespace
@@ -198,8 +277,10 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   const Run base = latest_run(options.baseline, options.deterministic_only);
   const Run cur = latest_run(options.current, options.deterministic_only);
   const ResultFile &bf = base.file, &cf = cur.file;
+  const std::string inputs_note = check_same_inputs(base, cur);
   CompareResult result;
   std::vector<Finding> findings;
+  std::vector<TimingChange> timing_changes;
   std::vector<JsonEntry> smaller, bigger;
   std::vector<std::string> unanchored;       // cells with an anchor in the baseline only
   std::vector<std::string> unanchored_base;  // cells without an anchor in the baseline
@@ -227,6 +308,7 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
       continue;
     }
     const std::size_t ci = *ci_found;
+    check_same_cell_input(base, bi, cur, ci);
     ++result.compared_cells;
     for (const MetricRule& rule : metrics) {
       const auto vb = checked_number(bf, bi, rule.column), vc = checked_number(cf, ci, rule.column);
@@ -264,13 +346,30 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
         ++result.timings_without_interval;
         continue;
       }
-      const Verdict v = verdict(change, t.larger_is_better);
-      const double margin = options.min_timing_margin;
-      const bool beyond_margin = change.estimate > 1.0 + margin || change.estimate < 1.0 - margin;
-      if (v != Verdict::kWithinNoise && beyond_margin)
-        findings.push_back({key, metric, rb->estimate, rc->estimate, v == Verdict::kBehind, change});
+      timing_changes.push_back({key, metric, rb->estimate, rc->estimate, change, t.larger_is_better});
     }
   }
+  // A change is flagged where it exceeds the margin and Holm's procedure over every timing change of the
+  // file rejects no change: a hundred intervals at 95% each would flag an unchanged build somewhere most
+  // of the time.
+  std::vector<double> p_values;
+  for (const TimingChange& t : timing_changes) p_values.push_back(p_value_of_no_change(t.change));
+  const HolmResult holm_result = holm(p_values);
+  result.timing_comparisons = static_cast<int>(timing_changes.size());
+  std::vector<double> half_widths;  // of the changes' 95% intervals, on the log scale
+  for (std::size_t k = 0; k < timing_changes.size(); ++k) {
+    const TimingChange& t = timing_changes[k];
+    half_widths.push_back(0.5 * std::log(*t.change.hi / *t.change.lo));
+    const double margin = options.min_timing_margin;
+    const bool beyond_margin = t.change.estimate > 1.0 + margin || t.change.estimate < 1.0 - margin;
+    if (!holm_result.rejected[k] || !beyond_margin) continue;
+    const bool worse = t.larger_is_better ? t.change.estimate < 1.0 : t.change.estimate > 1.0;
+    findings.push_back({t.cell, t.metric, t.baseline, t.current, worse, t.change, holm_result.adjusted[k]});
+  }
+  std::vector<std::string> only_new;  // cells of the new run the baseline lacks
+  for (const auto& [key, i] : cur.cells)
+    if (!is_embree(cf, i) && !base.find(key)) only_new.push_back(key);
+  result.new_cells = static_cast<int>(only_new.size());
 
   // A baseline without any of Embree's rows gates no timing at all: passing would say they were checked.
   // One that lacks some anchors leaves those cells' timings out, and says which.
@@ -281,19 +380,34 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
                     "so no timing can be compared; make the baseline with Embree in the run, or compare with "
                     "--deterministic-only",
                     options.baseline.string(), result.compared_cells));
-  for (const auto& f : findings) (f.regression ? result.regressions : result.improvements) += 1;
+  for (const auto& f : findings) {
+    (f.regression ? result.regressions : result.improvements) += 1;
+    if (!f.regression && !f.change) ++result.out_of_date;
+  }
   result.regressions += result.missing_cells + result.missing_anchors;
   fmt::print(
       out,
       "# sahbench compare\n\nbaseline {} vs {}: {} cells compared, {} missing (each a regression{}), {} "
-      "other regressions, {} improvements{}\n\n",
+      "other regressions, {} improvements{}{}{}\n\n",
       options.baseline.string(), options.current.string(), result.compared_cells,
       result.missing_cells + result.missing_anchors,
       result.missing_anchors
           ? fmt::format("; {} of them cells whose Embree anchor alone is missing", result.missing_anchors)
           : "",
       result.regressions - result.missing_cells - result.missing_anchors, result.improvements,
+      result.out_of_date
+          ? fmt::format(" ({} of a deterministic metric: the baseline is out of date)", result.out_of_date)
+          : "",
+      result.new_cells ? fmt::format(", {} new cells (not gated)", result.new_cells) : "",
       options.deterministic_only ? " (deterministic metrics only)" : "");
+  if (result.out_of_date)
+    fmt::print(out,
+               "Deterministic metrics are reproduced to the bit by the same code on the same input: an "
+               "improvement means the baseline no longer describes the code, and a later regression below "
+               "its old value would pass. The gate fails until the baseline is made again from the new run "
+               "(copy {} over {} and commit it).\n\n",
+               options.current.string(), options.baseline.string());
+  if (!inputs_note.empty()) fmt::print(out, "{}\n\n", inputs_note);
   for (const ResultFile* f : {&bf, &cf})
     if (f->cut_last_line)
       fmt::print(out,
@@ -303,31 +417,47 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
   if (!not_in_base.empty())
     fmt::print(out, "Not compared: {}, which the baseline {} has no column for (a CSV from before it).\n\n",
                fmt::join(not_in_base, ", "), options.baseline.string());
-  if (!options.deterministic_only)
-    fmt::print(
-        out,
-        "Timing ratios to Embree are geometric means of per-round ratios; a change is flagged when its "
-        "95% interval lies wholly on one side of no change and it exceeds {:.1f}%.{}\n\n",
-        100.0 * options.min_timing_margin,
-        result.timings_without_interval
-            ? fmt::format(" {} timing ratios come from one round in a run and cannot be told from "
-                          "noise; they are not gated.",
-                          result.timings_without_interval)
-            : "");
+  if (!options.deterministic_only) {
+    fmt::print(out,
+               "Timing ratios to Embree are geometric means of per-round ratios; a change is flagged when it "
+               "exceeds {:.1f}% and Holm's step-down test over the file's {} timing changes rejects no "
+               "change, which keeps the chance of flagging an unchanged build anywhere at 5% (the table "
+               "gives each change's own 95% interval and its Holm-adjusted p).{}\n\n",
+               100.0 * options.min_timing_margin, result.timing_comparisons,
+               result.timings_without_interval
+                   ? fmt::format(" {} timing ratios come from one round in a run and cannot be told from "
+                                 "noise; they are not gated.",
+                                 result.timings_without_interval)
+                   : "");
+    // What the gate can see: a change well inside a cell's interval is not measured, flagged or not.
+    if (!half_widths.empty()) {
+      std::sort(half_widths.begin(), half_widths.end());
+      constexpr double kWide = 0.10;  // log scale: about +-10%
+      const auto wide =
+          std::count_if(half_widths.begin(), half_widths.end(), [](double h) { return h > kWide; });
+      const double median = half_widths[half_widths.size() / 2];
+      fmt::print(
+          out,
+          "Resolution: the median 95% interval of a change reaches from {:+.1f}% to {:+.1f}%; {} of {} "
+          "reach beyond +-10% and cannot show a change that small (more trace rounds narrow them).\n\n",
+          100.0 * (std::exp(-median) - 1.0), 100.0 * (std::exp(median) - 1.0), wide, half_widths.size());
+    }
+  }
   if (!findings.empty()) {
     fmt::print(out,
-               "| | cell | metric | baseline | new | change | 95% interval of the change |\n"
-               "|---|---|---|---:|---:|---:|---:|\n");
+               "| | cell | metric | baseline | new | change | 95% interval of the change | p (Holm) |\n"
+               "|---|---|---|---:|---:|---:|---:|---:|\n");
     for (const auto& f : findings) {
-      const std::string change = f.change
-                                     ? percent(f.change->estimate)
-                                     : fmt::format("{:+.2f}%", 100.0 * (f.current - f.baseline) /
-                                                                   std::max(std::fabs(f.baseline), 1e-12));
+      const std::string change =
+          f.change ? percent(f.change->estimate) : deterministic_change(f.baseline, f.current);
       const std::string interval =
           f.change ? fmt::format("[{}, {}]", percent(*f.change->lo), percent(*f.change->hi)) : "-";
-      fmt::print(out, "| {} | {} | {} | {:.6g} | {:.6g} | {} | {} |\n",
-                 f.regression ? "REGRESSION" : "improved", markdown_key(f.cell), f.metric, f.baseline,
-                 f.current, change, interval);
+      const std::string label = f.regression ? "REGRESSION"
+                                : f.change   ? "improved"
+                                             : "improved (out of date)";
+      fmt::print(out, "| {} | {} | {} | {:.6g} | {:.6g} | {} | {} | {} |\n", label, markdown_key(f.cell),
+                 f.metric, f.baseline, f.current, change, interval,
+                 f.change ? fmt::format("{:.2g}", f.holm_p) : "-");
     }
   }
   if (result.missing_anchors) {
@@ -347,6 +477,12 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
     fmt::print(out, "\nCells in the baseline but not in the new run:\n");
     for (const auto& [key, bi] : base.cells)
       if (!is_embree(bf, bi) && !cur.find(key)) fmt::print(out, "- {}\n", key);
+  }
+  if (!only_new.empty()) {
+    fmt::print(
+        out,
+        "\nCells in the new run but not in the baseline (not gated; make a new baseline to gate them):\n");
+    for (const auto& key : only_new) fmt::print(out, "- {}\n", key);
   }
   if (options.json) {
     write_json(*options.json, smaller);

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <array>
+#include <boost/math/distributions/students_t.hpp>
 #include <charconv>
 #include <cmath>
+#include <numeric>
 
 #include "core/error.h"
 #include "harness/run/timing.h"
@@ -137,6 +139,32 @@ RatioInterval ratio_change(const RatioInterval& base, const RatioInterval& now) 
   const double half = t_quantile_975(out.df) * se;
   out.lo = std::exp(out.mean_log - half);
   out.hi = std::exp(out.mean_log + half);
+  return out;
+}
+
+double p_value_of_no_change(const RatioInterval& change) {
+  if (!change.has_interval()) return 1.0;
+  if (change.sd_log == 0.0) return change.mean_log == 0.0 ? 1.0 : 0.0;
+  const boost::math::students_t t(change.df);
+  return 2.0 * boost::math::cdf(boost::math::complement(t, std::fabs(change.mean_log) / change.sd_log));
+}
+
+HolmResult holm(std::span<const double> p, double alpha) {
+  std::vector<std::size_t> order(p.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return p[a] < p[b]; });
+  HolmResult out{std::vector<bool>(p.size(), false), std::vector<double>(p.size(), 1.0)};
+  const std::size_t m = p.size();
+  double running = 0.0;  // adjusted p-values never fall along the order
+  bool still_rejecting = true;
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t i = order[k];
+    const double scaled = std::min(1.0, static_cast<double>(m - k) * p[i]);
+    running = std::max(running, scaled);
+    out.adjusted[i] = running;
+    still_rejecting = still_rejecting && p[i] <= alpha / static_cast<double>(m - k);
+    out.rejected[i] = still_rejecting;
+  }
   return out;
 }
 

@@ -64,6 +64,22 @@ RatioInterval ratio_change(const RatioInterval& base, const RatioInterval& now);
 /// "1.08 [1.03, 1.12]"; "1.08 [n=1]" from one round; "1.08 [medians]" for a ratio of medians.
 std::string format_ratio(const RatioInterval& ratio, int decimals = 2);
 
+/// The two-sided p-value of "no change" for a change from ratio_change: the probability under Student's
+/// t with the change's Welch degrees of freedom of a mean log at least as far from 0 as its mean_log.
+/// 1 without an interval; 0 for a non-zero change between runs without spread.
+double p_value_of_no_change(const RatioInterval& change);
+
+/// Holm's step-down procedure (Holm 1979, "A simple sequentially rejective multiple test procedure",
+/// Scand. J. Statist. 6(2)): which of the hypotheses with p-values `p` are rejected so that the chance of
+/// rejecting any true one stays at most `alpha`, and each one's adjusted p-value (the smallest alpha at
+/// which it would be rejected). Without it, each of a file's hundred timing changes would be flagged by
+/// chance 5% of the time, and an unchanged build most of the time somewhere.
+struct HolmResult {
+  std::vector<bool> rejected;
+  std::vector<double> adjusted;
+};
+HolmResult holm(std::span<const double> p, double alpha = 0.05);
+
 enum class Verdict { kAhead, kBehind, kWithinNoise };
 
 /// Ahead when the interval lies wholly on the better side of 1 (above it where larger is better, as

@@ -26,13 +26,13 @@
 namespace sahbench {
 
 struct RaySet {
-  std::string name;
+  std::string name = {};
   RayKind kind = RayKind::kPrimary;
   bool occlusion = false;  ///< any-hit query (shadow, ambient occlusion) rather than closest hit
-  std::vector<Ray> rays;
+  std::vector<Ray> rays = {};
   /// What a reader of the set's figures should know about its rays (a shadow set's lights enclosed by
   /// the scene), for the rows' notes and the run's log; empty when nothing.
-  std::string note;
+  std::string note = {};
 };
 
 struct GeneratedRaySets {

@@ -277,5 +277,40 @@ TEST(RatioStats, ChangeUsesWelchSatterthwaiteDegreesOfFreedom) {
   EXPECT_FALSE(ratio_change(base, now).has_interval());
 }
 
+TEST(RatioStats, PValueOfNoChangeIsStudentsTwoSidedTail) {
+  RatioInterval change;
+  change.n = 11;
+  change.df = 10.0;
+  change.sd_log = 0.5;
+  change.mean_log = 1.0;  // t = 2
+  change.lo = 0.9;
+  change.hi = 8.0;
+  // Two-sided P(|T| >= 2) at 10 degrees of freedom: 0.07339 (R: 2 * pt(-2, 10)).
+  EXPECT_NEAR(p_value_of_no_change(change), 0.073388, 1e-5);
+  change.mean_log = -1.0;
+  EXPECT_NEAR(p_value_of_no_change(change), 0.073388, 1e-5);
+  // At the edge of the 95% interval the p-value is 0.05.
+  change.mean_log = t_quantile_975(10.0) * change.sd_log;
+  EXPECT_NEAR(p_value_of_no_change(change), 0.05, 1e-6);
+  EXPECT_EQ(p_value_of_no_change(RatioInterval{}), 1.0) << "no interval, no evidence";
+}
+
+// Holm 1979's step-down: sorted p-values are held to alpha / m, alpha / (m - 1), ..., and the first
+// that fails stops the rejections.
+TEST(RatioStats, HolmRejectsStepDownAndAdjustsMonotonically) {
+  const std::vector<double> p = {0.04, 0.001, 0.03, 0.012};
+  const HolmResult h = holm(p, 0.05);
+  // Sorted: 0.001 <= 0.05/4, 0.012 <= 0.05/3, 0.03 > 0.05/2: stop; 0.04 is not rejected either.
+  EXPECT_EQ(h.rejected, (std::vector<bool>{false, true, false, true}));
+  EXPECT_NEAR(h.adjusted[1], 0.004, 1e-12);
+  EXPECT_NEAR(h.adjusted[3], 0.036, 1e-12);
+  EXPECT_NEAR(h.adjusted[2], 0.06, 1e-12);
+  EXPECT_NEAR(h.adjusted[0], 0.06, 1e-12) << "never below an earlier adjusted p-value";
+  EXPECT_TRUE(holm(std::vector<double>{}).rejected.empty());
+  // Each p-value alone at 0.049 is below 0.05, but not twenty of them together.
+  const HolmResult many = holm(std::vector<double>(20, 0.049));
+  EXPECT_EQ(std::count(many.rejected.begin(), many.rejected.end(), true), 0);
+}
+
 }  // namespace
 }  // namespace sahbench

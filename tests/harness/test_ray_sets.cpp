@@ -143,9 +143,11 @@ TEST(HarnessRaySets, ShadowSetNotesTheLightsTheSceneEncloses) {
   std::string listed;
   for (const std::size_t i : inside) listed += (listed.empty() ? "" : ", ") + std::to_string(i + 1);
   EXPECT_NE(out.sets[0].note.find(listed + " of 4 enclosed"), std::string::npos) << out.sets[0].note;
-  for (std::size_t i = 0; i < out.sets[0].rays.size(); ++i)
-    if (std::find(inside.begin(), inside.end(), i % lights.size()) != inside.end())
+  for (std::size_t i = 0; i < out.sets[0].rays.size(); ++i) {
+    if (std::find(inside.begin(), inside.end(), i % lights.size()) != inside.end()) {
       EXPECT_TRUE(brute_force_any(scene.triangles, out.sets[0].rays[i])) << "shadow ray " << i;
+    }
+  }
   EXPECT_NE(out.sets[1].note.find("scene light 2 of 2 enclosed"), std::string::npos) << out.sets[1].note;
 
   CsvRow row;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 
 #include "builders/params.h"
@@ -290,6 +291,11 @@ int main(int argc, char** argv) {
     std::cerr << "sahbench: " << e.what() << "\n";
     return 130;
   } catch (const Error& e) {
+    std::cerr << "sahbench: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // A path the system refuses (a folder under a regular file, no permission): bad input, named by the
+    // message ("cannot create directories: Not a directory [PATH]").
     std::cerr << "sahbench: error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {

@@ -737,6 +737,14 @@ void print_report(const ReportOptions& options, std::ostream& out) {
 }
 
 void run_report_command(const ReportOptions& options, std::ostream& out) {
+  // Writing the report over a result CSV would lose its rows.
+  for (const auto& input : options.inputs)
+    if (!options.output.empty() && std::filesystem::exists(options.output) &&
+        std::filesystem::exists(input) && std::filesystem::equivalent(options.output, input))
+      throw Error(
+          fmt::format("--output {} is one of the result CSVs the report reads; write the report to "
+                      "another file",
+                      options.output.string()));
   // The whole report first, so that a bad CSV or --columns leaves no half-written file or output behind.
   std::ostringstream text;
   print_report(options, text);

@@ -643,6 +643,19 @@ TEST(Report, BadInputIsAnErrorNamingIt) {
   std::stringstream text;
   text << in.rdbuf();
   EXPECT_NE(text.str().find("## proc:soup"), std::string::npos);
+  // The report over one of its own inputs would lose the rows: refused, the CSV as it was.
+  const auto input = write_results("self.csv");
+  const std::string before = (std::stringstream() << std::ifstream(input).rdbuf()).str();
+  options = ReportOptions{{input}, "", ReportFormat::kMarkdown, input};
+  try {
+    run_report_command(options, unused);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--output " + input.string() + " is one of the result CSVs"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ((std::stringstream() << std::ifstream(input).rdbuf()).str(), before);
 }
 
 TEST(Report, ACsvThatIsNotSahbenchsIsRefused) {

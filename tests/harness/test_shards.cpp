@@ -20,6 +20,7 @@
 #include "harness/report/compare.h"
 #include "harness/report/report.h"
 #include "harness/run/csv.h"
+#include "harness/run/run_session.h"
 #include "harness/run/runner.h"
 #include "harness/run/shard_merge.h"
 #include "harness/run/shard_plan.h"
@@ -334,6 +335,39 @@ TEST(ShardMerge, RefusesDifferentFingerprintsMissingShardsAndDuplicatedCells) {
   EXPECT_NE(different.find(other.string() + " (shard 1/3) has"), std::string::npos) << different;
   EXPECT_NE(different.find("they differ in: seed"), std::string::npos) << different;
   EXPECT_FALSE(std::filesystem::exists(merged));
+}
+
+// A merge replaces its output: an earlier merge of the same sweep may be made again, but rows of a run
+// (or of another sweep's merge) are never lost, and an output a run is writing is refused.
+TEST(ShardMerge, ReplacesOnlyAnEarlierMergeOfTheSameSweep) {
+  const auto config = write_run_config("merge_over", 7);
+  const auto shards = run_shards(config, 2);
+  const auto merged = dir() / "merge_over_merged.csv";
+  std::filesystem::remove(merged);
+  std::ostringstream log;
+  const MergeSummary first = merge_shards({merged, shards, std::nullopt}, log);
+  const MergeSummary again = merge_shards({merged, shards, std::nullopt}, log);
+  EXPECT_EQ(again.rows, first.rows);
+  EXPECT_EQ(read_csv(merged).size(), first.rows);
+
+  // A run's rows: refused, and the file keeps them.
+  const auto run_rows = dir() / "merge_over_run.csv";
+  std::filesystem::copy_file(shards[0], run_rows, std::filesystem::copy_options::overwrite_existing);
+  const std::size_t kept = read_csv(run_rows).size();
+  const std::string refused = error_of([&] { merge_shards({run_rows, shards, std::nullopt}, log); });
+  EXPECT_NE(refused.find("merge: the output " + run_rows.string() + " holds rows of a run"),
+            std::string::npos)
+      << refused;
+  EXPECT_NE(refused.find("merge into a new file"), std::string::npos) << refused;
+  EXPECT_EQ(read_csv(run_rows).size(), kept);
+
+  // Locked by a run that is writing it.
+  const auto busy = dir() / "merge_over_busy.csv";
+  std::filesystem::remove(busy);
+  const OutputLock writing(busy);
+  const std::string locked = error_of([&] { merge_shards({busy, shards, std::nullopt}, log); });
+  EXPECT_NE(locked.find(busy.string()), std::string::npos) << locked;
+  EXPECT_FALSE(std::filesystem::exists(busy));
 }
 
 // Shards run on CPUs that skip a layout (16-ray packets without AVX-512) merge without its cells; a

@@ -42,6 +42,12 @@ Scene load_scene_file(const fs::path& path) {
   else
     throw Error(path.string() + ": unsupported scene file extension '" + path.extension().string() +
                 "' (supported: .gltf, .glb, .obj, .ply)");
+  // The readers are lenient (tinyobjloader skips lines it cannot read), so a file that is not a scene at
+  // all, or one cut off before its faces, would load as an empty scene and every figure of it be nothing.
+  if (scene.triangles.empty())
+    throw Error(path.string() +
+                ": no triangles (a file of another format, cut off before its faces, or a "
+                "scene without any)");
   scene.name = path.string();
   scene.source = path.string();
   return scene;

@@ -1,3 +1,5 @@
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -6,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <set>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -15,6 +18,7 @@
 #include "harness/config/config.h"
 #include "harness/embree/embree_bvh_builder.h"
 #include "scenes/load.h"
+#include "scenes/procedural.h"
 #include "tests/support/config_error.h"
 #include "tests/support/error_of.h"
 #include "tests/support/prerequisites.h"
@@ -834,6 +838,29 @@ TEST(HarnessConfigLights, BadLightsNameKeyValueAndLine) {
                {"unknown key 'intensity' in [[lights]]", "scene, positions"});
   expect_error(kBase + shadow + table + "positions = [[0, 1, 0]]\n" + table + "positions = [[0, 2, 0]]\n", 17,
                {"scene \"proc:soup:tris=1k\" has two [[lights]] tables"});
+}
+
+// Settings are chosen on tune.toml and results claimed on claim.toml: the two share no view of a scene,
+// the procedural ones compared by their normalised spec (a proc scene's seed is its own, not the
+// experiment's), a shared scene by its camera (Sponza is seen from two ends).
+TEST(HarnessConfigLoad, ClaimAndTuneShareNoSceneView) {
+  const std::filesystem::path configs = std::filesystem::path(SAHBENCH_SOURCE_DIR) / "configs";
+  auto scenes_of = [](const ExperimentConfig& c) {
+    std::set<std::string> out;
+    for (const auto* list : {&c.scenes, &c.optional_scenes})
+      for (const auto& scene : *list) {
+        std::string view = is_procedural_spec(scene) ? generate_procedural(scene).source : scene;
+        if (const CameraConfig* camera = c.camera_for(scene))
+          view += fmt::format(" from {} to {}", fmt::join(camera->eye, ","), fmt::join(camera->target, ","));
+        out.insert(view);
+      }
+    return out;
+  };
+  const auto tune = scenes_of(load_experiment_config(configs / "tune.toml"));
+  for (const char* claim : {"claim.toml", "claim_builders.toml", "claim_bvh2.toml", "claim_packets.toml"}) {
+    for (const auto& scene : scenes_of(load_experiment_config(configs / claim)))
+      EXPECT_EQ(tune.count(scene), 0u) << claim << " claims on tune.toml's " << scene;
+  }
 }
 
 // Every experiment config shipped in configs/ loads, and every one that measures Sponza looks at it from

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <string>
 
+#include "core/error.h"
 #include "scenes/load.h"
 #include "scenes/obj_loader.h"
 #include "tests/scenes/temp_dir.h"
@@ -12,6 +13,21 @@ namespace {
 
 using test::error_message;
 using test::TempDir;
+
+// Bytes that are no OBJ, or an OBJ cut off before its faces, load as no triangles: refused, not measured
+// as an empty scene.
+TEST(SceneObj, AFileWithoutTrianglesIsRefused) {
+  TempDir dir;
+  for (const char* text : {"\x7f\x45\x4c\x46 garbage \x01\x02\n", "v 0 0 0\nv 1 0 0\nv 0 1", ""}) {
+    const auto path = dir.write("none.obj", text);
+    try {
+      load_scene_file(path);
+      ADD_FAILURE() << "no error for " << text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(path.string() + ": no triangles"), std::string::npos) << e.what();
+    }
+  }
+}
 
 TEST(SceneObj, QuadsAndPolygonsWithMissingMtl) {
   TempDir dir;

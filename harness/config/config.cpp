@@ -14,6 +14,9 @@
 #include "harness/config/toml_file.h"
 #include "harness/embree/embree_scene.h"
 #include "scenes/camera.h"
+#include "scenes/proc_spec.h"
+#include "scenes/procedural.h"
+#include "scenes/scene_path.h"
 #include "traversal/layout.h"
 
 namespace sahbench {
@@ -119,6 +122,29 @@ void read_experiment(const Source& src, const toml::table& root, ExperimentConfi
                "scene \"" + scene + "\" is in both scenes and optional_scenes");
   if (config.scenes.empty() && config.optional_scenes.empty())
     src.fail(table, "[experiment] names no scene: give scenes or optional_scenes");
+  // A procedural spec is checked here, where its line is known: an optional one with a typo would
+  // otherwise be skipped as "not found". And one scene under two spellings (tris=10k and tris=10000, a
+  // shared scene's name and its path) would be measured twice.
+  std::map<std::string, std::string> spellings;  // the scene it is -> how the config first spelled it
+  for (const char* list : {"scenes", "optional_scenes"}) {
+    for (const auto& scene : list == std::string_view("scenes") ? config.scenes : config.optional_scenes) {
+      std::string identity = scene;
+      if (is_procedural_spec(scene)) {
+        try {
+          identity = parse_proc_spec(scene, procedural_kinds()).normalised();
+        } catch (const Error& e) {
+          src.fail(*table.get(list), std::string("experiment.") + list + ": " + e.what());
+        }
+      } else if (const auto file = find_scene_file(scene)) {
+        std::error_code ec;
+        identity = std::filesystem::weakly_canonical(*file, ec).string();
+      }
+      const auto [it, added] = spellings.emplace(identity, scene);
+      if (!added)
+        src.fail(*table.get(list), "scenes \"" + it->second + "\" and \"" + scene +
+                                       "\" are the same scene (" + identity + "): list it once");
+    }
+  }
 
   if (const auto* n = table.get("layouts")) {
     config.layouts.clear();

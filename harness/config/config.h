@@ -9,11 +9,12 @@
 //   [experiment]
 //   name = "default"                  # required: letters, digits, '-', '_'
 //   output = "results/default.csv"    # default "results/<name>.csv", relative to the current directory
-//   seed = 1                          # seeds every generated ray set (a procedural scene has its own:
-//   proc:KIND:seed=N) threads = [1, 2]                  # an integer or a list (default 1) scenes =
-//   ["proc:soup:tris=100k"]  # required scenes: a missing one is an error at run time optional_scenes =
-//   ["crytek_sponza", "stanford_bunny"]   # skipped with a message when not found layouts = ["bvh2"] #
-//   default ["bvh2"] reference = "auto"                # auto | embree | brute_force | none
+//   seed = 1                          # seeds every ray set (proc:KIND:seed=N seeds a scene)
+//   threads = [1, 2]                  # an integer or a list (default 1)
+//   scenes = ["proc:soup:tris=100k"]  # required scenes: a missing one is an error at run time
+//   optional_scenes = ["crytek_sponza", "stanford_bunny"]   # skipped with a message when not found
+//   layouts = ["bvh2"]                # default ["bvh2"]
+//   reference = "auto"                # auto | embree | brute_force | none
 //   brute_force_max_triangles = 20000 # auto only: brute force up to this many triangles, else Embree
 //   epo = false                       # true: each tree of ours also gets its EPO cost (core/epo.h) in
 //                                     # epo_cost and sah_epo_cost; untimed, but a walk of the tree per

@@ -268,8 +268,8 @@ class AnimationRunner {
     frame.sets = std::move(generated.sets);
     frame.skipped = std::move(generated.skipped);
     for (const auto& rs : frame.sets)
-      frame.references.push_back(
-          make_reference(frame.scene, rs, cfg_.reference, cfg_.brute_force_max_triangles));
+      frame.references.push_back(make_reference(
+          frame.scene, rs, cfg_.reference, cfg_.brute_force_max_triangles, [this] { check_interrupt(); }));
     return frame;
   }
 

@@ -54,25 +54,31 @@ class ExactSettler {
   std::map<std::size_t, ExactHit> known_;
 };
 
+ReferencePolicy resolved_reference(ReferencePolicy policy, std::size_t triangles,
+                                   uint64_t brute_force_max_triangles) {
+  if (policy != ReferencePolicy::kAuto) return policy;
+  return triangles <= brute_force_max_triangles ? ReferencePolicy::kBruteForce : ReferencePolicy::kEmbree;
+}
+
 Reference make_reference(const Scene& scene, const RaySet& rs, ReferencePolicy policy,
-                         uint64_t brute_force_max_triangles) {
-  if (policy == ReferencePolicy::kAuto)
-    policy = scene.triangles.size() <= brute_force_max_triangles ? ReferencePolicy::kBruteForce
-                                                                 : ReferencePolicy::kEmbree;
+                         uint64_t brute_force_max_triangles, const std::function<void()>& between_chunks) {
+  policy = resolved_reference(policy, scene.triangles.size(), brute_force_max_triangles);
   Reference ref;
   const std::size_t n = rs.rays.size();
   if (policy == ReferencePolicy::kBruteForce) {
     ref.name = "brute_force";
-    if (rs.occlusion) {
+    if (rs.occlusion)
       ref.occluded.resize(n);
-      tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-        ref.occluded[i] = brute_force_any(scene.triangles, rs.rays[i]);
-      });
-    } else {
+    else
       ref.hits.resize(n);
-      tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-        ref.hits[i] = brute_force_closest(scene.triangles, rs.rays[i]);
+    for (std::size_t begin = 0; begin < n; begin += kReferenceChunk) {
+      tbb::parallel_for(begin, std::min(n, begin + kReferenceChunk), [&](std::size_t i) {
+        if (rs.occlusion)
+          ref.occluded[i] = brute_force_any(scene.triangles, rs.rays[i]);
+        else
+          ref.hits[i] = brute_force_closest(scene.triangles, rs.rays[i]);
       });
+      if (between_chunks) between_chunks();
     }
   } else if (policy == ReferencePolicy::kEmbree) {
     // Embree in robust mode, so that its own edge cases do not count as our mismatches, and the exact

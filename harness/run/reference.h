@@ -4,6 +4,7 @@
 // that differ from it (traversal/hit_compare.h says what counts as the same answer).
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -34,9 +35,17 @@ struct Reference {
 /// The answers of `policy` for `rs` on `scene`. kAuto is brute force up to `brute_force_max_triangles`
 /// triangles and Embree robust above; kNone gives no answers. Runs in parallel with TBB under the
 /// caller's thread limit (brute force), or on an Embree device of its own that is released before the
-/// call returns.
+/// call returns. Brute force, which takes seconds on the larger scenes it is used for, calls
+/// `between_chunks` (when given) after each chunk of kReferenceChunk rays, so that a run can stop there
+/// on Ctrl-C (it throws).
+inline constexpr std::size_t kReferenceChunk = 4096;
 Reference make_reference(const Scene& scene, const RaySet& rs, ReferencePolicy policy,
-                         uint64_t brute_force_max_triangles);
+                         uint64_t brute_force_max_triangles,
+                         const std::function<void()>& between_chunks = {});
+
+/// Which reference `policy` gives a scene of `triangles` triangles: kBruteForce, kEmbree or kNone.
+ReferencePolicy resolved_reference(ReferencePolicy policy, std::size_t triangles,
+                                   uint64_t brute_force_max_triangles);
 
 /// The length of the diagonal of the box around `triangles` (1 when there are none): the scene's size,
 /// from which count_mismatches derives each ray's tie tolerance.

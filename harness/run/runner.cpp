@@ -142,7 +142,15 @@ class ExperimentRunner {
       try {
         scene = load_scene(scene_name);
       } catch (const Error& e) {
-        throw Error(fmt::format("{}: experiment.scenes: {}", cfg_.path.string(), e.what()));
+        const auto& optional = cfg_.optional_scenes;
+        const bool is_optional = std::find(optional.begin(), optional.end(), scene_name) != optional.end();
+        throw Error(fmt::format(
+            "{}: experiment.{}: {}{}", cfg_.path.string(), is_optional ? "optional_scenes" : "scenes",
+            e.what(),
+            progress.done() > 0 ? fmt::format("; the {} cells finished are kept: fix or remove the scene, "
+                                              "then continue with: {}",
+                                              progress.done(), continue_with_)
+                                : ""));
       }
     });
     load_ms_ += load_ms;
@@ -173,11 +181,24 @@ class ExperimentRunner {
       if (!set.note.empty())
         log_ << fmt::format("scene {}: ray set '{}': {}\n", scene_name, set.name, set.note);
     std::vector<Reference> references(generated.sets.size());
-    reference_ms_ += time_ms([&] {
+    // Brute force over a few hundred thousand triangles takes seconds: said on stderr, and stopped on
+    // Ctrl-C between chunks of rays, as the timed cells are between steps.
+    const bool brute_force =
+        resolved_reference(cfg_.reference, scene.triangles.size(), cfg_.brute_force_max_triangles) ==
+        ReferencePolicy::kBruteForce;
+    std::size_t reference_rays = 0;
+    for (const RaySet& set : generated.sets) reference_rays += set.rays.size();
+    if (brute_force && reference_rays > 0)
+      log_ << fmt::format("scene {}: reference answers by brute force ({} rays x {} triangles)\n", scene_name,
+                          reference_rays, scene.triangles.size());
+    const double ms = time_ms([&] {
       for (std::size_t i = 0; i < generated.sets.size(); ++i)
-        references[i] =
-            make_reference(scene, generated.sets[i], cfg_.reference, cfg_.brute_force_max_triangles);
+        references[i] = make_reference(scene, generated.sets[i], cfg_.reference,
+                                       cfg_.brute_force_max_triangles, [&] { check_interrupt(progress); });
     });
+    reference_ms_ += ms;
+    if (brute_force && reference_rays > 0)
+      log_ << fmt::format("scene {}: reference answers in {:.1f} s\n", scene_name, ms / 1000.0);
 
     for (int threads : cfg_.threads) {
       const tbb::global_control limit(tbb::global_control::max_allowed_parallelism,

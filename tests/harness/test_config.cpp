@@ -649,6 +649,13 @@ TEST(HarnessConfigErrors, EmptyListsAndDuplicates) {
   expect_error(experiment("scenes = [\"s\"]\noptional_scenes = [\"s\"]"), 4,
                {"\"s\"", "both scenes and optional_scenes"});
   expect_error(experiment("scenes = [\"s\"]\nthreads = [2, 2]"), 4, {"threads lists 2 twice"});
+  // One scene under two spellings, and a procedural spec with a typo even where the scene is optional.
+  expect_error(
+      experiment("scenes = [\"proc:terrain:tris=10k\"]\noptional_scenes = [\"proc:terrain:tris=10000\"]"), 4,
+      {"\"proc:terrain:tris=10k\" and \"proc:terrain:tris=10000\" are the same scene"});
+  expect_error(experiment("scenes = [\"s\"]\noptional_scenes = [\"proc:terrian:tris=1k\"]"), 4,
+               {"experiment.optional_scenes", "terrian"});
+  expect_error(experiment("scenes = [\"proc:terrain:tris=0\"]"), 3, {"experiment.scenes", "tris"});
   expect_error(experiment("scenes = [\"\"]"), 3, {"must not be empty"});
 }
 

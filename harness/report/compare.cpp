@@ -16,6 +16,7 @@
 #include "core/error.h"
 #include "harness/report/ratio_stats.h"
 #include "harness/report/result_cells.h"
+#include "harness/report/stress_report.h"
 #include "harness/run/result_row.h"
 #include "harness/run/run_session.h"
 
@@ -83,6 +84,11 @@ Run latest_run(const std::filesystem::path& path, bool deterministic_only) {
   Run run{read_result_file(path), {}, {}};
   const ResultFile& f = run.file;
   if (f.rows.empty()) throw Error(path.string() + ": no result rows");
+  if (is_stress_result(f.rows))
+    throw Error(
+        path.string() +
+        ": a `sahbench stress` result, which compare does not gate (its rows are cases, not the cells "
+        "of a run); compare two CSVs of `sahbench run`, and read this one with `sahbench report`");
   for (const auto& column : required_columns(deterministic_only))
     if (!f.has_column(column))
       throw Error(fmt::format("{}:1: the header has no column '{}'{}", path.string(), column,

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <fmt/ostream.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cctype>
@@ -584,7 +585,20 @@ void print_report(const ReportOptions& options, std::ostream& out) {
   if (all.empty()) throw Error("no rows in the given CSV files");
   std::string run = options.run_id;
   // Rows are appended as cells finish, so the last row belongs to the latest run.
-  if (run.empty()) run = field(all.back().row(), "run_id");
+  if (run.empty()) {
+    run = field(all.back().row(), "run_id");
+    // Files of several runs given together: the others are not in the tables, which the report says.
+    std::vector<std::string> others;
+    for (const Located& l : all)
+      if (const std::string& id = field(l.row(), "run_id");
+          id != run && std::find(others.begin(), others.end(), id) == others.end())
+        others.push_back(id);
+    if (!others.empty() && files.size() > 1)
+      cut_notes.push_back(
+          fmt::format("this report is of run {} (the last row of {}); the files hold {} other "
+                      "runs, left out ({}): name one with --run",
+                      run, files.back().path.string(), others.size(), fmt::join(others, ", ")));
+  }
   std::vector<Located> located;
   std::copy_if(all.begin(), all.end(), std::back_inserter(located),
                [&](const Located& l) { return field(l.row(), "run_id") == run; });

@@ -386,8 +386,11 @@ TEST(HarnessCompare, RunsOfDifferentInputsAreNotCompared) {
   for (const std::string part : {"seed", "scenes", "ray_sets", "cameras", "reference"}) {
     const auto other = with_parts("inputs_" + part, parts({{part, "ffffffff"}}), "20020");
     const std::string e = compare_error(other, true, base);
-    EXPECT_NE(e.find("measure different inputs: they differ in " + part), std::string::npos) << e;
-    EXPECT_NE(e.find("not comparable"), std::string::npos) << e;
+    EXPECT_NE(e.find("measure different inputs, so their cells are not comparable: their fingerprint_parts "
+                     "differ in " +
+                     part),
+              std::string::npos)
+        << e;
   }
   // Without fingerprint_parts (an older CSV) the cells' own sizes are still held to the baseline's.
   header.erase(std::find(header.begin(), header.end(), "fingerprint_parts"));
@@ -560,6 +563,17 @@ TEST(HarnessCompare, JsonEscapesCellNames) {
   const nlohmann::json parsed = nlohmann::json::parse(std::ifstream(json));
   ASSERT_FALSE(parsed.empty());
   EXPECT_TRUE(parsed[0]["name"].get<std::string>().starts_with(R"(C:\scenes\"mesh".obj|)")) << parsed.dump();
+}
+
+// A `sahbench stress` CSV has cases, not cells of a run: refused by name, not by a missing fingerprint.
+TEST(HarnessCompare, AStressResultIsRefusedByName) {
+  std::vector<std::string> header = {"run_id", "case", "false_misses", "leaks"};
+  const auto path =
+      write("stress", {{{"run_id", "s"}, {"case", "c"}, {"false_misses", "0"}, {"leaks", "0"}}}, header);
+  const std::string e = compare_error(path, true, path);
+  EXPECT_NE(e.find(path.string() + ": a `sahbench stress` result, which compare does not gate"),
+            std::string::npos)
+      << e;
 }
 
 // --- Bad data: each an Error naming the file, the column and the line ---

@@ -658,6 +658,29 @@ TEST(Report, BadInputIsAnErrorNamingIt) {
   EXPECT_EQ((std::stringstream() << std::ifstream(input).rdbuf()).str(), before);
 }
 
+// Two files of two runs: the report is of the last file's run, and says which runs it left out.
+TEST(Report, FilesOfOtherRunsAreNamedNotSilentlyLeftOut) {
+  const auto first = write_results("run_one.csv");
+  const auto second = temp_csv("run_two.csv");
+  {
+    CsvWriter w(second, columns_with_samples());
+    for (CsvRow row : read_csv(first)) {
+      row["run_id"] = "r2";
+      w.append(row);
+    }
+  }
+  std::ostringstream out;
+  print_report({{first, second}, ""}, out);
+  EXPECT_NE(out.str().find("# sahbench report: run r2"), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("Note: this report is of run r2 (the last row of " + second.string() +
+                           "); the files hold 1 other runs, left out (r1): name one with --run."),
+            std::string::npos)
+      << out.str();
+  std::ostringstream one;
+  print_report({{first}, ""}, one);
+  EXPECT_EQ(one.str().find("other runs"), std::string::npos) << one.str();
+}
+
 TEST(Report, ACsvThatIsNotSahbenchsIsRefused) {
   const auto other = temp_csv("other.csv");
   std::ofstream(other) << "name,value\nx,1\n";

@@ -5,6 +5,7 @@
 #include <tbb/global_control.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -52,8 +53,14 @@ int run_build_command(const BuildCommandOptions& options, std::ostream& out, std
   if (options.warmup < 0)
     throw Error("--warmup must be at least 0 (got " + std::to_string(options.warmup) + ")");
   if (options.builders.empty()) throw Error("no builder given (--builder NAME)");
-  for (int t : options.threads)
+  for (std::size_t i = 0; i < options.threads.size(); ++i) {
+    const int t = options.threads[i];
     if (t < 1) throw Error("--threads: " + std::to_string(t) + " is not a thread count");
+    // As a config's threads list: the same count twice would build and print everything twice.
+    if (std::find(options.threads.begin(), options.threads.begin() + static_cast<std::ptrdiff_t>(i), t) !=
+        options.threads.begin() + static_cast<std::ptrdiff_t>(i))
+      throw Error("--threads lists " + std::to_string(t) + " twice");
+  }
   warn_oversubscribed(options.threads, "warning: --threads ", "builds", log);
   const std::vector<BuilderRun> runs = resolved_runs(options);
   if (!options.save.empty()) {

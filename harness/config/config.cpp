@@ -279,6 +279,12 @@ void check_value_types(const Source& src, const BuilderInfo& info, const std::st
     if (node->is_boolean() && !switch01)
       src.fail(*node, info.name + ": parameter '" + key + "' takes " + (number ? "a number" : "a name") +
                           ", not " + (text == "1" ? "true" : "false"));
+    // A path or a name written as a number (`path = 5`) would look for a file or a choice called "5".
+    if ((spec->type == ParamType::kPath || spec->type == ParamType::kChoice) &&
+        (node->is_integer() || node->is_floating_point()))
+      src.fail(*node, info.name + ": parameter '" + key + "' takes " +
+                          (spec->type == ParamType::kPath ? "a file path" : "a name") +
+                          " in quotes, not the number " + text);
   }
 }
 

@@ -17,6 +17,7 @@
 #include "core/error.h"
 #include "harness/config/config.h"
 #include "harness/embree/embree_bvh_builder.h"
+#include "harness/run/tree_file_builder.h"
 #include "scenes/load.h"
 #include "scenes/procedural.h"
 #include "tests/support/config_error.h"
@@ -425,6 +426,12 @@ TEST(HarnessConfigSource, NumbersAreNumbersAndBooleansOnlySwitch) {
                {"ploc: parameter 'radius' takes a number, not the string \"16\""});
   expect_error(ploc("radius = true\n"), 13, {"ploc: parameter 'radius' takes a number, not true"});
   expect_error(ploc("radius = [8, \"16\"]\n"), 13, {"not the string \"16\""});
+  // A path or a name is a string: `path = 5` is no file called "5".
+  register_tree_file_builder();  // as sahbench does at startup (a repeated call is a no-op)
+  expect_error(kWideBase + "[[builder]]\nname = \"file\"\npath = 5\n", 10,
+               {"file: parameter 'path' takes a file path in quotes, not the number 5"});
+  expect_error(kWideBase + "[[builder]]\nname = \"wide_collapse\"\nmethod = 2\n", 10,
+               {"wide_collapse: parameter 'method' takes a name in quotes, not the number 2"});
   // A 0/1 switch takes a boolean, and names stay strings.
   const auto ok = parse_experiment_config(
       kWideBase + "[[builder]]\nname = \"binned_sah\"\nadaptive_bins = false\n", "test.toml");

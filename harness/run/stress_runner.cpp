@@ -128,8 +128,22 @@ class StressRunner {
         cfg_.cases.size(), builder_labels(), cfg_.layouts.size(), cfg_.embree_robust.size(), output.string());
     layouts_ = runnable_specs(cfg_.layouts, log_);  // as `sahbench run` skips them
     const auto start = std::chrono::steady_clock::now();
+    // Ctrl-C stops between cases, and says what was kept: the suite has no --resume (it runs in minutes).
+    const InterruptGuard interrupts;
+    const auto total =
+        static_cast<std::size_t>(std::count_if(cfg_.cases.begin(), cfg_.cases.end(), selected));
+    std::size_t done = 0;
     for (const StressCaseSpec& spec : cfg_.cases) {
-      if (selected(spec)) run_case(spec);
+      if (!selected(spec)) continue;
+      InterruptGuard::check(
+          done, total,
+          fmt::format("sahbench stress {}{} (the rows of the finished cases are in {}; the "
+                      "suite has no --resume and runs them again)",
+                      cfg_.path.string(), options_.only.empty() ? "" : " --only " + options_.only,
+                      output.string()));
+      log_ << fmt::format("[{}/{}] ", done + 1, total);
+      run_case(spec);
+      ++done;
     }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     log_ << fmt::format("done in {:.1f} s: {} rows, {} guarantee failures\n", s, summary_.rows,

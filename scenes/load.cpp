@@ -44,6 +44,9 @@ Scene load_scene_file(const fs::path& path) {
                 "' (supported: .gltf, .glb, .obj, .ply)");
   // The readers are lenient (tinyobjloader skips lines it cannot read), so a file that is not a scene at
   // all, or one cut off before its faces, would load as an empty scene and every figure of it be nothing.
+  if (scene.triangles.empty() && scene.removed.total() > 0)
+    throw Error(path.string() + ": no triangles left: all " + std::to_string(scene.removed.total()) +
+                " were invalid (non-finite or degenerate) and removed");
   if (scene.triangles.empty())
     throw Error(path.string() +
                 ": no triangles (a file of another format, cut off before its faces, or a "
@@ -53,6 +56,19 @@ Scene load_scene_file(const fs::path& path) {
   return scene;
 }
 
+std::optional<fs::path> scene_file_of(std::string_view spec) {
+  if (is_procedural_spec(spec)) return std::nullopt;
+  fs::path path(spec);
+  if (!path.has_filename()) path = path.parent_path();  // "dir/" names the folder "dir"
+  std::error_code ec;
+  if (fs::is_regular_file(path, ec)) return path;
+  // A scene folder given by path is resolved like a folder on the search path.
+  if (fs::is_directory(path, ec))
+    return find_scene_file_in(path.parent_path().empty() ? fs::path(".") : path.parent_path(),
+                              path.filename().string());
+  return find_scene_file(spec);
+}
+
 Scene load_scene(std::string_view spec) {
   if (spec.empty()) throw Error("empty scene name: expected a file, a shared scene name or proc:KIND");
   if (is_procedural_spec(spec)) return generate_procedural(spec);
@@ -60,19 +76,10 @@ Scene load_scene(std::string_view spec) {
   fs::path path(spec);
   if (!path.has_filename()) path = path.parent_path();  // "dir/" names the folder "dir"
   std::error_code ec;
-  std::optional<fs::path> file;
-  if (fs::is_regular_file(path, ec)) {
-    file = path;
-  } else if (fs::is_directory(path, ec)) {
-    // A scene folder given by path is resolved like a folder on the search path.
-    file = find_scene_file_in(path.parent_path().empty() ? fs::path(".") : path.parent_path(),
-                              path.filename().string());
-    if (!file)
-      throw Error(std::string(spec) +
-                  ": directory holds no scene file (NAME.{gltf,glb,obj,ply} or scene.gltf)");
-  } else {
-    file = find_scene_file(spec);
-  }
+  const std::optional<fs::path> file = scene_file_of(spec);
+  if (!file && fs::is_directory(path, ec))
+    throw Error(std::string(spec) +
+                ": directory holds no scene file (NAME.{gltf,glb,obj,ply} or scene.gltf)");
   if (!file) {
     const bool path_like = spec.find('/') != std::string_view::npos || has_scene_extension(path);
     throw Error(std::string(spec) + ": " + (path_like ? "no such file" : "unknown scene") +

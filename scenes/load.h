@@ -2,6 +2,7 @@
 // Loading a scene from what a user or config names: a procedural spec, a file, or a shared scene.
 
 #include <filesystem>
+#include <optional>
 #include <string_view>
 
 #include "scenes/scene.h"
@@ -17,6 +18,10 @@ namespace sahbench {
 /// Throws Error for an unsupported extension, a missing file, an unknown name (listing the search path
 /// tried), or a malformed file.
 Scene load_scene(std::string_view spec);
+
+/// The file load_scene reads for `spec` (a path, first as given, then a shared scene name on the search
+/// path), or nullopt for a procedural spec or where there is none.
+std::optional<std::filesystem::path> scene_file_of(std::string_view spec);
 
 /// Loads one file, choosing the loader by its extension. Scene::name and Scene::source are the path.
 Scene load_scene_file(const std::filesystem::path& path);

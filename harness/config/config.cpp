@@ -14,9 +14,9 @@
 #include "harness/config/toml_file.h"
 #include "harness/embree/embree_scene.h"
 #include "scenes/camera.h"
+#include "scenes/load.h"
 #include "scenes/proc_spec.h"
 #include "scenes/procedural.h"
-#include "scenes/scene_path.h"
 #include "traversal/layout.h"
 
 namespace sahbench {
@@ -135,9 +135,10 @@ void read_experiment(const Source& src, const toml::table& root, ExperimentConfi
         } catch (const Error& e) {
           src.fail(*table.get(list), std::string("experiment.") + list + ": " + e.what());
         }
-      } else if (const auto file = find_scene_file(scene)) {
+      } else if (const auto file = scene_file_of(scene)) {
         std::error_code ec;
-        identity = std::filesystem::weakly_canonical(*file, ec).string();
+        const std::filesystem::path canonical = std::filesystem::weakly_canonical(*file, ec);
+        if (!ec) identity = canonical.string();
       }
       const auto [it, added] = spellings.emplace(identity, scene);
       if (!added)

@@ -191,9 +191,10 @@ void write_json(const std::filesystem::path& path, const std::vector<JsonEntry>&
 // The parts of a run's fingerprint (harness/run/run_session.h) that decide what its cells measure: two
 // runs that differ in one of them measure other inputs under the same cell names. The build (what a
 // comparison is for), the repetitions, and the lists of builders, layouts and threads (which add or
-// remove cells, each named by its key) may differ. Scenes are a part of their own: the list may differ
-// too, so their part is held to only where both runs have the same scenes.
-constexpr std::string_view kInputParts[] = {"seed", "ray_sets", "cameras", "reference", "animation"};
+// remove cells, each named by its key) may differ. The scenes, ray sets and cameras are hashed as lists,
+// so their parts are held to only where both runs have the same scenes and ray sets; where one run has
+// more, each cell's own scene size and ray count are (check_same_cell_input).
+constexpr std::string_view kInputParts[] = {"seed", "reference", "animation"};
 
 std::optional<std::vector<std::pair<std::string, std::string>>> input_parts(const Run& run) {
   const ResultFile& f = run.file;
@@ -203,9 +204,9 @@ std::optional<std::vector<std::pair<std::string, std::string>>> input_parts(cons
   return Fingerprint::parse_parts(text);
 }
 
-std::set<std::string> scenes_of(const Run& run) {
+std::set<std::string> values_of(const Run& run, const std::string& column) {
   std::set<std::string> out;
-  for (const auto& [key, i] : run.cells) out.insert(run.file.field(i, "scene"));
+  for (const auto& [key, i] : run.cells) out.insert(run.file.field(i, column));
   return out;
 }
 
@@ -225,8 +226,14 @@ std::string check_same_inputs(const Run& base, const Run& cur) {
   std::vector<std::string> differ;
   for (const std::string_view name : kInputParts)
     if (part(*bp, name) != part(*cp, name)) differ.emplace_back(name);
-  if (scenes_of(base) == scenes_of(cur) && part(*bp, "scenes") != part(*cp, "scenes"))
-    differ.emplace_back("scenes (a scene file's path, size or contents)");
+  const bool same_scenes = values_of(base, "scene") == values_of(cur, "scene");
+  const bool same_sets = values_of(base, "ray_set") == values_of(cur, "ray_set");
+  if (same_scenes && part(*bp, "scenes") != part(*cp, "scenes"))
+    differ.emplace_back("scenes (a scene file's path, size or contents, or the scenes' order)");
+  if (same_sets && part(*bp, "ray_sets") != part(*cp, "ray_sets"))
+    differ.emplace_back("ray_sets (a ray set's size, lights or radius, or the sets' order)");
+  if (same_scenes && part(*bp, "cameras") != part(*cp, "cameras"))
+    differ.emplace_back("cameras (a view or the lights of a scene)");
   if (!differ.empty())
     throw Error(fmt::format(
         "{} (run {}) and {} (run {}) measure different inputs, so their cells are not comparable: their "
@@ -333,8 +340,8 @@ CompareResult compare_results(const CompareOptions& options, std::ostream& out) 
       findings.push_back({key, rule.column, *vb, *vc, worse, std::nullopt});
     }
     if (options.deterministic_only) continue;
-    // Timings: only as ratios to Embree in the same run, each from samples paired by round, and their
-    // change flagged only when its interval excludes no change and it exceeds the margin.
+    // Timings: only as ratios to Embree in the same run, each from samples paired by round; their changes
+    // are judged together below.
     const auto ab = base.find(key_of(bf, bi, true)), ac = cur.find(key_of(cf, ci, true));
     if (ab && !ac) {
       ++result.missing_anchors;

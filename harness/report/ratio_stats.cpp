@@ -145,7 +145,9 @@ RatioInterval ratio_change(const RatioInterval& base, const RatioInterval& now) 
 double p_value_of_no_change(const RatioInterval& change) {
   if (!change.has_interval()) return 1.0;
   if (change.sd_log == 0.0) return change.mean_log == 0.0 ? 1.0 : 0.0;
-  const boost::math::students_t t(change.df);
+  // Below 30 degrees of freedom at their floor, as t_quantile_975 takes them for the printed interval, so
+  // that p < 0.05 exactly where that interval excludes no change.
+  const boost::math::students_t t(change.df < 30.0 ? std::max(1.0, std::floor(change.df)) : change.df);
   return 2.0 * boost::math::cdf(boost::math::complement(t, std::fabs(change.mean_log) / change.sd_log));
 }
 

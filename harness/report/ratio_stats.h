@@ -30,8 +30,9 @@ struct RatioInterval {
   std::optional<double> lo, hi;  ///< both or neither: none from one round, or from medians
   int n = 0;                     ///< rounds paired (a change: the fewer of its two); 0: from medians
   double mean_log = 0.0;         ///< mean of the log ratios (for a change: d)
-  double sd_log = 0.0;           ///< their sample standard deviation (0 with one round)
-  double df = 0.0;               ///< degrees of freedom of the interval's t quantile
+  double sd_log =
+      0.0;          ///< their sample standard deviation (0 with one round); for a change, d's standard error
+  double df = 0.0;  ///< degrees of freedom of the interval's t quantile
   bool has_interval() const { return lo.has_value(); }
 };
 

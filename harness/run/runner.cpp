@@ -144,13 +144,16 @@ class ExperimentRunner {
       } catch (const Error& e) {
         const auto& optional = cfg_.optional_scenes;
         const bool is_optional = std::find(optional.begin(), optional.end(), scene_name) != optional.end();
-        throw Error(fmt::format(
-            "{}: experiment.{}: {}{}", cfg_.path.string(), is_optional ? "optional_scenes" : "scenes",
-            e.what(),
-            progress.done() > 0 ? fmt::format("; the {} cells finished are kept: fix or remove the scene, "
-                                              "then continue with: {}",
-                                              progress.done(), continue_with_)
-                                : ""));
+        throw Error(
+            fmt::format("{}: experiment.{}: {}{}", cfg_.path.string(),
+                        is_optional ? "optional_scenes" : "scenes", e.what(),
+                        // Not a --resume: the scenes' contents are part of the run's fingerprint, so a fixed
+                        // or removed scene is another run.
+                        progress.done() > 0
+                            ? fmt::format("; the {} cells finished are kept in the output CSV, but a fixed "
+                                          "or removed scene makes another run: run again without --resume",
+                                          progress.done())
+                            : ""));
       }
     });
     load_ms_ += load_ms;

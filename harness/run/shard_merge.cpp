@@ -110,19 +110,20 @@ std::string named(const std::vector<std::string>& items) {
   return out;
 }
 
-// A merge replaces its output, which may only hold an earlier merge of the same sweep (derived from the
-// shards, so made again from them): rows of a run, or of another sweep's merge, would be lost.
-void check_output_replaceable(const std::filesystem::path& output, const std::string& fingerprint) {
+// A merge replaces its output, which may only hold earlier merges (derived from shards, so made again
+// from them, of this sweep or another commit's): rows of a run would be lost. A merged row carries its
+// shard's run id in shard_run_id, which no run writes.
+void check_output_replaceable(const std::filesystem::path& output) {
   if (!std::filesystem::exists(output)) return;
   if (std::filesystem::is_directory(output))
     throw Error(fmt::format("merge: the output {} is a directory", output.string()));
   for (const CsvRow& row : read_csv(output)) {
     const std::string id = field(row, "run_id");
-    if (id.find("-merged-") == std::string::npos || field(row, "run_fingerprint") != fingerprint)
-      throw Error(fmt::format(
-          "merge: the output {} holds rows of {} (run {}), which merging would replace; merge into a new "
-          "file, or move that one away first",
-          output.string(), id.find("-merged-") == std::string::npos ? "a run" : "another sweep's merge", id));
+    if (id.find("-merged-") == std::string::npos || field(row, "shard_run_id").empty())
+      throw Error(
+          fmt::format("merge: the output {} holds rows of a run ({}), which merging would replace; "
+                      "merge into a new file, or move that one away first",
+                      output.string(), id));
   }
 }
 
@@ -261,7 +262,7 @@ MergeSummary merge_shards(const MergeOptions& options, std::ostream& log) {
   summary.run_id = fmt::format("{}-merged-{}-{:08x}", cfg.name, first.fingerprint.substr(0, 8), h);
   // The run's own lock (run_session.h): no run may be writing the output while it is replaced.
   const OutputLock lock(options.output);
-  check_output_replaceable(options.output, first.fingerprint);
+  check_output_replaceable(options.output);
   // Written beside the output and renamed over it, so that a failed merge leaves no half-written file.
   const std::filesystem::path partial = options.output.string() + ".partial";
   std::filesystem::remove(partial);

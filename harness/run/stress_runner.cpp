@@ -137,9 +137,10 @@ class StressRunner {
       if (!selected(spec)) continue;
       InterruptGuard::check(
           done, total,
-          fmt::format("sahbench stress {}{} (the rows of the finished cases are in {}; the "
-                      "suite has no --resume and runs them again)",
-                      cfg_.path.string(), options_.only.empty() ? "" : " --only " + options_.only,
+          fmt::format("sahbench stress {}{}{} (the rows of the finished cases are in {}; the suite has no "
+                      "--resume and runs them again)",
+                      cfg_.path.string(), options_.only.empty() ? "" : " --only '" + options_.only + "'",
+                      options_.output ? " --output '" + options_.output->string() + "'" : "",
                       output.string()));
       log_ << fmt::format("[{}/{}] ", done + 1, total);
       run_case(spec);

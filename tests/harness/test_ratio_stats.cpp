@@ -289,6 +289,9 @@ TEST(RatioStats, PValueOfNoChangeIsStudentsTwoSidedTail) {
   EXPECT_NEAR(p_value_of_no_change(change), 0.073388, 1e-5);
   change.mean_log = -1.0;
   EXPECT_NEAR(p_value_of_no_change(change), 0.073388, 1e-5);
+  change.df = 10.7;  // Welch's fractional df, taken at its floor as the printed interval takes it
+  EXPECT_NEAR(p_value_of_no_change(change), 0.073388, 1e-5);
+  change.df = 10.0;
   // At the edge of the 95% interval the p-value is 0.05.
   change.mean_log = t_quantile_975(10.0) * change.sd_log;
   EXPECT_NEAR(p_value_of_no_change(change), 0.05, 1e-6);

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/error.h"
 #include "harness/run/reference.h"
 #include "scenes/load.h"
 #include "traversal/brute_force.h"
@@ -87,6 +88,26 @@ TEST(Reference, BruteForceNeedsNoSettling) {
   const Reference ref = make_reference(scene, rays_at(false), ReferencePolicy::kAuto, 1u << 20);
   EXPECT_EQ(ref.name, "brute_force");
   EXPECT_EQ(ref.settler, nullptr);
+}
+
+// Brute force is cut into chunks of rays, after each of which the caller may stop it (Ctrl-C in a run).
+TEST(Reference, BruteForceCallsBackBetweenChunksAndStopsWhenItThrows) {
+  const Scene scene = load_scene("proc:sphere:tris=200");
+  RaySet set = rays_at(false);
+  const std::vector<Ray> some = set.rays;
+  while (set.rays.size() < 2 * kReferenceChunk + 1) set.rays.insert(set.rays.end(), some.begin(), some.end());
+  std::size_t calls = 0;
+  const Reference ref = make_reference(scene, set, ReferencePolicy::kBruteForce, 0, [&] { ++calls; });
+  EXPECT_EQ(calls, (set.rays.size() + kReferenceChunk - 1) / kReferenceChunk);
+  ASSERT_EQ(ref.hits.size(), set.rays.size());
+  EXPECT_EQ(ref.hits.back().prim, brute_force_closest(scene.triangles, set.rays.back()).prim);
+  calls = 0;
+  EXPECT_THROW(make_reference(scene, set, ReferencePolicy::kBruteForce, 0,
+                              [&] {
+                                if (++calls == 1) throw Error("stop");
+                              }),
+               Error);
+  EXPECT_EQ(calls, 1u) << "stopped after the first chunk";
 }
 
 }  // namespace

@@ -337,8 +337,8 @@ TEST(ShardMerge, RefusesDifferentFingerprintsMissingShardsAndDuplicatedCells) {
   EXPECT_FALSE(std::filesystem::exists(merged));
 }
 
-// A merge replaces its output: an earlier merge of the same sweep may be made again, but rows of a run
-// (or of another sweep's merge) are never lost, and an output a run is writing is refused.
+// A merge replaces its output: an earlier merge may be made again, but rows of a run are never lost, and
+// an output a run is writing is refused.
 TEST(ShardMerge, ReplacesOnlyAnEarlierMergeOfTheSameSweep) {
   const auto config = write_run_config("merge_over", 7);
   const auto shards = run_shards(config, 2);

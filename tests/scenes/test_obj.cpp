@@ -29,6 +29,20 @@ TEST(SceneObj, AFileWithoutTrianglesIsRefused) {
   }
 }
 
+// A file whose every triangle is removed as invalid says so, not that it is no OBJ.
+TEST(SceneObj, AFileOfOnlyInvalidTrianglesSaysSo) {
+  TempDir dir;
+  const auto path = dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  try {
+    load_scene_file(path);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path.string() + ": no triangles left: all 1 were invalid"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(SceneObj, QuadsAndPolygonsWithMissingMtl) {
   TempDir dir;
   const std::string text =

@@ -219,8 +219,10 @@ ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerp
   return point;
 }
 
-Interrupted::Interrupted(std::size_t done, std::size_t total, const std::string& continue_with)
-    : Error(fmt::format("interrupted after {} of {} cells; continue with: {}", done, total, continue_with)) {}
+Interrupted::Interrupted(std::size_t done, std::size_t total, const std::string& continue_with,
+                         const std::string& units)
+    : Error(fmt::format("interrupted after {} of {} {}; continue with: {}", done, total, units,
+                        continue_with)) {}
 
 InterruptGuard::InterruptGuard() {
   g_interrupted.store(false);
@@ -241,8 +243,9 @@ bool InterruptGuard::requested() {
   return g_interrupted.load();
 }
 
-void InterruptGuard::check(std::size_t done, std::size_t total, const std::string& continue_with) {
-  if (requested()) throw Interrupted(done, total, continue_with);
+void InterruptGuard::check(std::size_t done, std::size_t total, const std::string& continue_with,
+                           const std::string& units) {
+  if (requested()) throw Interrupted(done, total, continue_with, units);
 }
 
 namespace {

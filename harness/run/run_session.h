@@ -83,7 +83,9 @@ ResumePoint find_resume_point(const std::filesystem::path& output, const Fingerp
 /// progress are dropped. The CLI prints message() and exits 130.
 class Interrupted : public Error {
  public:
-  Interrupted(std::size_t done, std::size_t total, const std::string& continue_with);
+  /// "interrupted after DONE of TOTAL UNITS; continue with: CONTINUE_WITH"
+  Interrupted(std::size_t done, std::size_t total, const std::string& continue_with,
+              const std::string& units = "cells");
 };
 
 /// While alive, SIGINT and SIGTERM only set a flag that check() turns into Interrupted; a second signal of
@@ -98,7 +100,8 @@ class InterruptGuard {
 
   static bool requested();
   /// Throws Interrupted(done, total, continue_with) if a signal has arrived.
-  static void check(std::size_t done, std::size_t total, const std::string& continue_with);
+  static void check(std::size_t done, std::size_t total, const std::string& continue_with,
+                    const std::string& units = "cells");
 };
 
 /// "sahbench run CONFIG --resume", with the run's --output, --only and --shard, each quoted for a shell where

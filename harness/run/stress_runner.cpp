@@ -141,7 +141,8 @@ class StressRunner {
                       "--resume and runs them again)",
                       cfg_.path.string(), options_.only.empty() ? "" : " --only '" + options_.only + "'",
                       options_.output ? " --output '" + options_.output->string() + "'" : "",
-                      output.string()));
+                      output.string()),
+          "cases");
       log_ << fmt::format("[{}/{}] ", done + 1, total);
       run_case(spec);
       ++done;

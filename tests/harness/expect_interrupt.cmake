@@ -26,13 +26,7 @@ height = 512
 # SIGINT once the first scene's row is on disk: the second scene, a 4M-triangle sphere traced 30 times,
 # is then still running.
 interrupt_after_first_row(${csv} rc err run ${config})
-if(NOT rc EQUAL 130)
-  message(FATAL_ERROR "exit code ${rc}, expected 130\nstderr: ${err}")
-endif()
-string(FIND "${err}" "interrupted after 1 of 2 cells; continue with: sahbench run ${config} --resume" at)
-if(at EQUAL -1)
-  message(FATAL_ERROR "stderr lacks the interrupt message:\n${err}")
-endif()
+expect_interrupted(${rc} "${err}" "interrupted after 1 of 2 cells; continue with: sahbench run ${config} --resume")
 file(STRINGS ${csv} lines)
 list(LENGTH lines count)
 if(NOT count EQUAL 2)

@@ -14,3 +14,15 @@ function(interrupt_after_first_row csv rc_var err_var)
   set(${rc_var} "${rc}" PARENT_SCOPE)
   set(${err_var} "${err}" PARENT_SCOPE)
 endfunction()
+
+# expect_interrupted(RC ERR TEXT): fails the test unless the run exited 130 (stopped by SIGINT) and its stderr
+# ERR holds TEXT (the interrupt message with the command that continues it).
+function(expect_interrupted rc err text)
+  if(NOT rc EQUAL 130)
+    message(FATAL_ERROR "exit code ${rc}, expected 130\nstderr: ${err}")
+  endif()
+  string(FIND "${err}" "${text}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "stderr lacks '${text}':\n${err}")
+  endif()
+endfunction()

@@ -466,6 +466,24 @@ void read_builders(const Source& src, const toml::table& root, ExperimentConfig&
       config.builders.push_back(std::move(run));
     }
   }
+  // A listed layout that no builder's trees fit would give no row at all, as a builder without a layout
+  // would: both are errors. (Layouts left to their default are not checked.)
+  const toml::array* listed = root["experiment"]["layouts"].as_array();
+  if (!listed) return;
+  for (std::size_t i = 0; i < config.layouts.size() && i < listed->size(); ++i) {
+    const uint32_t arity = find_layout(config.layouts[i].name).arity;
+    if (std::any_of(config.builders.begin(), config.builders.end(),
+                    [&](const BuilderRun& run) { return !run.is_embree() && run.arity == arity; }))
+      continue;
+    const std::string what =
+        arity == 2 ? std::string("a binary builder (binned_sah, sweep_sah, sbvh, ...)")
+                   : "a builder of that arity (wide_collapse with arity = " + std::to_string(arity) +
+                         ", for example)";
+    src.fail(*listed->get(i), "experiment.layouts: \"" + config.layouts[i].text() + "\" traces " +
+                                  std::to_string(arity) + "-wide trees, but no [[builder]] of this config " +
+                                  "builds them, so it would give no row: add " + what +
+                                  " or remove the layout");
+  }
 }
 
 RaySetConfig read_ray_set(const Source& src, const toml::table& table) {

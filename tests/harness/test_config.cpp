@@ -54,7 +54,7 @@ seed = 42
 threads = [1, 4]
 scenes = ["proc:soup:tris=100k", "scenes/a.obj"]
 optional_scenes = ["crytek_sponza"]
-layouts = ["bvh2", "bvh8:tri=mt"]
+layouts = ["bvh2", "bvh2_packed:tri=mt"]
 reference = "auto"
 brute_force_max_triangles = 5000
 
@@ -114,7 +114,7 @@ count = 99
   expected.threads = {1, 4};
   expected.scenes = {"proc:soup:tris=100k", "scenes/a.obj"};
   expected.optional_scenes = {"crytek_sponza"};
-  expected.layouts = {parse_layout_spec("bvh2"), parse_layout_spec("bvh8:tri=mt")};
+  expected.layouts = {parse_layout_spec("bvh2"), parse_layout_spec("bvh2_packed:tri=mt")};
   expected.reference = ReferencePolicy::kAuto;
   expected.brute_force_max_triangles = 5000;
   expected.reps = {7, 0, 3, 2, false};
@@ -408,8 +408,11 @@ source = "sweep_sah"
 
   // A name alone: the source's defaults, or for wide_collapse's three shared sources its own parameters,
   // written as before sources nested.
-  const auto plain = parse_experiment_config(
-      kWideBase + "[[builder]]\nname = \"wide_collapse\"\nsource = { name = \"sweep_sah\" }\n", "test.toml");
+  const auto plain =
+      parse_experiment_config(kWideBase +
+                                  "[[builder]]\nname = \"wide_collapse\"\nsource = { name = \"sweep_sah\" }\n"
+                                  "[[builder]]\nname = \"binned_sah\"\n",
+                              "test.toml");
   EXPECT_EQ(plain.builders[0].params, (ParamOverrides{{"source", "sweep_sah"}}));
   EXPECT_TRUE(plain.builders[0].values.get_source("source").shared());
   EXPECT_NE(plain.builders[0].params_text().find(";source=sweep_sah;"), std::string::npos);
@@ -434,8 +437,10 @@ TEST(HarnessConfigSource, NumbersAreNumbersAndBooleansOnlySwitch) {
   expect_error(kWideBase + "[[builder]]\nname = \"wide_collapse\"\nmethod = 2\n", 10,
                {"wide_collapse: parameter 'method' takes a name in quotes, not the number 2"});
   // A 0/1 switch takes a boolean, and names stay strings.
-  const auto ok = parse_experiment_config(
-      kWideBase + "[[builder]]\nname = \"binned_sah\"\nadaptive_bins = false\n", "test.toml");
+  const auto ok = parse_experiment_config(kWideBase +
+                                              "[[builder]]\nname = \"binned_sah\"\nadaptive_bins = "
+                                              "false\n[[builder]]\nname = \"wide_collapse\"\n",
+                                          "test.toml");
   EXPECT_NE(ok.builders[0].params_text().find("adaptive_bins=0"), std::string::npos);
 }
 
@@ -641,6 +646,24 @@ TEST(HarnessConfigErrors, WrongTypes) {
                {"ray_set.count = 4000000000", "268435456"});
   expect_error(kBase + "[[ray_set]]\nkind = \"shadow\"\nlights = 100000000\n", 12,
                {"ray_set.lights = 100000000", "65536"});
+}
+
+// A listed layout that no builder's trees fit would give no row: refused at its line, as a builder
+// whose trees no layout traces is.
+TEST(HarnessConfigErrors, LayoutThatNoBuilderFits) {
+  const auto config = [](const std::string& layouts, const std::string& builder) {
+    return "[experiment]\nname = \"t\"\nscenes = [\"s\"]\nlayouts = [" + layouts + "]\n\n[[builder]]\n" +
+           builder + "\n\n[[builder]]\nname = \"embree\"\n\n[[ray_set]]\nkind = \"primary\"\n";
+  };
+  expect_error(config("\"bvh2\",\n  \"bvh8:tri=mt\"", "name = \"binned_sah\""), 5,
+               {"experiment.layouts: \"bvh8:tri=mt\" traces 8-wide trees", "no [[builder]]",
+                "wide_collapse with arity = 8"});
+  expect_error(config("\"bvh2_packed\", \"bvh8\"", "name = \"wide_collapse\"\narity = 8"), 4,
+               {"\"bvh2_packed\" traces 2-wide trees", "a binary builder"});
+  // Each layout with a builder of its arity, the combinations that do not fit left out as before.
+  EXPECT_NO_THROW(parse_experiment_config(
+      config("\"bvh2\", \"bvh8\"", "name = \"binned_sah\"\n[[builder]]\nname = \"wide_collapse\""),
+      "test.toml"));
 }
 
 TEST(HarnessConfigErrors, EmptyListsAndDuplicates) {

@@ -115,6 +115,11 @@ std::vector<Ray> read_rays(const std::filesystem::path& path, std::vector<std::s
       throw Error(where + fmt::format(": tmin = {} must be finite and at least 0 (the kernels answer for "
                                       "[tmin, tmax] with tmin >= 0)",
                                       ray.tmin));
+    // An empty interval would answer every query with a miss, as swapped columns would.
+    if (ray.tmax < ray.tmin)
+      throw Error(where + fmt::format(": tmax = {} is below tmin = {}: the interval [tmin, tmax] is empty "
+                                      "(the columns are ox oy oz dx dy dz tmin tmax)",
+                                      ray.tmax, ray.tmin));
     if (ray.dir == Vec3{0, 0, 0}) throw Error(where + ": the direction is zero");
     rays.push_back(ray);
     if (lines) lines->push_back(number);

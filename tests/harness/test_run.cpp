@@ -797,7 +797,7 @@ TEST(HarnessTrace, MalformedRayFilesNameTheLine) {
   EXPECT_THROW(read_rays(path), Error);
   EXPECT_THROW(read_rays(temp_dir() / "missing.txt"), Error);
   // Rays the kernels do not answer for: NaN anywhere, an infinite origin or direction, a tmin below 0
-  // (a hit behind the origin) or an infinite one. tmax may be infinite.
+  // (a hit behind the origin) or an infinite one, a tmax below tmin. tmax may be infinite.
   auto error_for = [&](const char* line) {
     std::ofstream(path) << "0 0 5 0 0 -1\n" << line << "\n";
     return test::error_of([&] { read_rays(path); });
@@ -811,6 +811,9 @@ TEST(HarnessTrace, MalformedRayFilesNameTheLine) {
       error_for("0 0 -3 0 0 -1 -10 10").find("bad_rays.txt:2: tmin = -10 must be finite and at least 0"),
       std::string::npos);
   EXPECT_NE(error_for("0 0 -3 0 0 -1 inf inf").find("tmin = inf must be finite"), std::string::npos);
+  EXPECT_NE(error_for("0 0 5 0 0 -1 3 2").find("bad_rays.txt:2: tmax = 2 is below tmin = 3"),
+            std::string::npos);
+  EXPECT_NE(error_for("0 0 5 0 0 -1 0 -2").find("tmax = -2 is below tmin = 0"), std::string::npos);
   std::ofstream(path) << "0 0 5 0 0 -1 0 inf\n";
   EXPECT_EQ(read_rays(path).size(), 1u);
   // An empty comma-separated field would shift the numbers after it into other columns.

@@ -114,10 +114,16 @@ std::vector<std::filesystem::path> image_files(const std::filesystem::path& pref
 
 void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   check_output_folder(options.out, "--out");
-  if (options.ray_set != "primary")
+  if (options.ray_set != "primary") {
+    const bool a_kind = std::any_of(std::begin(kAllRayKinds), std::end(kAllRayKinds),
+                                    [&](RayKind kind) { return to_string(kind) == options.ray_set; });
+    if (!a_kind)
+      throw Error("--ray-set '" + options.ray_set + "': no such ray set; per-pixel maps are of the primary " +
+                  "rays (--ray-set primary, the default)");
     throw Error("--ray-set '" + options.ray_set +
                 "': per-pixel maps need one ray per pixel, which only the primary "
                 "set has (secondary sets start from the primary hits only)");
+  }
   if (options.width == 0 || options.height == 0 || options.width > kMaxImageSide ||
       options.height > kMaxImageSide)
     throw Error(fmt::format("image size {}x{}: each side must be in 1..{}", options.width, options.height,

@@ -195,6 +195,8 @@ std::string default_layout(const BuilderRun& run);
 BuilderRun parse_builder_run(std::string_view text);
 
 enum class RayKind { kPrimary, kShadow, kDiffuse, kAmbientOcclusion, kRandom };
+inline constexpr RayKind kAllRayKinds[] = {RayKind::kPrimary, RayKind::kShadow, RayKind::kDiffuse,
+                                           RayKind::kAmbientOcclusion, RayKind::kRandom};
 
 /// "primary", "shadow", "diffuse", "ao", "random": the config's spelling, and the CSV's.
 std::string to_string(RayKind kind);

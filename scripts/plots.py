@@ -66,6 +66,31 @@ def log(message):
     print(f"plots.py: {message}", file=sys.stderr)
 
 
+# Measured quantities, checked where a row has them as `sahbench report` checks them: rates and ray
+# counts positive, times (a tiny build prints 0.0000 ms), bytes and costs not negative. A figure would
+# otherwise drop the point, or draw it, without a word.
+POSITIVE = ["trace_mrays_median", "trace_mrays_min", "trace_mrays_max", "ray_count"]
+NOT_NEGATIVE = ["build_ms_median", "build_ms_min", "build_ms_max", "build_layout_ms_median", "mem_bytes",
+                "sah_cost"]
+
+
+def check_measured(path, df):
+    """Exits 2 naming the file, line and column of a measured field out of its range."""
+    for columns, ok, what in ((POSITIVE, lambda v: v > 0, "a positive number"),
+                              (NOT_NEGATIVE, lambda v: v >= 0, "a number of at least 0")):
+        for column in columns:
+            if column not in df.columns:
+                continue
+            text = df[column].astype(str).str.strip()
+            bad = (text != "") & ~ok(pd.to_numeric(text, errors="coerce"))
+            if bad.any():
+                row = bad.to_numpy().nonzero()[0][0]
+                # The file's line: the header is line 1, and a run's rows have no line breaks in fields.
+                print(f"plots.py: {path}:{df.index[row] + 2}: column '{column}': '{text.iloc[row]}' is not "
+                      f"{what}", file=sys.stderr)
+                sys.exit(2)
+
+
 def load(paths, all_runs):
     frames = []
     for path in paths:
@@ -75,6 +100,7 @@ def load(paths, all_runs):
             sys.exit(f"plots.py: {path}: cannot read: {e}")
         if not all_runs and "run_id" in df.columns and len(df):
             df = df[df["run_id"] == df["run_id"].iloc[-1]]
+        check_measured(path, df)
         frames.append(df)
     data = pd.concat(frames, ignore_index=True, sort=False)
     for column in NUMERIC:

@@ -208,6 +208,14 @@ def main():
         for kind in ("errors_vs_speed", "refit_vs_rebuild"):
             check(f"{kind}: skipped" in err, f"{shipped}: no skip message for {kind}: {err}")
 
+        # A measured value that is not a positive number is refused, naming file, line and column.
+        rows = benchmark_rows()
+        rows[1]["trace_mrays_median"] = "-1"
+        write_csv(tmp / "negative.csv", rows)
+        code, err = run(plots, [tmp / "negative.csv", "--out", tmp / "negative"])
+        check(code == 2 and "negative.csv:3: column 'trace_mrays_median': '-1' is not a positive number" in err,
+              f"a negative rate must fail naming it: exit {code}: {err}")
+
         code, err = run(plots, [tmp / "missing.csv"])
         check(code != 0 and "missing.csv" in err, f"a missing file must fail naming it: exit {code}: {err}")
 

@@ -150,8 +150,11 @@ def builder_labels(data):
         for b, p in runs:
             if b == builder:
                 # A key some runs lack (Embree's robust=1) varies too, as in the report's labels.
+                def varies(k):
+                    return len(values.get(k, ())) > 1 or counts.get(k, 0) < len(own)
+                # A file's hash beside its varying path (the tree file builder's path_hash) is left out.
                 varying = [f"{k}={v}" for k, v in split_params(p)
-                           if len(values.get(k, ())) > 1 or counts.get(k, 0) < len(own)]
+                           if varies(k) and not (k.endswith("_hash") and k[:-5] in values and varies(k[:-5]))]
                 labels[(b, p)] = builder + (f" [{';'.join(varying)}]" if varying else "")
     return labels
 

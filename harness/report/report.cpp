@@ -95,12 +95,20 @@ std::map<std::string, std::string> short_labels(const std::vector<const CsvRow*>
   auto common_to_all = [&](const std::string& builder, const std::string& k) {
     return values[builder][k].size() == 1 && rows_with[builder][k] == builder_rows[builder];
   };
+  // A file's hash (path_hash beside path: the tree file builder's) adds nothing to a label that names
+  // the file, and its 18 characters widened tables past the page; it stays where only it differs.
+  auto redundant_hash = [&](const std::string& builder, const std::string& k) {
+    if (!k.ends_with("_hash")) return false;
+    const std::string named = k.substr(0, k.size() - 5);
+    return rows_with[builder].contains(named) && !common_to_all(builder, named);
+  };
   std::map<std::string, std::string> labels;  // full label -> short label
   for (const CsvRow* r : rows) {
     const std::string builder = field(*r, "builder");
     std::string varying;
     for (const auto& [k, v] : split_params(field(*r, "builder_params")))
-      if (!common_to_all(builder, k)) varying += (varying.empty() ? "" : ";") + k + "=" + v;
+      if (!common_to_all(builder, k) && !redundant_hash(builder, k))
+        varying += (varying.empty() ? "" : ";") + k + "=" + v;
     labels[row_label(*r)] = builder + (varying.empty() ? "" : " [" + varying + "]");
   }
   for (const auto& [builder, order] : key_order) {

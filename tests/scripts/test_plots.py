@@ -157,6 +157,11 @@ def main():
           and labels[("embree", "quality=medium")] == "embree [quality=medium]",
           f"a parameter some runs lack is a varying one: {labels}")
 
+    files = plots.builder_labels(pd.DataFrame({"builder": ["file"] * 2, "builder_params": [
+        "path=a.sbt;path_hash=0x2b5477d10d8a3dff", "path=b.sbt;path_hash=0x0123456789abcdef"]}))
+    check(files[("file", "path=a.sbt;path_hash=0x2b5477d10d8a3dff")] == "file [path=a.sbt]",
+          f"a file's hash beside its varying path is left out of its label: {files}")
+
     # The helpers behind the pairings and the parameter parsing.
     check(plots.bins_of("adaptive_bins=1;bins=32;max_leaf=8") == 32, "bins_of")
     check(plots.bins_of("max_leaf=8") is None, "bins_of without bins")

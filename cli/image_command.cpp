@@ -182,10 +182,10 @@ void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
 
   const uint32_t w = options.width, h = options.height;
   const std::vector<uint32_t> pixel = primary_pixel_order(w, h);  // ray i's pixel
-  FloatImage nodes{w, h, {"Y"}, std::vector<float>(rays.size())};
-  FloatImage prims{w, h, {"Y"}, std::vector<float>(rays.size())};
-  FloatImage depth{w, h, {"Z"}, std::vector<float>(rays.size())};
-  FloatImage normal{w, h, {"R", "G", "B"}, std::vector<float>(3 * rays.size(), 0.0f)};
+  FloatImage nodes{w, h, {"Y"}, std::vector<float>(rays.size()), kMapNames[0]};
+  FloatImage prims{w, h, {"Y"}, std::vector<float>(rays.size()), kMapNames[1]};
+  FloatImage depth{w, h, {"Z"}, std::vector<float>(rays.size()), kMapNames[2]};
+  FloatImage normal{w, h, {"R", "G", "B"}, std::vector<float>(3 * rays.size(), 0.0f), kMapNames[3]};
   Range node_range, prim_range, depth_range;  // [min, max] of each map
   std::size_t hit_count = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
@@ -247,12 +247,21 @@ ImageDiffResult run_image_diff_command(const ImageDiffOptions& options, std::ost
   check_output_folder(prefix, "--out");
   const FloatImage a = read_float_image(options.a);
   const FloatImage b = read_float_image(options.b);
+  for (const auto& [image, path] : {std::pair{&a, &options.a}, std::pair{&b, &options.b}})
+    if (image->from_integers)
+      throw Error(path->string() +
+                  ": an image of integer samples (a PNG is a false-colour picture of a map); image-diff "
+                  "compares the values, in the .exr files that sahbench image writes beside the pictures");
   if (a.width != b.width || a.height != b.height || a.channel_count() != b.channel_count())
     throw Error(fmt::format("{} is {}x{} with {} channels, {} is {}x{} with {} channels: not comparable",
                             options.a.string(), a.width, a.height, a.channel_count(), options.b.string(),
                             b.width, b.height, b.channel_count()));
+  if (!a.kind.empty() && !b.kind.empty() && a.kind != b.kind)
+    throw Error(fmt::format("{} is a map of {}, {} one of {}: not comparable", options.a.string(), a.kind,
+                            options.b.string(), b.kind));
 
-  FloatImage diff{a.width, a.height, a.channels, std::vector<float>(a.pixels.size())};
+  FloatImage diff{a.width, a.height, a.channels, std::vector<float>(a.pixels.size()),
+                  a.kind.empty() ? std::string() : a.kind + " difference"};
   ImageDiffResult result;
   double sum_abs = 0.0;
   for (std::size_t i = 0; i < a.pixels.size(); ++i) {

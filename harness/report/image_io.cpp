@@ -32,6 +32,7 @@ void write_float_image(const std::filesystem::path& path, const FloatImage& imag
   spec.channelnames = image.channels;
   // Lossless: the counts and depths are data, not pictures.
   spec.attribute("compression", "zip");
+  if (!image.kind.empty()) spec.attribute("sahbench:map", image.kind);
   write_pixels(path, spec, OIIO::TypeDesc::FLOAT, image.pixels.data());
 }
 
@@ -53,6 +54,8 @@ FloatImage read_float_image(const std::filesystem::path& path) {
   image.height = static_cast<uint32_t>(spec.height);
   image.channels = spec.channelnames;
   image.channels.resize(static_cast<std::size_t>(spec.nchannels));
+  image.kind = spec.get_string_attribute("sahbench:map");
+  image.from_integers = !spec.format.is_floating_point();
   image.pixels.resize(std::size_t{image.width} * image.height * image.channel_count());
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
     throw Error(name + ": cannot read image: " + in->geterror());

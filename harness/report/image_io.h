@@ -15,6 +15,11 @@ struct FloatImage {
   uint32_t width = 0, height = 0;
   std::vector<std::string> channels;  ///< channel names, e.g. {"Y"} or {"R", "G", "B"}
   std::vector<float> pixels;
+  /// What the values are ("nodes", "depth", ...: `sahbench image`'s maps), kept in the file as the
+  /// attribute sahbench:map; empty where unknown (a file without it).
+  std::string kind;
+  /// Read from a file of integer samples (an 8-bit PNG: a picture of values, not the values).
+  bool from_integers = false;
 
   std::size_t channel_count() const { return channels.size(); }
   float at(uint32_t x, uint32_t y, std::size_t c = 0) const {

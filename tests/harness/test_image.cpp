@@ -295,6 +295,18 @@ TEST(HarnessImage, BadInputIsAnErrorNamingIt) {
                   {dir.path() / "small_nodes.exr", dir.path() / "small_nodes.exr", missing_folder}, log);
             }).find("does not exist"),
             std::string::npos);
+  // Maps of two kinds (node counts against depths), and the PNG pictures of maps, are no values to subtract.
+  EXPECT_NE(error_message([&] {
+              run_image_diff_command(
+                  {dir.path() / "small_nodes.exr", dir.path() / "small_depth.exr", dir.path() / "d"}, log);
+            }).find("is a map of nodes, " + (dir.path() / "small_depth.exr").string() + " one of depth"),
+            std::string::npos);
+  EXPECT_NE(error_message([&] {
+              run_image_diff_command(
+                  {dir.path() / "small_nodes.png", dir.path() / "small_nodes.png", dir.path() / "d"}, log);
+            }).find("small_nodes.png: an image of integer samples"),
+            std::string::npos);
+  EXPECT_EQ(read_float_image(dir.path() / "small_prims.exr").kind, "prims");
 }
 
 }  // namespace

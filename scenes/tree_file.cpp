@@ -234,14 +234,19 @@ TreeFile read_tree_file(const std::filesystem::path& path) {
   return file;
 }
 
-Bvh check_tree_for_scene(TreeFile file, const std::filesystem::path& path,
-                         std::span<const Triangle> triangles) {
+void check_tree_file_scene(uint64_t scene_hash, uint64_t triangle_count, const std::filesystem::path& path,
+                           std::span<const Triangle> triangles) {
   const uint64_t hash = triangle_hash(triangles);
-  if (file.scene_hash != hash || file.triangle_count != triangles.size())
+  if (scene_hash != hash || triangle_count != triangles.size())
     throw Error(fmt::format(
         "tree file {} was built for a scene with hash {} and {} triangles, this scene has hash {} and {} "
         "triangles",
-        path.string(), hash_text(file.scene_hash), file.triangle_count, hash_text(hash), triangles.size()));
+        path.string(), hash_text(scene_hash), triangle_count, hash_text(hash), triangles.size()));
+}
+
+Bvh check_tree_for_scene(TreeFile file, const std::filesystem::path& path,
+                         std::span<const Triangle> triangles) {
+  check_tree_file_scene(file.scene_hash, file.triangle_count, path, triangles);
   const ValidationReport report = validate(file.bvh, triangles);
   if (!report.ok()) {
     std::string quoted;

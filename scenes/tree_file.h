@@ -65,6 +65,11 @@ TreeFileHeader read_tree_file_header(const std::filesystem::path& path);
 /// one has trailing bytes). The tree's structure is not checked here.
 TreeFile read_tree_file(const std::filesystem::path& path);
 
+/// Throws unless a tree file's recorded scene (hash and triangle count, from its header) is `triangles`,
+/// with the message check_tree_for_scene gives.
+void check_tree_file_scene(uint64_t scene_hash, uint64_t triangle_count, const std::filesystem::path& path,
+                           std::span<const Triangle> triangles);
+
 /// The tree of `file`, read from `path`, if it is one for `triangles`: the file's triangle count and hash
 /// must be the scene's ("tree file P was built for a scene with hash H and N triangles, this scene
 /// has ..."), and the tree must pass the validator (core/validate.h), whose first errors the Error quotes.

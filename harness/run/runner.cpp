@@ -34,6 +34,7 @@
 #include "harness/run/shard_plan.h"
 #include "harness/run/static_plan.h"
 #include "harness/run/timing.h"
+#include "harness/run/tree_file_builder.h"
 #include "scenes/load.h"
 #include "scenes/proc_spec.h"
 #include "scenes/procedural.h"
@@ -157,6 +158,16 @@ class ExperimentRunner {
       }
     });
     load_ms_ += load_ms;
+    // A tree file for another scene is refused now, naming the config and the run, not after the builds
+    // before it.
+    for (const BuilderRun& b : cfg_.builders) {
+      try {
+        check_tree_file_fits(b, scene.triangles);
+      } catch (const Error& e) {
+        throw Error(fmt::format("{}: builder run '{}' on scene {}: {}", cfg_.path.string(), b.label(),
+                                scene_name, e.what()));
+      }
+    }
     diagonal_ = scene_diagonal(scene.triangles);
     log_ << fmt::format("scene {}: {} triangles ({} removed), {}, from {} in {:.0f} ms\n", scene_name,
                         scene.triangles.size(), scene.removed.total(), scene.animated ? "animated" : "static",

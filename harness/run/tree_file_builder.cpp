@@ -90,4 +90,11 @@ void register_tree_file_builder() {
        [](const ParamSet& p) { return read_tree_file_header(path_of(p)).arity; }});
 }
 
+void check_tree_file_fits(const BuilderRun& run, std::span<const Triangle> triangles) {
+  if (run.name != kBuilderName) return;
+  const std::string& path = path_of(run.values);
+  const TreeFileHeader header = read_tree_file_header(path);
+  check_tree_file_scene(header.scene_hash, header.triangle_count, path, triangles);
+}
+
 }  // namespace sahbench

@@ -4,6 +4,11 @@
 // compiled to every layout of its arity and traced against Embree in the same rows. It lives in the
 // harness because builders/ does no file I/O.
 
+#include <span>
+
+#include "core/triangle.h"
+#include "harness/config/config.h"
+
 namespace sahbench {
 
 /// Registers "file" with builders/registry.h: parameters path (kPath, required), c_trav and c_isect (the
@@ -12,5 +17,10 @@ namespace sahbench {
 /// build time is the time to read and check the file. Calling it again does nothing. Not thread-safe:
 /// call at startup, like register_builder.
 void register_tree_file_builder();
+
+/// Where `run` is a `file` builder run: its file's header checked against the scene's `triangles`
+/// (check_tree_file_scene), so that a tree for another scene is refused when the scene is loaded,
+/// before any build. Other runs: nothing.
+void check_tree_file_fits(const BuilderRun& run, std::span<const Triangle> triangles);
 
 }  // namespace sahbench

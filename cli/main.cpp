@@ -153,7 +153,8 @@ int main(int argc, char** argv) {
       ->required();
   trace_cmd
       ->add_option("--out", trace.out,
-                   "output CSV: a '# builder=... layout=... isa=... query=...' line, then ray,hit,prim,t,u,v")
+                   "output CSV ('-': standard output): a '# builder=... layout=... isa=... query=...' line, "
+                   "then ray,hit,prim,t,u,v")
       ->required();
 
   CompareOptions compare;

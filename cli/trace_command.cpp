@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <fstream>
+#include <iostream>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -111,8 +112,14 @@ void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
   const std::string what = fmt::format("builder={} layout={} isa={} query={}", answers.builder,
                                        answers.layout, answers.isa, to_string(options.query));
 
-  std::ofstream out(options.out);
-  if (!out) throw Error(options.out.string() + ": cannot open for writing");
+  // "-" is standard output, for a pipe into another tool.
+  const bool to_stdout = options.out == "-";
+  std::ofstream file;
+  if (!to_stdout) {
+    file.open(options.out);
+    if (!file) throw Error(options.out.string() + ": cannot open for writing");
+  }
+  std::ostream& out = to_stdout ? std::cout : file;
   out << "# " << what << "\n";
   out << "ray,hit,prim,t,u,v\n";
   std::size_t found = 0;
@@ -125,12 +132,15 @@ void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
     const Hit& h = answers.hits[i];
     if (h.found()) {
       ++found;
-      out << fmt::format("{},1,{},{:.9g},{:.9g},{:.9g}\n", i, h.prim, h.t, h.u, h.v);
+      // + 0.0f: a barycentric of -0 (a hit on an edge) prints as 0.
+      out << fmt::format("{},1,{},{:.9g},{:.9g},{:.9g}\n", i, h.prim, h.t, h.u + 0.0f, h.v + 0.0f);
     } else {
       out << i << ",0,,,,\n";
     }
   }
-  if (!out) throw Error(options.out.string() + ": write failed");
+  out.flush();
+  if (!out)
+    throw Error((to_stdout ? std::string("standard output") : options.out.string()) + ": write failed");
   log << fmt::format("{}\n{} rays, {} hits on {} ({} triangles) -> {}\n", what, rays.size(), found,
                      scene.name, scene.triangles.size(), options.out.string());
 }

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -557,6 +559,16 @@ TEST(HarnessTrace, OutputMatchesBruteForceLineByLine) {
   EXPECT_EQ(rows[0].at("hit"), "1");
   EXPECT_EQ(rows[1].at("hit"), "0");
   EXPECT_EQ(rows[3].at("hit"), "0");
+
+  // --out - writes the same lines to standard output, and no file called "-".
+  std::ostringstream captured;
+  std::streambuf* const saved = std::cout.rdbuf(captured.rdbuf());
+  run_trace_command({"proc:sphere:tris=2000", "binned_sah", "bvh2", rays_path, "-"}, log);
+  std::cout.rdbuf(saved);
+  std::ifstream written(out_path);
+  const std::string file_text((std::istreambuf_iterator<char>(written)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(captured.str(), file_text);
+  EXPECT_FALSE(std::filesystem::exists("-"));
 }
 
 TEST(HarnessTrace, UnknownBuildersAndMismatchedLayoutsAreErrorsNamingThem) {

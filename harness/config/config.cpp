@@ -467,9 +467,12 @@ void read_builders(const Source& src, const toml::table& root, ExperimentConfig&
     }
   }
   // A listed layout that no builder's trees fit would give no row at all, as a builder without a layout
-  // would: both are errors. (Layouts left to their default are not checked.)
+  // would: both are errors. (Layouts left to their default, or beside Embree's builders alone, are not
+  // checked.)
   const toml::array* listed = root["experiment"]["layouts"].as_array();
-  if (!listed) return;
+  const bool ours = std::any_of(config.builders.begin(), config.builders.end(),
+                                [](const BuilderRun& run) { return !run.is_embree(); });
+  if (!listed || !ours) return;  // Embree's builders alone: our layouts trace nothing either way
   for (std::size_t i = 0; i < config.layouts.size() && i < listed->size(); ++i) {
     const uint32_t arity = find_layout(config.layouts[i].name).arity;
     if (std::any_of(config.builders.begin(), config.builders.end(),
@@ -767,6 +770,12 @@ std::vector<Vec3> to_lights(const LightsConfig& lights) {
 
 std::string to_string(RayKind kind) {
   return spelling(kRayKinds, kind);
+}
+
+std::optional<RayKind> parse_ray_kind(std::string_view name) {
+  for (const auto& [text, kind] : kRayKinds)
+    if (text == name) return kind;
+  return std::nullopt;
 }
 
 std::string to_string(ReferencePolicy policy) {

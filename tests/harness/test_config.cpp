@@ -660,6 +660,11 @@ TEST(HarnessConfigErrors, LayoutThatNoBuilderFits) {
                 "wide_collapse with arity = 8"});
   expect_error(config("\"bvh2_packed\", \"bvh8\"", "name = \"wide_collapse\"\narity = 8"), 4,
                {"\"bvh2_packed\" traces 2-wide trees", "a binary builder"});
+  // Embree's builders alone: no layout of ours traces anything, listed or not.
+  EXPECT_NO_THROW(parse_experiment_config(
+      "[experiment]\nname = \"t\"\nscenes = [\"s\"]\nlayouts = [\"bvh8\"]\n[[builder]]\nname = "
+      "\"embree\"\n[[ray_set]]\nkind = \"primary\"\n",
+      "test.toml"));
   // Each layout with a builder of its arity, the combinations that do not fit left out as before.
   EXPECT_NO_THROW(parse_experiment_config(
       config("\"bvh2\", \"bvh8\"", "name = \"binned_sah\"\n[[builder]]\nname = \"wide_collapse\""),

@@ -66,9 +66,9 @@ def log(message):
     print(f"plots.py: {message}", file=sys.stderr)
 
 
-# Measured quantities, checked where a row has them as `sahbench report` checks them: rates and ray
-# counts positive, times (a tiny build prints 0.0000 ms), bytes and costs not negative. A figure would
-# otherwise drop the point, or draw it, without a word.
+# Measured quantities, checked where a row has them: rates and ray counts finite and positive, times
+# (a tiny build prints 0.0000 ms), bytes and costs finite and not negative. A figure would otherwise
+# drop the point, or draw it, without a word.
 POSITIVE = ["trace_mrays_median", "trace_mrays_min", "trace_mrays_max", "ray_count"]
 NOT_NEGATIVE = ["build_ms_median", "build_ms_min", "build_ms_max", "build_layout_ms_median", "mem_bytes",
                 "sah_cost"]
@@ -76,8 +76,9 @@ NOT_NEGATIVE = ["build_ms_median", "build_ms_min", "build_ms_max", "build_layout
 
 def check_measured(path, df):
     """Exits 2 naming the file, line and column of a measured field out of its range."""
-    for columns, ok, what in ((POSITIVE, lambda v: v > 0, "a positive number"),
-                              (NOT_NEGATIVE, lambda v: v >= 0, "a number of at least 0")):
+    finite = lambda v: v.abs() < float("inf")  # noqa: E731 (False for NaN too)
+    for columns, ok, what in ((POSITIVE, lambda v: finite(v) & (v > 0), "a finite positive number"),
+                              (NOT_NEGATIVE, lambda v: finite(v) & (v >= 0), "a finite number of at least 0")):
         for column in columns:
             if column not in df.columns:
                 continue
@@ -85,7 +86,7 @@ def check_measured(path, df):
             bad = (text != "") & ~ok(pd.to_numeric(text, errors="coerce"))
             if bad.any():
                 row = bad.to_numpy().nonzero()[0][0]
-                # The file's line: the header is line 1, and a run's rows have no line breaks in fields.
+                # The file's line where it has no blank lines (pandas skips those): the header is line 1.
                 print(f"plots.py: {path}:{df.index[row] + 2}: column '{column}': '{text.iloc[row]}' is not "
                       f"{what}", file=sys.stderr)
                 sys.exit(2)
@@ -152,9 +153,20 @@ def builder_labels(data):
                 # A key some runs lack (Embree's robust=1) varies too, as in the report's labels.
                 def varies(k):
                     return len(values.get(k, ())) > 1 or counts.get(k, 0) < len(own)
-                # A file's hash beside its varying path (the tree file builder's path_hash) is left out.
-                varying = [f"{k}={v}" for k, v in split_params(p)
-                           if varies(k) and not (k.endswith("_hash") and k[:-5] in values and varies(k[:-5]))]
+
+                def redundant_hash(k):
+                    # A file's hash beside its varying name (the tree file builder's path_hash), where each
+                    # name comes with one hash (two files of one name in two folders keep theirs), as in
+                    # the report's labels.
+                    named = k[:-5]
+                    if not k.endswith("_hash") or named not in values or not varies(named):
+                        return False
+                    hashes = {}
+                    for q in own:
+                        fields = dict(split_params(q))
+                        hashes.setdefault(fields.get(named), set()).add(fields.get(k))
+                    return all(len(h) == 1 for h in hashes.values())
+                varying = [f"{k}={v}" for k, v in split_params(p) if varies(k) and not redundant_hash(k)]
                 labels[(b, p)] = builder + (f" [{';'.join(varying)}]" if varying else "")
     return labels
 

@@ -96,11 +96,25 @@ std::map<std::string, std::string> short_labels(const std::vector<const CsvRow*>
     return values[builder][k].size() == 1 && rows_with[builder][k] == builder_rows[builder];
   };
   // A file's hash (path_hash beside path: the tree file builder's) adds nothing to a label that names
-  // the file, and its 18 characters widened tables past the page; it stays where only it differs.
+  // the file, and its 18 characters widened tables past the page. It is left out where the named value
+  // varies and each of its values comes with one hash (the CSV records a file's name, not its folder:
+  // two files of one name in two folders keep their hashes).
   auto redundant_hash = [&](const std::string& builder, const std::string& k) {
     if (!k.ends_with("_hash")) return false;
     const std::string named = k.substr(0, k.size() - 5);
-    return rows_with[builder].contains(named) && !common_to_all(builder, named);
+    if (!rows_with[builder].contains(named) || common_to_all(builder, named)) return false;
+    std::map<std::string, std::set<std::string>> hashes;  // named value -> its hashes
+    for (const CsvRow* r : rows) {
+      if (field(*r, "builder") != builder) continue;
+      std::string value, hash;
+      for (const auto& [pk, pv] : split_params(field(*r, "builder_params"))) {
+        if (pk == named) value = pv;
+        if (pk == k) hash = pv;
+      }
+      hashes[value].insert(hash);
+    }
+    return std::all_of(hashes.begin(), hashes.end(),
+                       [](const auto& entry) { return entry.second.size() == 1; });
   };
   std::map<std::string, std::string> labels;  // full label -> short label
   for (const CsvRow* r : rows) {

@@ -138,13 +138,19 @@ TEST(Report, FileLabelsNameThePathWithoutItsHash) {
                       2.0 * (1 << 20), "40.5", 2.0));
     w.append(make_row("tagged", "x=1;y_hash=0x1", "bvh2", "primary", 5.0, 2.0 * (1 << 20), "40.5", 2.0));
     w.append(make_row("tagged", "x=1;y_hash=0x2", "bvh2", "primary", 5.0, 2.0 * (1 << 20), "40.5", 2.0));
+    // Two files of one name (the CSV records no folder) and a third: the hash tells the first two apart.
+    for (const char* params :
+         {"path=t.sbt;path_hash=0x1", "path=t.sbt;path_hash=0x2", "path=u.sbt;path_hash=0x3"})
+      w.append(make_row("twice", params, "bvh2", "primary", 5.0, 2.0 * (1 << 20), "40.5", 2.0));
   }
   std::ostringstream md;
   print_report({{path}, ""}, md);
   EXPECT_NE(md.str().find("| file [path=a.sbt] | bvh2 |"), std::string::npos) << md.str();
   EXPECT_NE(md.str().find("| file [path=b.sbt] | bvh2 |"), std::string::npos) << md.str();
-  EXPECT_EQ(md.str().find("path_hash=0x"), std::string::npos) << md.str();
+  EXPECT_EQ(md.str().find("path=a.sbt;path_hash"), std::string::npos) << md.str();
   EXPECT_NE(md.str().find("| tagged [y_hash=0x1] |"), std::string::npos) << md.str();
+  EXPECT_NE(md.str().find("| twice [path=t.sbt;path_hash=0x1] |"), std::string::npos) << md.str();
+  EXPECT_NE(md.str().find("| twice [path=t.sbt;path_hash=0x2] |"), std::string::npos) << md.str();
 }
 
 TEST(Report, MarkdownMarksTheBestOfEachColumnWithRatiosAndCaption) {

@@ -161,6 +161,10 @@ def main():
         "path=a.sbt;path_hash=0x2b5477d10d8a3dff", "path=b.sbt;path_hash=0x0123456789abcdef"]}))
     check(files[("file", "path=a.sbt;path_hash=0x2b5477d10d8a3dff")] == "file [path=a.sbt]",
           f"a file's hash beside its varying path is left out of its label: {files}")
+    same_name = plots.builder_labels(pd.DataFrame({"builder": ["file"] * 3, "builder_params": [
+        "path=t.sbt;path_hash=0x1", "path=t.sbt;path_hash=0x2", "path=u.sbt;path_hash=0x3"]}))
+    check(len(set(same_name.values())) == 3 and same_name[("file", "path=t.sbt;path_hash=0x1")]
+          == "file [path=t.sbt;path_hash=0x1]", f"two files of one name keep their hashes: {same_name}")
 
     # The helpers behind the pairings and the parameter parsing.
     check(plots.bins_of("adaptive_bins=1;bins=32;max_leaf=8") == 32, "bins_of")
@@ -218,7 +222,7 @@ def main():
         rows[1]["trace_mrays_median"] = "-1"
         write_csv(tmp / "negative.csv", rows)
         code, err = run(plots, [tmp / "negative.csv", "--out", tmp / "negative"])
-        check(code == 2 and "negative.csv:3: column 'trace_mrays_median': '-1' is not a positive number" in err,
+        check(code == 2 and "negative.csv:3: column 'trace_mrays_median': '-1' is not a finite positive number" in err,
               f"a negative rate must fail naming it: exit {code}: {err}")
 
         code, err = run(plots, [tmp / "missing.csv"])

@@ -250,6 +250,13 @@ bool ParamSet::reads_files() const {
   });
 }
 
+std::vector<const SourceSpec*> ParamSet::own_sources() const {
+  std::vector<const SourceSpec*> out;
+  for (const Value& v : values_)
+    if (v.spec.type == ParamType::kSource && !v.source.shared()) out.push_back(&v.source);
+  return out;
+}
+
 ParamSpec path_param(std::string name, std::string help,
                      std::function<std::string(const std::string&)> identity) {
   ParamSpec spec{std::move(name), ParamType::kPath, 0.0, 0.0, 0.0, std::move(help)};

@@ -116,6 +116,8 @@ class ParamSet {
   const std::string& get_path_identity(std::string_view name) const;
   /// Whether any kPath parameter, here or in a source's parameters, names a file.
   bool reads_files() const;
+  /// The sources of this set's kSource parameters that have parameters of their own (not shared).
+  std::vector<const SourceSpec*> own_sources() const;
 
   /// "key=value;key=value" in declaration order, integers without a fraction, a source as
   /// "NAME(its to_string())" unless shared, a path followed by NAME_hash=IDENTITY where it has one, and

@@ -90,11 +90,24 @@ void register_tree_file_builder() {
        [](const ParamSet& p) { return read_tree_file_header(path_of(p)).arity; }});
 }
 
+namespace {
+
+// The file builder's tree at `name` with `params`, and those of the sources below it (a pass over a
+// tree file), checked against the scene.
+void check_files_below(const std::string& name, const ParamSet& params, std::span<const Triangle> triangles) {
+  if (name == kBuilderName) {
+    const std::string& path = path_of(params);
+    const TreeFileHeader header = read_tree_file_header(path);
+    check_tree_file_scene(header.scene_hash, header.triangle_count, path, triangles);
+  }
+  for (const SourceSpec* source : params.own_sources())
+    check_files_below(source->name(), *source->params, triangles);
+}
+
+}  // namespace
+
 void check_tree_file_fits(const BuilderRun& run, std::span<const Triangle> triangles) {
-  if (run.name != kBuilderName) return;
-  const std::string& path = path_of(run.values);
-  const TreeFileHeader header = read_tree_file_header(path);
-  check_tree_file_scene(header.scene_hash, header.triangle_count, path, triangles);
+  if (!run.is_embree() && run.values.reads_files()) check_files_below(run.name, run.values, triangles);
 }
 
 }  // namespace sahbench

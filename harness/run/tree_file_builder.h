@@ -18,9 +18,9 @@ namespace sahbench {
 /// call at startup, like register_builder.
 void register_tree_file_builder();
 
-/// Where `run` is a `file` builder run: its file's header checked against the scene's `triangles`
-/// (check_tree_file_scene), so that a tree for another scene is refused when the scene is loaded,
-/// before any build. Other runs: nothing.
+/// Where `run` reads a tree file (a `file` run, or a pass whose source chain holds one): each file's
+/// header checked against the scene's `triangles` (check_tree_file_scene), so that a tree for another
+/// scene is refused when the scene is loaded, before any build. Other runs: nothing.
 void check_tree_file_fits(const BuilderRun& run, std::span<const Triangle> triangles);
 
 }  // namespace sahbench

@@ -115,9 +115,7 @@ std::vector<std::filesystem::path> image_files(const std::filesystem::path& pref
 void run_image_command(const ImageCommandOptions& options, std::ostream& log) {
   check_output_folder(options.out, "--out");
   if (options.ray_set != "primary") {
-    const bool a_kind = std::any_of(std::begin(kAllRayKinds), std::end(kAllRayKinds),
-                                    [&](RayKind kind) { return to_string(kind) == options.ray_set; });
-    if (!a_kind)
+    if (!parse_ray_kind(options.ray_set))
       throw Error("--ray-set '" + options.ray_set + "': no such ray set; per-pixel maps are of the primary " +
                   "rays (--ray-set primary, the default)");
     throw Error("--ray-set '" + options.ray_set +
@@ -250,8 +248,8 @@ ImageDiffResult run_image_diff_command(const ImageDiffOptions& options, std::ost
   for (const auto& [image, path] : {std::pair{&a, &options.a}, std::pair{&b, &options.b}})
     if (image->from_integers)
       throw Error(path->string() +
-                  ": an image of integer samples (a PNG is a false-colour picture of a map); image-diff "
-                  "compares the values, in the .exr files that sahbench image writes beside the pictures");
+                  ": an image of integer samples (as the PNGs, false-colour pictures of the maps); "
+                  "image-diff compares the values, in the .exr files that sahbench image writes beside them");
   if (a.width != b.width || a.height != b.height || a.channel_count() != b.channel_count())
     throw Error(fmt::format("{} is {}x{} with {} channels, {} is {}x{} with {} channels: not comparable",
                             options.a.string(), a.width, a.height, a.channel_count(), options.b.string(),

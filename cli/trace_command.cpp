@@ -142,7 +142,8 @@ void run_trace_command(const TraceCommandOptions& options, std::ostream& log) {
   if (!out)
     throw Error((to_stdout ? std::string("standard output") : options.out.string()) + ": write failed");
   log << fmt::format("{}\n{} rays, {} hits on {} ({} triangles) -> {}\n", what, rays.size(), found,
-                     scene.name, scene.triangles.size(), options.out.string());
+                     scene.name, scene.triangles.size(),
+                     to_stdout ? std::string("standard output") : options.out.string());
 }
 
 }  // namespace sahbench

@@ -195,11 +195,11 @@ std::string default_layout(const BuilderRun& run);
 BuilderRun parse_builder_run(std::string_view text);
 
 enum class RayKind { kPrimary, kShadow, kDiffuse, kAmbientOcclusion, kRandom };
-inline constexpr RayKind kAllRayKinds[] = {RayKind::kPrimary, RayKind::kShadow, RayKind::kDiffuse,
-                                           RayKind::kAmbientOcclusion, RayKind::kRandom};
 
 /// "primary", "shadow", "diffuse", "ao", "random": the config's spelling, and the CSV's.
 std::string to_string(RayKind kind);
+/// The inverse of to_string; nullopt for a name that is no ray kind.
+std::optional<RayKind> parse_ray_kind(std::string_view name);
 
 /// Random ray sets generate this many rays unless `count` says otherwise: as many as a 512x512 primary
 /// image, so that random and primary sets of the default size weigh the same.

@@ -12,6 +12,7 @@
 #include <iostream>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "builders/registry.h"
@@ -562,9 +563,12 @@ TEST(HarnessTrace, OutputMatchesBruteForceLineByLine) {
 
   // --out - writes the same lines to standard output, and no file called "-".
   std::ostringstream captured;
-  std::streambuf* const saved = std::cout.rdbuf(captured.rdbuf());
-  run_trace_command({"proc:sphere:tris=2000", "binned_sah", "bvh2", rays_path, "-"}, log);
-  std::cout.rdbuf(saved);
+  {
+    // Restores std::cout's buffer however the call ends.
+    const std::unique_ptr<std::streambuf, void (*)(std::streambuf*)> restore(
+        std::cout.rdbuf(captured.rdbuf()), [](std::streambuf* saved) { std::cout.rdbuf(saved); });
+    run_trace_command({"proc:sphere:tris=2000", "binned_sah", "bvh2", rays_path, "-"}, log);
+  }
   std::ifstream written(out_path);
   const std::string file_text((std::istreambuf_iterator<char>(written)), std::istreambuf_iterator<char>());
   EXPECT_EQ(captured.str(), file_text);

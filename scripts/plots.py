@@ -142,32 +142,30 @@ def builder_labels(data):
     labels = {}
     runs = sorted(set(zip(data["builder"], data["builder_params"])))
     for builder in {b for b, _ in runs}:
-        values, counts = {}, {}
+        values, counts, hashes = {}, {}, {}
         own = [p for b, p in runs if b == builder]
         for p in own:
-            for k, v in split_params(p):
+            fields = dict(split_params(p))
+            for k, v in fields.items():
                 values.setdefault(k, set()).add(v)
                 counts[k] = counts.get(k, 0) + 1
-        for b, p in runs:
-            if b == builder:
-                # A key some runs lack (Embree's robust=1) varies too, as in the report's labels.
-                def varies(k):
-                    return len(values.get(k, ())) > 1 or counts.get(k, 0) < len(own)
+                if k.endswith("_hash"):  # K_hash: the hashes seen with each value of K
+                    hashes.setdefault(k, {}).setdefault(fields.get(k[:-5]), set()).add(v)
 
-                def redundant_hash(k):
-                    # A file's hash beside its varying name (the tree file builder's path_hash), where each
-                    # name comes with one hash (two files of one name in two folders keep theirs), as in
-                    # the report's labels.
-                    named = k[:-5]
-                    if not k.endswith("_hash") or named not in values or not varies(named):
-                        return False
-                    hashes = {}
-                    for q in own:
-                        fields = dict(split_params(q))
-                        hashes.setdefault(fields.get(named), set()).add(fields.get(k))
-                    return all(len(h) == 1 for h in hashes.values())
-                varying = [f"{k}={v}" for k, v in split_params(p) if varies(k) and not redundant_hash(k)]
-                labels[(b, p)] = builder + (f" [{';'.join(varying)}]" if varying else "")
+        def varies(k):
+            # A key some runs lack (Embree's robust=1) varies too, as in the report's labels.
+            return len(values.get(k, ())) > 1 or counts.get(k, 0) < len(own)
+
+        def redundant_hash(k):
+            # A file's hash beside its varying name (the tree file builder's path_hash), where each name
+            # comes with one hash (two files of one name in two folders keep theirs), as in the report.
+            named = k[:-5]
+            return (k.endswith("_hash") and named in values and varies(named)
+                    and all(len(h) == 1 for h in hashes[k].values()))
+
+        for p in own:
+            varying = [f"{k}={v}" for k, v in split_params(p) if varies(k) and not redundant_hash(k)]
+            labels[(builder, p)] = builder + (f" [{';'.join(varying)}]" if varying else "")
     return labels
 
 

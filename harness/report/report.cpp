@@ -81,15 +81,23 @@ std::map<std::string, std::string> short_labels(const std::vector<const CsvRow*>
   std::map<std::string, std::vector<std::string>> key_order;
   std::map<std::string, std::map<std::string, std::size_t>> rows_with;  // builder -> key -> rows with it
   std::map<std::string, std::size_t> builder_rows;
+  // builder -> K_hash -> value of K -> the hashes seen with it (a path and the hash of its file)
+  std::map<std::string, std::map<std::string, std::map<std::string, std::set<std::string>>>> hashes;
   for (const CsvRow* r : rows) {
     const std::string builder = field(*r, "builder");
     ++builder_rows[builder];
-    for (const auto& [k, v] : split_params(field(*r, "builder_params"))) {
+    const auto params = split_params(field(*r, "builder_params"));
+    for (const auto& [k, v] : params) {
       ++rows_with[builder][k];
       auto& seen = values[builder][k];
       if (std::find(seen.begin(), seen.end(), v) == seen.end()) seen.push_back(v);
       auto& order = key_order[builder];
       if (std::find(order.begin(), order.end(), k) == order.end()) order.push_back(k);
+      if (!k.ends_with("_hash")) continue;
+      const std::string named = k.substr(0, k.size() - 5);
+      const auto it =
+          std::find_if(params.begin(), params.end(), [&](const auto& p) { return p.first == named; });
+      hashes[builder][k][it == params.end() ? std::string() : it->second].insert(v);
     }
   }
   auto common_to_all = [&](const std::string& builder, const std::string& k) {
@@ -103,17 +111,8 @@ std::map<std::string, std::string> short_labels(const std::vector<const CsvRow*>
     if (!k.ends_with("_hash")) return false;
     const std::string named = k.substr(0, k.size() - 5);
     if (!rows_with[builder].contains(named) || common_to_all(builder, named)) return false;
-    std::map<std::string, std::set<std::string>> hashes;  // named value -> its hashes
-    for (const CsvRow* r : rows) {
-      if (field(*r, "builder") != builder) continue;
-      std::string value, hash;
-      for (const auto& [pk, pv] : split_params(field(*r, "builder_params"))) {
-        if (pk == named) value = pv;
-        if (pk == k) hash = pv;
-      }
-      hashes[value].insert(hash);
-    }
-    return std::all_of(hashes.begin(), hashes.end(),
+    const auto& by_value = hashes[builder][k];
+    return std::all_of(by_value.begin(), by_value.end(),
                        [](const auto& entry) { return entry.second.size() == 1; });
   };
   std::map<std::string, std::string> labels;  // full label -> short label

@@ -107,7 +107,7 @@ void check_files_below(const std::string& name, const ParamSet& params, std::spa
 }  // namespace
 
 void check_tree_file_fits(const BuilderRun& run, std::span<const Triangle> triangles) {
-  if (!run.is_embree() && run.values.reads_files()) check_files_below(run.name, run.values, triangles);
+  if (!run.is_embree()) check_files_below(run.name, run.values, triangles);
 }
 
 }  // namespace sahbench

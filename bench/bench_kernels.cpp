@@ -244,9 +244,9 @@ void BM_PairNodeVisit(benchmark::State& state) {
     for (const Ray& ray : rs) {
       const detail::PairSlabs<BoxTest> test(ray);
       const auto interval = detail::PairSlabs<BoxTest>::interval(ray.tmin, ray.tmax);
-      float t_a, t_b;
+      float t_a, t_b, e_a, e_b;
       for (const PairNode& n : nodes)
-        hits += static_cast<uint32_t>(std::popcount(test.intersect(n, interval, t_a, t_b)));
+        hits += static_cast<uint32_t>(std::popcount(test.intersect(n, interval, t_a, t_b, e_a, e_b)));
     }
     benchmark::DoNotOptimize(hits);
   }

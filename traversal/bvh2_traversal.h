@@ -163,12 +163,29 @@ template <bool kAnyHit, class TriangleTest, BinaryLeaf Leaf>
   return false;
 }
 
+/// How closest hit orders two children of a binary node that a ray enters at one distance: the later
+/// slot first (bvh2's walk, BinaryWalk), or the one the ray leaves first (bvh2_packed's, PackedWalk, which
+/// says why). The general loop below takes either, so that the tests hold each walk to it.
+enum class ClosestTies { kLaterSlot, kExitFirst };
+
+// Of two children a ray meets, entered at t0 and t1 and left at e0 and e1, whether the second goes first:
+// the one entered first; on equal entries, with kExitFirst the one left first, and otherwise (or on
+// equal exits too) the second.
+template <ClosestTies kTies>
+[[gnu::always_inline]] inline bool second_goes_first(float t0, float t1, float e0, float e1) {
+  if constexpr (kTies == ClosestTies::kExitFirst) {
+    return !(t0 < t1) & !((t0 == t1) & (e0 < e1));
+  } else {
+    return !(t0 < t1);
+  }
+}
+
 // The loop for binary trees (every inner node of a valid arity-2 tree has two children), the shape of
 // Aila and Laine 2009's "while-while" kernel and of tinybvh's BVH::Intersect: both children are tested
 // where their parent is visited, the ray goes on to the nearer one without a trip through the stack and
 // pushes the other with its entry distance, and a popped node entered beyond the closest hit is skipped.
 // It visits the nodes that the general loop below visits, in the same order (on equal entry distances
-// the second child first, as that loop's insertion sort), so results and counters are the same.
+// the second child first, ClosestTies::kLaterSlot), so results and counters are the same.
 //
 // One step at a time: a step is one inner node, or one leaf and the pops after it, so that several walks
 // can be stepped in turn (trace_walks below). The walk starts with the root's box test and counts the
@@ -297,15 +314,17 @@ class BinaryWalk {
 // Ties: a hit at exactly the current closest t replaces it only when its primitive index is lower, so
 // among hits at the same float t the lowest index wins, as in the brute-force reference.
 //
-// kBinaryLoop sends binary trees to BinaryWalk; the tests turn it off to check that both loops agree.
+// kBinaryLoop sends binary trees to BinaryWalk; the tests turn it off to check that both loops agree,
+// and give the general loop `ties` to hold each binary walk to its own order.
 template <class TriangleTest, class BoxTest, bool kAnyHit, bool kCount, bool kBinaryLoop = true>
 Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray,
-             [[maybe_unused]] TraversalCounters* counters, AnyHitOrder order) {
+             [[maybe_unused]] TraversalCounters* counters, AnyHitOrder order,
+             ClosestTies ties = ClosestTies::kLaterSlot) {
   if constexpr (std::is_same_v<BoxTest, FmaRayBox>) {
     // A ray outside box=fma's domain takes the robust box test (ray_box.h: FmaRayBox).
     if (!FmaRayBox::takes(ray)) [[unlikely]]
       return traverse<TriangleTest, RobustRayBox, kAnyHit, kCount, kBinaryLoop>(bvh, triangles, ray, counters,
-                                                                                order);
+                                                                                order, ties);
   }
   if (kBinaryLoop && bvh.arity == 2) {
     const AnyHitOrder any_order = kAnyHit ? resolve_any_hit_order(bvh, order) : AnyHitOrder::kNearest;
@@ -391,15 +410,25 @@ Hit traverse(const Bvh& bvh, std::span<const Triangle> triangles, const Ray& ray
       if (first + 1 < size) std::rotate(stack + first, stack + first + 1, stack + size);
       continue;
     }
+    // Insertion sort into this node's part of the stack, popped first on top (highest index): nearest
+    // entry first, ties as second_goes_first orders two children (exits[k] is stack[base + k]'s exit).
+    const bool by_exit = !kAnyHit && bvh.arity == 2 && ties == ClosestTies::kExitFirst;
+    const auto goes_first = [by_exit](const StackEntry& earlier, float earlier_exit, float t, float exit) {
+      return by_exit ? second_goes_first<ClosestTies::kExitFirst>(earlier.t_entry, t, earlier_exit, exit)
+                     : second_goes_first<ClosestTies::kLaterSlot>(earlier.t_entry, t, earlier_exit, exit);
+    };
+    float exits[kMaxArity];
     for (uint32_t child = node.first; child < end; ++child) {
-      if (!box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry)) continue;
+      float t_exit;
+      if (!box_test.intersect(bvh.nodes[child].bounds, ray.tmin, best_t, t_entry, t_exit)) continue;
       uint32_t slot = size++;
-      // Insertion sort into this node's part of the stack, nearest on top (highest index).
-      while (slot > base && stack[slot - 1].t_entry < t_entry) {
+      while (slot > base && !goes_first(stack[slot - 1], exits[slot - 1 - base], t_entry, t_exit)) {
         stack[slot] = stack[slot - 1];
+        exits[slot - base] = exits[slot - 1 - base];
         --slot;
       }
       stack[slot] = {child, t_entry};
+      exits[slot - base] = t_exit;
     }
   }
   return best;

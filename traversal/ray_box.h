@@ -58,8 +58,11 @@ struct SlabSetup {
   // NaN: with a zero direction component, (plane - org) * inf is NaN exactly when the origin lies on that
   // plane. The updates are written `t > near ? t : near` so that a NaN t compares false and leaves the
   // interval unchanged: an origin on a face plane counts as inside that slab, which can only add hits.
+  // `t_exit` is where the ray leaves the box, min(tmax, far distances): bvh2_packed's closest hit orders
+  // by it the children it enters at one distance (packed_bvh2.h: PackedWalk).
   template <bool kScaleFar>
-  bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry, float far_scale = 1.0f) const {
+  bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry, float& t_exit,
+                 float far_scale = 1.0f) const {
     float t_near = tmin;
     float t_far = tmax;
     for (std::size_t axis = 0; axis < 3; ++axis) {
@@ -70,6 +73,7 @@ struct SlabSetup {
       t_far = t1 < t_far ? t1 : t_far;
     }
     t_entry = t_near;
+    t_exit = t_far;
     return t_near <= t_far;
   }
 };
@@ -162,7 +166,12 @@ class RobustRayBox {
   /// True when the ray meets `box` within [tmin, tmax]; `t_entry` is then the (rounded) entry distance,
   /// max(tmin, near distance), which is a valid ordering key but not a conservative bound.
   bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry) const {
-    return setup_.intersect<true>(box, tmin, tmax, t_entry, kFarScale);
+    float t_exit;
+    return intersect(box, tmin, tmax, t_entry, t_exit);
+  }
+  /// The same, with the (rounded, scaled) exit distance min(tmax, far distances) in `t_exit`.
+  bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry, float& t_exit) const {
+    return setup_.intersect<true>(box, tmin, tmax, t_entry, t_exit, kFarScale);
   }
 
   /// intersect() on two boxes at once (a binary node's children): bit 0 for `a`, bit 1 for `b`.
@@ -190,7 +199,11 @@ class FastRayBox {
   explicit FastRayBox(const Ray& ray) : setup_(ray) {}
 
   bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry) const {
-    return setup_.intersect<false>(box, tmin, tmax, t_entry);
+    float t_exit;
+    return intersect(box, tmin, tmax, t_entry, t_exit);
+  }
+  bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry, float& t_exit) const {
+    return setup_.intersect<false>(box, tmin, tmax, t_entry, t_exit);
   }
 
   /// intersect() on two boxes at once (a binary node's children): bit 0 for `a`, bit 1 for `b`.
@@ -242,6 +255,10 @@ class FmaRayBox {
   }
 
   bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry) const {
+    float t_exit;
+    return intersect(box, tmin, tmax, t_entry, t_exit);
+  }
+  bool intersect(const Aabb& box, float tmin, float tmax, float& t_entry, float& t_exit) const {
     float t_near = tmin;
     float t_far = tmax;
     for (std::size_t axis = 0; axis < 3; ++axis) {
@@ -251,6 +268,7 @@ class FmaRayBox {
       t_far = t1 < t_far ? t1 : t_far;
     }
     t_entry = t_near;
+    t_exit = t_far;
     return t_near <= t_far;
   }
 

@@ -173,15 +173,18 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
         // instruction sets and packet widths with the same variant compare against the same answers.
         struct ScalarAnswers {
           KernelVariant variant;
+          detail::ClosestTies ties;
           std::vector<Hit> closest;
           std::vector<uint8_t> any;
           TraversalCounters closest_counts, any_counts;
         };
         std::deque<ScalarAnswers> scalar_answers;  // references stay valid as it grows
-        auto scalar_for = [&](const KernelVariant& variant) -> const ScalarAnswers& {
+        auto scalar_for = [&](const KernelVariant& variant,
+                              detail::ClosestTies ties) -> const ScalarAnswers& {
           for (const ScalarAnswers& a : scalar_answers)
-            if (a.variant == variant) return a;
-          ScalarAnswers a{variant, std::vector<Hit>(rays.size()), std::vector<uint8_t>(rays.size()), {}, {}};
+            if (a.variant == variant && a.ties == ties) return a;
+          ScalarAnswers a{variant, ties, std::vector<Hit>(rays.size()), std::vector<uint8_t>(rays.size()),
+                          {},      {}};
           // The general loop, one triangle at a time (kBinaryLoop off): not the binary walks' own leaf
           // loop, which tests watertight triangles four at a time, so that the binary layouts are held
           // to one-at-a-time answers.
@@ -191,7 +194,7 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
                                                                        &a.any_counts, variant.any_hit)
                              .found();
               a.closest[i] = detail::traverse<Tri, Box, false, true, false>(
-                  bvh, scene.triangles, rays[i], &a.closest_counts, AnyHitOrder::kAuto);
+                  bvh, scene.triangles, rays[i], &a.closest_counts, AnyHitOrder::kAuto, ties);
             }
           });
           scalar_answers.push_back(std::move(a));
@@ -209,7 +212,10 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
           const TraceCounts any_counts = compiled->count_any(rays);
 
           // The scalar kernel with the same tests, on the same tree, ray by ray.
-          const ScalarAnswers& scalar = scalar_for(spec.variant);
+          // bvh2_packed orders closest hit's ties by exit (packed_bvh2.h), and so do its packets' counts.
+          const ScalarAnswers& scalar =
+              scalar_for(spec.variant, spec.name == "bvh2_packed" ? detail::ClosestTies::kExitFirst
+                                                                  : detail::ClosestTies::kLaterSlot);
           const TraversalCounters& scalar_closest = scalar.closest_counts;
           const TraversalCounters& scalar_any = scalar.any_counts;
           bool tie_broken_differently = false;
@@ -938,6 +944,57 @@ TEST(Layouts, WideKernelsVisitTheBinaryKernelsNodesOnABinaryTree) {
       EXPECT_EQ(c.prims_tested, closest.prims_tested);
       EXPECT_EQ(a.nodes_visited, any.nodes_visited);
       EXPECT_EQ(a.prims_tested, any.prims_tested);
+    }
+  }
+}
+
+// bvh2_packed's closest hit takes first, of two children that a ray starts inside (both entered at
+// tmin), the one it leaves first, whichever slot holds it; bvh2's the later slot. Here the root's
+// children are a leaf around the origin holding the hit at t = 0.5 and an inner node reaching to x = 10,
+// whose two leaves (x in [5, 6] and [7, 8]) are then entered beyond the hit and never tested by
+// bvh2_packed, nor by the general loop in that order: one triangle with the leaf in either slot. bvh2
+// tests two with the leaf in the first slot (the near far leaf's, then the leaf's).
+TEST(Layouts, PackedClosestHitTakesTheChildLeftFirstAmongThoseEnteredTogether) {
+  const std::vector<Triangle> tris = {{{0.5f, -0.5f, -0.5f}, {0.5f, 0.5f, -0.5f}, {0.5f, 0.0f, 0.5f}},
+                                      {{5.5f, -0.5f, -0.5f}, {5.5f, 0.5f, -0.5f}, {5.5f, 0.0f, 0.5f}},
+                                      {{7.5f, -0.5f, -0.5f}, {7.5f, 0.5f, -0.5f}, {7.5f, 0.0f, 0.5f}}};
+  // The second ray, axis-parallel, is outside box=fma's domain and takes the robust test.
+  const std::vector<Ray> rays = {Ray{{0, 0, 0}, 0.0f, {1.0f, 0.01f, 0.02f}},
+                                 Ray{{0, 0, 0}, 0.0f, {1.0f, 0.0f, 0.0f}}};
+  for (const bool leaf_first : {true, false}) {
+    SCOPED_TRACE(leaf_first ? "the leaf in the first slot" : "the leaf in the second slot");
+    Bvh bvh;
+    bvh.nodes.push_back({Aabb{{-1, -1, -1}, {10, 1, 1}}, 1, 2, 0});
+    const Node leaf{Aabb{{-1, -1, -1}, {1, 1, 1}}, 0, 0, 1}, inner{Aabb{{-1, -1, -1}, {10, 1, 1}}, 3, 2, 0};
+    bvh.nodes.push_back(leaf_first ? leaf : inner);
+    bvh.nodes.push_back(leaf_first ? inner : leaf);
+    bvh.nodes.push_back({Aabb{{5, -1, -1}, {6, 1, 1}}, 1, 0, 1});
+    bvh.nodes.push_back({Aabb{{7, -1, -1}, {8, 1, 1}}, 2, 0, 1});
+    bvh.prim_refs = {0, 1, 2};
+    ASSERT_TRUE(validate(bvh, std::span<const Triangle>(tris)).ok());
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+      SCOPED_TRACE("ray " + std::to_string(i));
+      for (const detail::ClosestTies ties :
+           {detail::ClosestTies::kExitFirst, detail::ClosestTies::kLaterSlot}) {
+        TraversalCounters general;
+        const Hit hit =
+            detail::traverse<WatertightTriangleTest, RobustRayBox, false, true, /*kBinaryLoop=*/false>(
+                bvh, tris, rays[i], &general, AnyHitOrder::kAuto, ties);
+        EXPECT_EQ(hit.prim, 0u);
+        const bool exit_first = ties == detail::ClosestTies::kExitFirst;
+        EXPECT_EQ(general.prim_tests, exit_first || !leaf_first ? 1u : 2u) << "the general loop";
+      }
+      for (const char* name : {"bvh2_packed", "bvh2_packed:tri=mt,box=fast", "bvh2_packed:tri=mtn,box=fma",
+                               "bvh2", "bvh2:tri=mtn,box=fma"}) {
+        SCOPED_TRACE(name);
+        const auto layout = compile_layout(name, bvh, tris);
+        const std::span<const Ray> one(&rays[i], 1);
+        std::vector<Hit> hits(1);
+        layout->trace_closest(one, hits);
+        EXPECT_EQ(hits[0].prim, 0u);
+        const bool packed = std::string_view(name).starts_with("bvh2_packed");
+        EXPECT_EQ(layout->count_closest(one).prims_tested, packed || !leaf_first ? 1u : 2u);
+      }
     }
   }
 }

@@ -167,10 +167,11 @@ TYPED_TEST(TravRayBoxBoth, IntervalIsClosedAndRespected) {
   EXPECT_FALSE(hits<TypeParam>(with(0.0f, 0.999f), kUnitBox));
 }
 
-// bvh2_packed's test of both children at once answers as the box test does on each, hit and entry
-// distance, on the IEEE cases above (origins on face planes with +-0 direction components, grazing
-// edges and corners, tmin and tmax at a face) and on random rays; the NaN rule lives in the order of
-// the operands of its max, so only cases where (plane - org) / dir is NaN can check it.
+// bvh2_packed's test of both children at once answers as the box test does on each: hit, entry and exit
+// distance (the exits order its closest hit's ties), on the IEEE cases
+// above (origins on face planes with +-0 direction components, grazing edges and corners, tmin and tmax at a
+// face) and on random rays; the NaN rule lives in the order of the operands of its max, so only cases where
+// (plane - org) / dir is NaN can check it.
 TYPED_TEST(TravRayBoxBoth, PairNodeTestAgreesWithTheBoxTestOnEachChild) {
   std::vector<Ray> rays;
   for (float zy : {0.0f, -0.0f})
@@ -202,19 +203,22 @@ TYPED_TEST(TravRayBoxBoth, PairNodeTestAgreesWithTheBoxTestOnEachChild) {
         if (!FmaRayBox::takes(ray)) continue;  // traced with RobustRayBox, tested as that type
       }
       SCOPED_TRACE(testing::Message() << "ray " << i);
-      float t_left = -1.0f, t_right = -1.0f, want_left = -1.0f, want_right = -1.0f;
+      float t_left = -1.0f, t_right = -1.0f, e_left = -1.0f, e_right = -1.0f;
       const unsigned mask = detail::PairSlabs<TypeParam>(ray).intersect(
-          node, detail::PairSlabs<TypeParam>::interval(ray.tmin, ray.tmax), t_left, t_right);
+          node, detail::PairSlabs<TypeParam>::interval(ray.tmin, ray.tmax), t_left, t_right, e_left, e_right);
       const TypeParam box(ray);
-      const bool left = box.intersect(kUnitBox, ray.tmin, ray.tmax, want_left);
-      const bool right_hit = box.intersect(right, ray.tmin, ray.tmax, want_right);
+      float want_left = -1.0f, want_right = -1.0f, exit_left = -1.0f, exit_right = -1.0f;
+      const bool left = box.intersect(kUnitBox, ray.tmin, ray.tmax, want_left, exit_left);
+      const bool right_hit = box.intersect(right, ray.tmin, ray.tmax, want_right, exit_right);
       ASSERT_EQ((mask & 1u) != 0, left);
       ASSERT_EQ((mask & 2u) != 0, right_hit);
       if (left) {
         ASSERT_EQ(t_left, want_left);
+        ASSERT_EQ(e_left, exit_left);
       }
       if (right_hit) {
         ASSERT_EQ(t_right, want_right);
+        ASSERT_EQ(e_right, exit_right);
       }
     }
   }

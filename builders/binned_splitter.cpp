@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "builders/size_split.h"
 #include "core/simd.h"
 
 namespace sahbench {
@@ -322,11 +323,27 @@ class SplitterImpl {
     if (range.size() == 2) return split_pair(range, mapping, parent_area, sides);
     const BinSet set = bin(range, mapping);
     const Split split = best_split(set, range.size(), parent_area, params_.top_down.cost);
+    if (params_.top_down.size_split && range.size() >= kSizeSplitMinPrims) {
+      const SizeSplit by_size =
+          best_size_split(bin_sizes(range, parent_area), range.size(), parent_area, params_.top_down.cost);
+      if (by_size.split.cost < split.cost) {  // ties keep the plane
+        if (sides) *sides = {by_size.large, by_size.rest};
+        return by_size.split;
+      }
+    }
     if (sides && split.valid()) *sides = side_bounds(set, split);
     return split;
   }
 
   Partition partition(const NodeRange& range, const Split& split) {
+    if (split.axis == kSizeSplitAxis) {
+      const float node_area = range.bounds.half_area();
+      auto goes_left = [&](const PackedBox& box) {
+        return goes_left_of_size_split(split, box.aabb().half_area(), node_area);
+      };
+      return range.size() >= kParallelThreshold ? partition_parallel(range, goes_left)
+                                                : partition_serial(range, goes_left);
+    }
     const BinMapping mapping(range.centroid_bounds, bins_for_node(params_, range.size()));
     // Compares the bins of all three axes with the split position and keeps the split axis's bit.
     const Vec4i position = simd::splat(split.position);
@@ -381,6 +398,39 @@ class SplitterImpl {
       *sides = {(a_left ? a : b).bounds, (a_left ? b : a).bounds};
     }
     return split;
+  }
+
+  // size_split.h's bin_sizes on the packed records: each class's box one 8-lane Bin, in two sets used in
+  // turn so that consecutive references of one class (most are in the smallest classes) do not wait for
+  // each other's update; the same boxes and counts, as min and max merge exactly.
+  SizeBins bin_sizes(const NodeRange& range, float node_area) const {
+    auto run = [&](uint32_t begin, uint32_t end) {
+      Bin boxes[2][kSizeClasses];
+      for (auto& set : boxes) std::fill_n(set, kSizeClasses, Bin::empty());
+      SizeBins bins;
+      for (uint32_t i = begin; i < end; ++i) {
+        const PrimRef& ref = refs_[i];
+        const uint32_t k = size_class(ref.bounds.half_area(), node_area);
+        boxes[i & 1][k].extend(Bin::of(PackedBox::of(ref)));
+        ++bins.counts[k];
+      }
+      for (uint32_t k = 0; k < kSizeClasses; ++k) {
+        boxes[0][k].extend(boxes[1][k]);
+        if (bins.counts[k] != 0) bins.bounds[k] = boxes[0][k].box().aabb();
+      }
+      return bins;
+    };
+    if (range.size() < kParallelThreshold) return run(range.begin, range.end);
+    return tbb::parallel_reduce(
+        tbb::blocked_range<uint32_t>(range.begin, range.end, kChunk), SizeBins{},
+        [&](const tbb::blocked_range<uint32_t>& r, SizeBins acc) {
+          acc.merge(run(r.begin(), r.end()));
+          return acc;
+        },
+        [](SizeBins a, const SizeBins& b) {
+          a.merge(b);
+          return a;
+        });
   }
 
   // The boxes of both sides of a split found in `set`: its bins below and from the split position.

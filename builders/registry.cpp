@@ -37,6 +37,23 @@ TopDownConfig top_down_config(const ParamSet& p) {
   return {p.get_uint("min_leaf"), p.get_uint("max_leaf"), sah_cost_of(p)};
 }
 
+// The builders that search centroid planes (binned, sweep and spatial-split) also offer a size split.
+ParamSpec size_split_param() {
+  return {"size_split",
+          ParamType::kInt,
+          double(TopDownConfig{}.size_split),
+          0,
+          1,
+          "1: also split a node's large primitives from the rest, where the SAH prefers it"};
+}
+
+// top_down_config of a builder that declares size_split.
+TopDownConfig plane_search_config(const ParamSet& p) {
+  TopDownConfig config = top_down_config(p);
+  config.size_split = p.get_uint("size_split") != 0;
+  return config;
+}
+
 // Wide trees are traced by the bvh4/bvh8 layouts, which test 4 triangles at once (traversal/wide_bvh.h).
 constexpr uint32_t kWideSahBlock = 4;
 
@@ -55,6 +72,7 @@ ParamSpec sah_block_param(uint32_t default_block) {
 // sah_block=4): built per primitive, its smaller leaves survive the pass and the collapse.
 std::vector<ParamSpec> binned_params(uint32_t default_block = 0) {
   auto params = top_down_params();
+  params.push_back(size_split_param());
   if (default_block != 0) params.push_back(sah_block_param(default_block));
   const BinnedSahParams defaults;
   params.insert(params.begin(), {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins,
@@ -65,7 +83,7 @@ std::vector<ParamSpec> binned_params(uint32_t default_block = 0) {
 }
 
 BinnedSahParams binned_config(const ParamSet& p) {
-  return {p.get_uint("bins"), p.get_uint("adaptive_bins") != 0, top_down_config(p)};
+  return {p.get_uint("bins"), p.get_uint("adaptive_bins") != 0, plane_search_config(p)};
 }
 
 // Wide trees: 8 children by default, the width of an AVX2 node (Embree's BVH8).
@@ -131,6 +149,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>>& own_build_p
       {"bins", {"binned_sah", "sbvh"}},
       {"adaptive_bins", {"binned_sah", "sbvh"}},
       {"min_leaf", {"binned_sah", "sweep_sah", "sbvh"}},
+      {"size_split", {"binned_sah", "sweep_sah", "sbvh"}},
       {"source_c_trav_scale", {"binned_sah", "sweep_sah", "sbvh"}},
       {"reinsert_iterations", {"binned_sah", "sweep_sah", "sbvh"}}};
   return params;
@@ -243,11 +262,18 @@ BuilderInfo wide_collapse_info() {
           arity_of};
 }
 
+std::vector<ParamSpec> sweep_params() {
+  auto params = top_down_params();
+  params.push_back(size_split_param());
+  return params;
+}
+
 BuilderInfo sweep_sah_info() {
-  return {
-      "sweep_sah", "full-sweep SAH over presorted centroids (MacDonald and Booth 1990)", top_down_params(),
-      [](const BuildInput& input, const ParamSet& p) { return build_sweep_sah(input, {top_down_config(p)}); },
-      [](const ParamSet& p) { check_config(top_down_config(p), "sweep_sah"); }};
+  return {"sweep_sah", "full-sweep SAH over presorted centroids (MacDonald and Booth 1990)", sweep_params(),
+          [](const BuildInput& input, const ParamSet& p) {
+            return build_sweep_sah(input, {plane_search_config(p)});
+          },
+          [](const ParamSet& p) { check_config(top_down_config(p), "sweep_sah"); }};
 }
 
 SbvhParams sbvh_params(const ParamSet& p) {
@@ -259,12 +285,13 @@ SbvhParams sbvh_params(const ParamSet& p) {
   s.node_overlap = p.get_float("node_overlap");
   s.max_dup = p.get_float("max_dup");
   s.unsplit = p.get_uint("unsplit") != 0;
-  s.top_down = top_down_config(p);
+  s.top_down = plane_search_config(p);
   return s;
 }
 
 std::vector<ParamSpec> sbvh_param_specs(uint32_t default_block = 0) {
   auto params = top_down_params();
+  params.push_back(size_split_param());
   const SbvhParams defaults;
   // alpha and max_dup as doubles, so the CSV shows 1e-05 and 0.5 rather than their float roundings.
   constexpr double kDefaultAlpha = 1e-5, kDefaultNodeOverlap = 0.1, kDefaultMaxDup = 0.5;

@@ -9,6 +9,8 @@
 #include <numeric>
 #include <vector>
 
+#include "builders/size_split.h"
+
 namespace sahbench {
 namespace {
 
@@ -19,8 +21,8 @@ constexpr uint32_t kParallelThreshold = 1u << 14;
 // range. Partitioning a node keeps the three orders sorted by stable-partitioning the two other axes.
 class SweepSplitter {
  public:
-  SweepSplitter(const BuildInput& input, std::span<const uint32_t> prims, const SahCost& cost)
-      : input_(input), cost_(cost), side_(input.size(), 0) {
+  SweepSplitter(const BuildInput& input, std::span<const uint32_t> prims, const TopDownConfig& config)
+      : input_(input), config_(config), side_(input.size(), 0) {
     auto sort_axis = [&](int axis) {
       auto& order = order_[axis];
       order.assign(prims.begin(), prims.end());
@@ -43,27 +45,42 @@ class SweepSplitter {
     } else {
       for (int a = 0; a < 3; ++a) sweep(a);
     }
-    // Ties keep the lowest axis, as the binned builder does.
+    // Ties keep the lowest axis, as the binned builder does, and planes over a size split.
     Split result = best[0];
     for (int a = 1; a < 3; ++a)
       if (best[a].cost < result.cost) result = best[a];
+    if (config_.size_split && range.size() >= kSizeSplitMinPrims) {
+      const SizeBins bins = bin_sizes(
+          range.size(), [&](uint32_t i) -> const Aabb& { return input_.bounds[order_[0][range.begin + i]]; },
+          parent_area);
+      const SizeSplit by_size = best_size_split(bins, range.size(), parent_area, config_.cost);
+      if (by_size.split.cost < result.cost) result = by_size.split;
+    }
     return result;
   }
 
   Partition partition(const NodeRange& range, const Split& split) {
-    const auto axis = static_cast<int>(split.axis);
-    const uint32_t mid = range.begin + split.position;
+    // A plane's left side is a prefix of its axis's order; a size split's is the large primitives, and
+    // all three orders are partitioned stably.
+    const bool by_size = split.axis == kSizeSplitAxis;
+    const auto axis = by_size ? 0 : static_cast<int>(split.axis);
+    const float node_area = range.bounds.half_area();
+    uint32_t mid = range.begin + split.position;
     const auto& order = order_[axis];
     Aabb left, right, left_c, right_c;
+    uint32_t left_count = 0;
     for (uint32_t i = range.begin; i < range.end; ++i) {
       const uint32_t p = order[i];
-      const bool is_left = i < mid;
+      const bool is_left =
+          by_size ? goes_left_of_size_split(split, input_.bounds[p].half_area(), node_area) : i < mid;
       side_[p] = is_left;
+      left_count += is_left;
       (is_left ? left : right).extend(input_.bounds[p]);
       (is_left ? left_c : right_c).extend(input_.bounds[p].center());
     }
+    if (by_size) mid = range.begin + left_count;
     auto reorder = [&](int other) {
-      if (other != axis) stable_partition(order_[other], range);
+      if (by_size || other != axis) stable_partition(order_[other], range);
     };
     if (range.size() >= kParallelThreshold) {
       tbb::parallel_invoke([&] { reorder(0); }, [&] { reorder(1); }, [&] { reorder(2); });
@@ -106,7 +123,7 @@ class SweepSplitter {
       }
     }
     if (best_weighted < std::numeric_limits<float>::infinity())
-      best.cost = cost_.split_cost_from_weighted(parent_area, best_weighted);
+      best.cost = config_.cost.split_cost_from_weighted(parent_area, best_weighted);
     return best;
   }
 
@@ -125,7 +142,7 @@ class SweepSplitter {
   }
 
   const BuildInput& input_;
-  const SahCost& cost_;
+  const TopDownConfig& config_;
   std::array<std::vector<uint32_t>, 3> order_;
   std::vector<uint8_t> side_;  // per primitive: 1 when it goes left; nodes own disjoint primitives
 };
@@ -158,13 +175,13 @@ Bvh build_sweep_sah(const BuildInput& input, const SweepSahParams& params) {
   check_prim_count(input.size(), "sweep_sah");
   std::vector<uint32_t> prims(input.size());
   std::iota(prims.begin(), prims.end(), 0u);
-  SweepSplitter splitter(input, prims, params.top_down.cost);
+  SweepSplitter splitter(input, prims, params.top_down);
   return build_top_down(splitter, params.top_down, root_range(input, prims));
 }
 
 Split find_sweep_split(const BuildInput& input, std::span<const uint32_t> prims,
                        const SweepSahParams& params) {
-  SweepSplitter splitter(input, prims, params.top_down.cost);
+  SweepSplitter splitter(input, prims, params.top_down);
   return splitter.find_split(root_range(input, prims));
 }
 

@@ -50,6 +50,9 @@ struct TopDownConfig {
   /// (the direct wide build of Wald, Benthin and Boulos 2008, "Getting Rid of Packets", and of
   /// Embree's BVHN builders).
   uint32_t arity = 2;
+  /// Also offer, where a node has kSizeSplitMinPrims primitives or more, the split of its large
+  /// primitives from the rest (builders/size_split.h), in the builders that search centroid planes.
+  bool size_split = true;
 };
 
 /// A node's primitives: the range [begin, end) of the splitter's reference order, and their bounds.
@@ -68,7 +71,8 @@ struct NodeRange {
 
 /// A split proposed by a Splitter. `cost` is SahCost::split_cost; infinite when no split separates the
 /// primitives (e.g. all centroids equal on every axis). `axis` and `position` mean what the splitter
-/// wants them to mean (a bin index, or a position in sorted order).
+/// wants them to mean (a bin index, or a position in sorted order; a size split's last class on axis
+/// kSizeSplitAxis, builders/size_split.h).
 struct Split {
   float cost = std::numeric_limits<float>::infinity();
   uint32_t axis = 0;

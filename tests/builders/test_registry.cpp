@@ -54,9 +54,9 @@ TEST(BuilderRegistry, KnowsBinnedAndSweep) {
 TEST(BuilderRegistry, DefaultsAppearInCsvForm) {
   const auto& info = find_builder("binned_sah");
   EXPECT_EQ(resolve_params(info.name, info.params, {}).to_string(),
-            "bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;sah_block=1");
+            "bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;size_split=1;sah_block=1");
   EXPECT_EQ(resolve_params(info.name, info.params, {{"bins", "16"}, {"c_trav", "0.5"}}).to_string(),
-            "bins=16;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=0.5;c_isect=1;sah_block=1");
+            "bins=16;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=0.5;c_isect=1;size_split=1;sah_block=1");
 }
 
 TEST(BuilderRegistry, BottomUpAndPresplitDefaultsAppearInCsvForm) {
@@ -67,7 +67,7 @@ TEST(BuilderRegistry, BottomUpAndPresplitDefaultsAppearInCsvForm) {
   EXPECT_EQ(defaults("lbvh"), "bits=30;hierarchy=apetrei;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
   EXPECT_EQ(defaults("ploc"), "radius=16;bits=30;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
   EXPECT_EQ(defaults("presplit"),
-            "split_budget=0.3;bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
+            "split_budget=0.3;bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;size_split=1");
   const auto& lbvh = find_builder("lbvh");
   expect_error(
       [&] {
@@ -127,7 +127,7 @@ TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
   // wide_collapse's sources named alone share its parameters and are written by name, as before chains.
   EXPECT_EQ(resolve_named("wide_collapse", {}).to_string(),
             "arity=8;method=sah;source=binned_sah;source_c_trav_scale=0.0625;reinsert_iterations=8;bins=32;"
-            "adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=3;c_isect=1;sah_block=4");
+            "adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=3;c_isect=1;size_split=1;sah_block=4");
   EXPECT_TRUE(resolve_named("wide_collapse", {{"source", "sbvh"}}).get_source("source").shared());
   // Any source with a parameter of its own, and any other source, is written with all of its values,
   // and the collapse without the parameters it applies only to its own binary build.
@@ -137,7 +137,8 @@ TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
                                                          {"source.source.max_leaf", "4"}});
   EXPECT_EQ(chain.to_string(),
             "arity=8;method=sah;source=reinsert(source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;"
-            "max_leaf=4;c_trav=1;c_isect=1;sah_block=1);iterations=2;batch=0.05;min_gain=0.001;c_trav=1;"
+            "max_leaf=4;c_trav=1;c_isect=1;size_split=1;sah_block=1);iterations=2;batch=0.05;min_gain=0.001;"
+            "c_trav=1;"
             "c_isect=1);max_leaf=8;c_trav=3;c_isect=1;sah_block=4");
   const SourceSpec& reinsert = chain.get_source("source");
   ASSERT_FALSE(reinsert.shared());
@@ -147,7 +148,8 @@ TEST(SourceChain, SharedSourcesKeepTheirTextAndOwnSourcesRecordTheChain) {
   EXPECT_FALSE(resolve_named("wide_collapse", {{"source.bins", "32"}}).get_source("source").shared());
   // A pass's default source is built with its own defaults.
   EXPECT_EQ(resolve_named("treelet", {}).to_string(),
-            "source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;sah_block=1);"
+            "source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;size_split=1;"
+            "sah_block=1);"
             "treelet_size=7;iterations=3;c_trav=1;c_isect=1");
 }
 

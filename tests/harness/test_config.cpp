@@ -399,7 +399,7 @@ source = "sweep_sah"
   EXPECT_EQ(cli.params_text(), config.builders[0].params_text());
   EXPECT_EQ(cli.arity, 8u);
   EXPECT_NE(cli.params_text().find(";source=reinsert(source=binned_sah(bins=32;adaptive_bins=1;min_leaf=1;"
-                                   "max_leaf=4;c_trav=1;c_isect=1;sah_block=1);iterations=1;"),
+                                   "max_leaf=4;c_trav=1;c_isect=1;size_split=1;sah_block=1);iterations=1;"),
             std::string::npos)
       << cli.params_text();
   const SourceSpec& reinsert = config.builders[2].values.get_source("source");

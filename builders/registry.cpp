@@ -37,11 +37,12 @@ TopDownConfig top_down_config(const ParamSet& p) {
   return {p.get_uint("min_leaf"), p.get_uint("max_leaf"), sah_cost_of(p)};
 }
 
-// The builders that search centroid planes (binned, sweep and spatial-split) also offer a size split.
-ParamSpec size_split_param() {
+// The builders that search centroid planes (binned, sweep and spatial-split) also offer a size split,
+// by default where their parameter structs say (off for the spatial-split builders).
+ParamSpec size_split_param(bool default_on) {
   return {"size_split",
           ParamType::kInt,
-          double(TopDownConfig{}.size_split),
+          double(default_on),
           0,
           1,
           "1: also split a node's large primitives from the rest, where the SAH prefers it"};
@@ -71,10 +72,10 @@ ParamSpec sah_block_param(uint32_t default_block) {
 // source of a pass the collapse then reads (wide_collapse over reinsert over binned_sah with
 // sah_block=4): built per primitive, its smaller leaves survive the pass and the collapse.
 std::vector<ParamSpec> binned_params(uint32_t default_block = 0) {
-  auto params = top_down_params();
-  params.push_back(size_split_param());
-  if (default_block != 0) params.push_back(sah_block_param(default_block));
   const BinnedSahParams defaults;
+  auto params = top_down_params();
+  params.push_back(size_split_param(defaults.top_down.size_split));
+  if (default_block != 0) params.push_back(sah_block_param(default_block));
   params.insert(params.begin(), {{"bins", ParamType::kInt, double(defaults.bins), kMinBins, kMaxBins,
                                   "centroid bins per axis"},
                                  {"adaptive_bins", ParamType::kInt, double(defaults.adaptive_bins), 0, 1,
@@ -149,7 +150,7 @@ const std::vector<std::pair<std::string, std::vector<std::string>>>& own_build_p
       {"bins", {"binned_sah", "sbvh"}},
       {"adaptive_bins", {"binned_sah", "sbvh"}},
       {"min_leaf", {"binned_sah", "sweep_sah", "sbvh"}},
-      {"size_split", {"binned_sah", "sweep_sah", "sbvh"}},
+      {"size_split", {"binned_sah", "sweep_sah"}},
       {"source_c_trav_scale", {"binned_sah", "sweep_sah", "sbvh"}},
       {"reinsert_iterations", {"binned_sah", "sweep_sah", "sbvh"}}};
   return params;
@@ -228,13 +229,15 @@ BuilderInfo wide_collapse_info() {
               per_prim.cost.block = 1;
               tree = build_sweep_sah(input, {per_prim});
             } else if (source == "sbvh") {
-              // Spatial splits with sbvh's defaults for its own parameters (alpha, max_dup, ...), costed
-              // per block like the binned source: built per primitive, the SBVH's small leaves collapsed
-              // to 60% more wide leaves than the binned tree's on the same scene, and traced 5-13% slower.
+              // Spatial splits with sbvh's defaults for its own parameters (alpha, max_dup, size_split ...),
+              // costed per block like the binned source: built per primitive, the SBVH's small leaves
+              // collapsed to 60% more wide leaves than the binned tree's on the same scene, and traced 5-13%
+              // slower.
               SbvhParams sbvh;
               sbvh.bins = binary.bins;
               sbvh.adaptive_bins = binary.adaptive_bins;
               sbvh.top_down = binary.top_down;
+              sbvh.top_down.size_split = SbvhParams{}.top_down.size_split;
               tree = build_sbvh(input, sbvh, "wide_collapse");
             } else {
               tree = build_binned_sah(input, binary);
@@ -264,7 +267,7 @@ BuilderInfo wide_collapse_info() {
 
 std::vector<ParamSpec> sweep_params() {
   auto params = top_down_params();
-  params.push_back(size_split_param());
+  params.push_back(size_split_param(SweepSahParams{}.top_down.size_split));
   return params;
 }
 
@@ -291,8 +294,8 @@ SbvhParams sbvh_params(const ParamSet& p) {
 
 std::vector<ParamSpec> sbvh_param_specs(uint32_t default_block = 0) {
   auto params = top_down_params();
-  params.push_back(size_split_param());
   const SbvhParams defaults;
+  params.push_back(size_split_param(defaults.top_down.size_split));
   // alpha and max_dup as doubles, so the CSV shows 1e-05 and 0.5 rather than their float roundings.
   constexpr double kDefaultAlpha = 1e-5, kDefaultNodeOverlap = 0.1, kDefaultMaxDup = 0.5;
   static_assert(float(kDefaultAlpha) == SbvhParams{}.alpha &&

@@ -36,6 +36,7 @@ void BM_BinningPass(benchmark::State& state) {
   BinnedSahParams params;
   params.bins = static_cast<uint32_t>(state.range(0));
   params.adaptive_bins = false;
+  params.top_down.size_split = false;  // the planes' binning alone, as before size splits
   for (auto _ : state) benchmark::DoNotOptimize(find_binned_split(input, prims, params));
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations() * n));
 }

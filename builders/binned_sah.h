@@ -1,7 +1,8 @@
 #pragma once
 /// Binned SAH builder: "On fast Construction of SAH-based Bounding Volume Hierarchies", I. Wald, 2007.
 /// Primitives are binned by centroid into `bins` equal intervals of the node's centroid bounds on each
-/// axis; the best of the bins - 1 planes per axis is chosen by the SAH.
+/// axis; the best of the bins - 1 planes per axis, or of the size splits (size_split.h), is chosen by the
+/// SAH.
 
 #include <cstdint>
 

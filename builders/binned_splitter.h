@@ -21,7 +21,8 @@ struct SplitBounds {
 };
 
 /// A Splitter for build_top_down (see top_down.h) over `refs`: each node's references are binned by box
-/// centre into bins_for_node() bins per axis, and the plane of least SAH cost is chosen. Nodes of 64K
+/// centre into bins_for_node() bins per axis, and the plane of least SAH cost is chosen, or a size split
+/// (size_split.h) where one costs less and TopDownConfig::size_split offers it. Nodes of 64K
 /// references or more are binned and partitioned in parallel, in fixed chunks, so the result does not
 /// depend on the thread count. Partitions leave NodeRange::spare at 0.
 class BinnedSplitter {

@@ -31,8 +31,10 @@ struct PresplitParams {
   /// triangles) its lowest SAH, 2% below no splits; the tuning scenes of uniform small triangles (the
   /// terrain, the bunny) lose 1-3% to any budget, and a few splits alone (0.01-0.05) cost Sponza 10-20%.
   float split_budget = 0.3f;
-  /// The binned build of the pieces.
-  BinnedSahParams binned;
+  /// The binned build of the pieces, without size splits (builders/size_split.h): the split pieces are
+  /// what large triangles become, and on tune.toml's Sponza view size splits too traced its shadow rays
+  /// slower after the collapse.
+  BinnedSahParams binned{.top_down = {.size_split = false}};
 };
 
 /// Builds over `input`, whose `triangles` must be given (splitting clips them).

@@ -38,7 +38,8 @@ TopDownConfig top_down_config(const ParamSet& p) {
 }
 
 // The builders that search centroid planes (binned, sweep and spatial-split) also offer a size split,
-// by default where their parameter structs say (off for the spatial-split builders).
+// by default where their parameter structs say (off for the builders that split references: sbvh,
+// wide_sbvh, presplit).
 ParamSpec size_split_param(bool default_on) {
   return {"size_split",
           ParamType::kInt,
@@ -71,8 +72,7 @@ ParamSpec sah_block_param(uint32_t default_block) {
 // that a binary tree meant for a wide collapse can be built with the wide leaves' costs, e.g. as the
 // source of a pass the collapse then reads (wide_collapse over reinsert over binned_sah with
 // sah_block=4): built per primitive, its smaller leaves survive the pass and the collapse.
-std::vector<ParamSpec> binned_params(uint32_t default_block = 0) {
-  const BinnedSahParams defaults;
+std::vector<ParamSpec> binned_params(uint32_t default_block = 0, const BinnedSahParams& defaults = {}) {
   auto params = top_down_params();
   params.push_back(size_split_param(defaults.top_down.size_split));
   if (default_block != 0) params.push_back(sah_block_param(default_block));
@@ -166,7 +166,14 @@ void check_own_build_params(const ParamSet& p, const char* builder) {
     for (const std::string& name : takers) names += (names.empty() ? "" : ", ") + name;
     const bool source_has = !source.shared() && source.params->has(spec.name);
     std::string instead;
-    if (source.shared())
+    const auto& source_params = find_builder(source.name()).params;
+    const bool declared = std::any_of(source_params.begin(), source_params.end(),
+                                      [&](const ParamSpec& q) { return q.name == spec.name; });
+    if (source.shared() && declared)
+      instead = "the collapse's own " + source.name() + " build keeps " + source.name() +
+                "'s default; give " + source.name() + " its own (source." + spec.name +
+                "=...) to build it as the plain builder";
+    else if (source.shared())
       instead = source.name() + " has no " + spec.name;
     else if (spec.name == "source_c_trav_scale")
       instead = source.params->has("c_trav") ? "give the source its own c_trav (source.c_trav=...)"
@@ -395,7 +402,7 @@ BuilderInfo ploc_info() {
 }
 
 BuilderInfo presplit_info() {
-  auto params = binned_params();
+  auto params = binned_params(0, PresplitParams{}.binned);
   // As a double, so that the CSV shows 0.3 rather than its float rounding.
   constexpr double kDefaultSplitBudget = 0.3;
   static_assert(float(kDefaultSplitBudget) == PresplitParams{}.split_budget);

@@ -4,12 +4,9 @@
 ///
 /// No centroid plane takes an enclosing shell apart from what it encloses: the floor and the outer walls
 /// of a room lie on every side of its furniture's centroids, so each plane leaves some of them with the
-/// furniture, and that child's box spans the room. On Crytek Sponza a node of 5755 triangles near the top
-/// of binned_sah's tree kept 24 such triangles with 1202 others; splitting the 24 off costs a third less
-/// there, and the whole tree's SAH went from 75.7 to 70.5 (tinybvh 1.6.7's binned builder, whose 8 bins
-/// over node bounds rather than centroid bounds happen to separate Sponza's shell: 72.1). Spatial splits
-/// (Stich et al. 2009) and early split clipping (Karras and Aila 2013) attack the same large triangles
-/// by splitting their references; this costs no reference.
+/// furniture, and that child's box spans the room (Crytek Sponza's top nodes; b50e90a has the figures).
+/// Spatial splits (Stich et al. 2009) and early split clipping (Karras and Aila 2013) attack the same
+/// large triangles by splitting their references; this costs no reference.
 ///
 /// Size classes by powers of two: class k holds the boxes with half-area in (A / 2^(k+1), A / 2^k] of
 /// the node's half-area A, the last class everything smaller (and boxes of no area). The candidates are
@@ -36,8 +33,8 @@ inline constexpr uint32_t kSizeClasses = 8;
 /// Split::axis of a size split; Split::position is then its last large class.
 inline constexpr uint32_t kSizeSplitAxis = 3;
 /// Nodes of fewer primitives are not offered size splits: they pay near the top of a tree, where a shell
-/// encloses much. On Sponza, from 64 primitives on the SAH was 70.39 against 70.49 from 512, for a
-/// build 18% slower than with planes alone against 6 to 16%.
+/// encloses much, and each node offered one costs a pass over its primitives (the README's builders
+/// section has the trade measured on Sponza).
 inline constexpr uint32_t kSizeSplitMinPrims = 512;
 
 /// The size class of a box of half-area `area` in a node of half-area `node_area` (> 0): floor(log2(
@@ -72,9 +69,9 @@ struct SizeBins {
 };
 
 /// The size classes of a node of `n` primitives, `box(i)` the box of its i-th (i < n), of half-area
-/// `node_area`. Nodes of 64K primitives or more are binned in parallel, in fixed chunks; boxes and counts
-/// merge exactly, so the result does not depend on the thread count. (The binned builder has its own
-/// loop over its packed records, with the same result.)
+/// `node_area`. Nodes of 64K primitives or more are binned in parallel; boxes and counts merge exactly, so
+/// the result depends neither on how TBB divides the range nor on the thread count. (The binned builder
+/// has its own loop over its packed records, with the same result; the split-search tests compare them.)
 template <class BoxAt>
 SizeBins bin_sizes(uint32_t n, BoxAt&& box, float node_area) {
   constexpr uint32_t kChunk = 1u << 12, kParallel = 1u << 16;

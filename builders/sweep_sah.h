@@ -3,6 +3,7 @@
 /// three axes (MacDonald and Booth 1990; the O(n log n) presorted form of Wald and Havran 2006, "On
 /// building fast kd-trees for ray tracing, and on doing that in O(N log N)", applied to BVHs). The
 /// reference for binned builders: its chosen split never costs more than a binned one for the same node.
+/// Both offer the same size splits (size_split.h) beside their planes.
 
 #include <span>
 

@@ -209,7 +209,8 @@ TEST(Collapse, ASourceWithParametersOfItsOwnIsCollapsedAsGiven) {
   // Not recorded where they do nothing: the text after the source's own parameters holds none of them.
   const std::string own = resolve_params(info.name, info.params, {{"source", "lbvh"}}).to_string();
   const std::string after = own.substr(own.rfind(')') + 1);
-  for (const char* unused : {"bins=", "min_leaf=", "source_c_trav_scale=", "reinsert_iterations="})
+  for (const char* unused :
+       {"bins=", "min_leaf=", "size_split=", "source_c_trav_scale=", "reinsert_iterations="})
     EXPECT_EQ(after.find(unused), std::string::npos) << own;
   EXPECT_NE(after.find("max_leaf="), std::string::npos) << own;
   const std::string shared = resolve_params(info.name, info.params, {}).to_string();
@@ -221,6 +222,12 @@ TEST(Collapse, ASourceWithParametersOfItsOwnIsCollapsedAsGiven) {
   const std::string sweep_bins = error_of({{"source", "sweep_sah"}, {"bins", "4"}});
   EXPECT_NE(sweep_bins.find("not to source=sweep_sah; sweep_sah has no bins"), std::string::npos)
       << sweep_bins;
+  // The collapse's own sbvh build keeps sbvh's size_split; the message says how to set it.
+  const std::string sbvh_sizes = error_of({{"source", "sbvh"}, {"size_split", "1"}});
+  EXPECT_NE(sbvh_sizes.find("the collapse's own sbvh build keeps sbvh's default; give sbvh its own "
+                            "(source.size_split=...)"),
+            std::string::npos)
+      << sbvh_sizes;
 }
 
 TEST(Collapse, OverflowingCostsKeepInnerNodesWhereLeavesWouldBeTooLarge) {

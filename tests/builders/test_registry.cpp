@@ -67,7 +67,7 @@ TEST(BuilderRegistry, BottomUpAndPresplitDefaultsAppearInCsvForm) {
   EXPECT_EQ(defaults("lbvh"), "bits=30;hierarchy=apetrei;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
   EXPECT_EQ(defaults("ploc"), "radius=16;bits=30;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1");
   EXPECT_EQ(defaults("presplit"),
-            "split_budget=0.3;bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;size_split=1");
+            "split_budget=0.3;bins=32;adaptive_bins=1;min_leaf=1;max_leaf=8;c_trav=1;c_isect=1;size_split=0");
   const auto& lbvh = find_builder("lbvh");
   expect_error(
       [&] {

@@ -44,7 +44,7 @@ namespace sahbench {
 struct TopDownConfig {
   uint32_t min_leaf = 1;  ///< nodes with this many primitives or fewer become leaves
   uint32_t max_leaf = 8;  ///< nodes with more are split even where the SAH prefers a leaf
-  SahCost cost;
+  SahCost cost{};
   /// Children per inner node, 2 to 8. Above 2, a node's children are found by splitting, again and
   /// again, the child of largest surface area until there are `arity` of them or none can be split
   /// (the direct wide build of Wald, Benthin and Boulos 2008, "Getting Rid of Packets", and of

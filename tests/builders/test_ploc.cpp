@@ -1,6 +1,7 @@
-// The PLOC builder: its clustering against a plain serial transcription of Meister and Bittner's loop,
-// the same tree byte for byte on one and two threads, identical boxes, and a chain of exponentially
-// spaced triangles deeper than the kernels allow. (The shared scene cases run through BuilderVsReference.)
+// The PLOC builder: its clustering against a plain serial transcription of Meister and Bittner's loop and,
+// at a radius over every cluster, against global greedy clustering; the same tree byte for byte on one
+// and two threads, identical boxes, and a chain of exponentially spaced triangles deeper than the kernels
+// allow. (The shared scene cases run through BuilderVsReference.)
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -133,8 +134,9 @@ TEST(Ploc, WithARadiusOverEveryClusterBuildsTheGlobalGreedyTree) {
   // Merged-box area never falls as a cluster grows, so merging mutual nearest neighbours gives the tree
   // that merging the closest pair first gives (Walter et al. 2008; Meister and Bittner 2018, section 3):
   // a check of the clustering against another algorithm, where the test above transcribes the same one.
-  // Boxes and meshes tie where one box lies in two others' merged box, and then the two algorithms break
-  // the tie differently: small random triangles in a volume and, flattened, on a sheet.
+  // Two candidates tie where their merged boxes with a cluster are one box (both lie inside it, as a
+  // mesh's neighbours often do), and the two algorithms break ties differently: so small random
+  // triangles, in a volume and, flattened, on a sheet.
   std::vector<Triangle> sheet = test::random_triangles(250, 6);
   for (Triangle& t : sheet)
     for (Vec3* v : {&t.v0, &t.v1, &t.v2}) v->y *= 0.05f;

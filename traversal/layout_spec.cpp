@@ -73,6 +73,7 @@ std::string LayoutSpec::text() const {
   if (variant.any_hit != defaults.any_hit) add("anyhit", to_string(variant.any_hit));
   if (isa != KernelIsa::kAuto) add("isa", to_string(isa));
   if (packet != 1) add("packet", std::to_string(packet));
+  if (!shadow_cache) add("shadow_cache", "off");
   return name + options;
 }
 
@@ -87,8 +88,8 @@ LayoutSpec parse_layout_spec(std::string_view text) {
   // The binary layouts take `isa` with `packet` only: it picks their packet kernels' build, while
   // their single-ray kernel has one, the baseline's.
   const bool takes_isa = info.has_isa || info.has_packet;
-  const std::string keys =
-      std::string("tri, box, anyhit") + (takes_isa ? ", isa" : "") + (info.has_packet ? ", packet" : "");
+  const std::string keys = std::string("tri, box, anyhit") + (takes_isa ? ", isa" : "") +
+                           (info.has_packet ? ", packet" : "") + (info.has_isa ? ", shadow_cache" : "");
   std::string_view rest = text.substr(colon + 1);
   std::vector<std::string> seen;
   while (true) {
@@ -125,12 +126,18 @@ LayoutSpec parse_layout_spec(std::string_view text) {
         spec.packet = static_cast<uint32_t>(std::stoul(value));
       else
         throw Error(where + ": packet = '" + value + "' is not one of 1, 8, 16");
+    } else if (key == "shadow_cache" && info.has_isa) {
+      if (value != "on" && value != "off")
+        throw Error(where + ": shadow_cache = '" + value + "' is not on or off");
+      spec.shadow_cache = value == "on";
     } else {
       throw Error(where + ": unknown option '" + key + "' (known: " + keys + ")");
     }
     if (comma == std::string_view::npos) break;
     rest = rest.substr(comma + 1);
   }
+  if (spec.packet != 1 && std::find(seen.begin(), seen.end(), "shadow_cache") != seen.end())
+    throw Error(where + ": shadow_cache applies to the single-ray kernels (packet=1), not to packets");
   if (!info.has_isa && spec.isa != KernelIsa::kAuto && spec.packet == 1)
     throw Error(where + ": isa picks the build of " + spec.name +
                 "'s packet kernels; its single-ray kernel has one build (add packet=8 or packet=16)");

@@ -242,6 +242,9 @@ struct WideBatch {
   IntOrder int_order = IntOrder::kNone;
   /// box=fma: some rays take the robust box test (WideRay::robust_box).
   bool robust_box = false;
+  /// Any hit, single-ray kernels: test first the leaf that blocked the last ray to the same end point
+  /// (wide_kernels.inl: ShadowCache; LayoutSpec::shadow_cache).
+  bool shadow_cache = false;
 };
 
 using WideKernel = void (*)(const WideBatch&);

@@ -1122,6 +1122,8 @@ class WideWalk {
   float best_t() const { return best_t_; }
   /// Any hit: whether the walk ended on a hit.
   bool found_any() const { return found_any_; }
+  /// Any hit, once found_any(): the leaf whose triangle ended the walk.
+  const WideStackEntry& leaf() const { return entry_; }
 
  private:
   const WideUnit* arena_;
@@ -1140,23 +1142,27 @@ class WideWalk {
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
           IntOrder kInt>
 SAHBENCH_KERNEL_INLINE bool trace_subtree(const WideUnit* arena, const WideRay& r, WideStackEntry entry,
-                                          Hit& best, float& best_t, WideCounts* counts) {
+                                          Hit& best, float& best_t, WideCounts* counts,
+                                          WideStackEntry* leaf = nullptr) {
   WideWalk<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt> walk(arena, r, entry, best, best_t, counts);
   while (walk.step()) {
   }
   best = walk.best();
   best_t = walk.best_t();
+  if (leaf && walk.found_any()) *leaf = walk.leaf();
   return walk.found_any();
 }
 
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
           IntOrder kInt>
-inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const WideRay& r, WideCounts* counts) {
+inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const WideRay& r, WideCounts* counts,
+                     WideStackEntry* leaf = nullptr) {
   Hit best;
   float t_root;
   if (!intersect_root<kBox>(root_planes, r, t_root)) return best;
   float best_t = r.tmax;
-  trace_subtree<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(arena, r, {0, 0, t_root}, best, best_t, counts);
+  trace_subtree<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(arena, r, {0, 0, t_root}, best, best_t, counts,
+                                                              leaf);
   return best;
 }
 
@@ -1165,15 +1171,18 @@ inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const Wide
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
           IntOrder kInt>
 inline void trace_ray_pair(const float* root_planes, const WideUnit* arena, const WideRay& r0,
-                           const WideRay& r1, WideCounts* counts, Hit& hit0, Hit& hit1) {
+                           const WideRay& r1, WideCounts* counts, Hit& hit0, Hit& hit1,
+                           WideStackEntry* leaf0 = nullptr, WideStackEntry* leaf1 = nullptr) {
   using Walk = WideWalk<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>;
   float t0, t1;
   const bool in0 = intersect_root<kBox>(root_planes, r0, t0), in1 = intersect_root<kBox>(root_planes, r1, t1);
   if (!in0 || !in1) {
     hit0 =
-        in0 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r0, counts) : Hit{};
+        in0 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r0, counts, leaf0)
+            : Hit{};
     hit1 =
-        in1 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r1, counts) : Hit{};
+        in1 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r1, counts, leaf1)
+            : Hit{};
     return;
   }
   Walk a(arena, r0, {0, 0, t0}, Hit{}, r0.tmax, counts), b(arena, r1, {0, 0, t1}, Hit{}, r1.tmax, counts);
@@ -1186,6 +1195,141 @@ inline void trace_ray_pair(const float* root_planes, const WideUnit* arena, cons
   while (more_b) more_b = b.step();
   hit0 = a.best();
   hit1 = b.best();
+  if (leaf0 && a.found_any()) *leaf0 = a.leaf();
+  if (leaf1 && b.found_any()) *leaf1 = b.leaf();
+}
+
+// A shadow cache (Haines and Greenberg, "The Light Buffer: A Shadow-Testing Accelerator", IEEE CG&A
+// 6(9), 1986: test first the object that blocked the last shadow ray towards the same light). Rays that
+// end at one point, as a point light's shadow rays do, are keyed by that point, and the leaf that ended
+// the last such ray's walk is tested before walking the tree. The answer cannot change: a triangle the
+// leaf test hits in [tmin, tmax] occludes the ray however it is found.
+class ShadowCache {
+ public:
+  static constexpr int kSlots = 8;
+
+  /// The slot of the point where `r` ends: that of an earlier ray ending there (within a thousandth of
+  /// the longer reach along an axis), else a new one; -1 once kSlots other points hold every slot.
+  SAHBENCH_KERNEL_INLINE int slot(const WideRay& r) {
+    float e[3], reach = 0.0f;
+    for (int a = 0; a < 3; ++a) {
+      const float d = r.dir[a] * r.tmax;
+      e[a] = r.org[a] + d;
+      reach = __builtin_fmaxf(reach, __builtin_fabsf(d));
+    }
+    const float tol = kTolerance * reach;
+    // Shadow rays usually take their lights in turn: the ray `used_` rays back most likely shares this
+    // one's end point.
+    int k = used_ != 0 ? recent_[(rays_ - used_) % kRecent] : -1;
+    if (k < 0 || !ends_at(k, e, tol)) {
+      k = -1;
+      for (int j = 0; j < used_; ++j)
+        if (ends_at(j, e, tol)) {
+          k = j;
+          break;
+        }
+      if (k < 0) {
+        if (used_ == kSlots) return -1;
+        k = used_++;
+        for (int a = 0; a < 3; ++a) end_[k][a] = e[a];
+        leaf_[k].count = 0;
+        tests_[k] = served_[k] = 0;
+        retired_[k] = false;
+      }
+    }
+    recent_[rays_++ % kRecent] = static_cast<int8_t>(k);
+    return k;
+  }
+
+  /// The leaf to test first for rays of slot k; count 0 when there is none.
+  const WideStackEntry& leaf(int k) const { return leaf_[k]; }
+  /// The leaf that ended the walk of a ray of slot k.
+  void remember(int k, const WideStackEntry& leaf) {
+    if (!retired_[k]) leaf_[k] = leaf;
+  }
+  /// Whether slot k's leaf settled the ray it was tested on. A slot whose leaves settle fewer than a quarter
+  /// of kWindow tests in a row is tested no more in this batch: where occluders change from ray to ray (a
+  /// terrain's), each failed test only adds to the walk.
+  SAHBENCH_KERNEL_INLINE void tested(int k, bool settled) {
+    served_[k] += settled;
+    if (++tests_[k] < kWindow) return;
+    if (served_[k] < kWindow / 4) {
+      retired_[k] = true;
+      leaf_[k].count = 0;
+    }
+    tests_[k] = served_[k] = 0;
+  }
+
+ private:
+  static constexpr float kTolerance = 1e-3f;
+  static constexpr uint8_t kWindow = 16;
+  static constexpr uint32_t kRecent = 16;  // a power of two above kSlots
+
+  SAHBENCH_KERNEL_INLINE bool ends_at(int k, const float* e, float tol) const {
+    const float d = __builtin_fmaxf(
+        __builtin_fmaxf(__builtin_fabsf(end_[k][0] - e[0]), __builtin_fabsf(end_[k][1] - e[1])),
+        __builtin_fabsf(end_[k][2] - e[2]));
+    return d <= tol;
+  }
+
+  float end_[kSlots][3];
+  WideStackEntry leaf_[kSlots];
+  uint8_t tests_[kSlots], served_[kSlots];
+  bool retired_[kSlots];
+  int8_t recent_[kRecent];
+  uint32_t rays_ = 0;
+  int used_ = 0;
+};
+
+// Any hit through a ShadowCache, from the batch's first ray until one ends at a point no slot takes (then
+// the batch is not rays to a few points, and the caller traces the rest as before, from the index this
+// returns). The rays the cached leaf does not settle are traced two at a time (trace_ray_pair). Out of
+// line, so that the batch loop without it compiles as it would alone.
+template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrder, IntOrder kInt>
+[[gnu::noinline]] std::size_t trace_shadow_cached(const WideBatch& batch) {
+  ShadowCache cache;
+  std::size_t pending[2];
+  int pending_slot[2], n = 0;
+  auto trace_pending = [&] {
+    WideStackEntry leaf[2];
+    Hit hit[2];
+    if (n == 2)
+      trace_ray_pair<N, kTri, kBox, true, false, kOrder, kInt>(batch.root_planes, batch.arena,
+                                                               batch.rays[pending[0]], batch.rays[pending[1]],
+                                                               nullptr, hit[0], hit[1], &leaf[0], &leaf[1]);
+    else
+      hit[0] = trace_ray<N, kTri, kBox, true, false, kOrder, kInt>(batch.root_planes, batch.arena,
+                                                                   batch.rays[pending[0]], nullptr, &leaf[0]);
+    for (int j = 0; j < n; ++j) {
+      const bool occluded = hit[j].prim != kInvalidPrim;
+      batch.occluded[pending[j]] = occluded;
+      if (occluded) cache.remember(pending_slot[j], leaf[j]);
+    }
+    n = 0;
+  };
+  std::size_t i = 0;
+  for (; i < batch.count; ++i) {
+    const WideRay& r = batch.rays[i];
+    const int k = cache.slot(r);
+    if (k < 0) break;
+    const WideStackEntry& leaf = cache.leaf(k);
+    if (leaf.count != 0) {
+      Hit hit;
+      float best_t = r.tmax;
+      const bool settled = intersect_leaf<kTri, true, false>(&at<BlockOf<kTri>>(batch.arena, leaf.child),
+                                                             leaf.count, r, hit, best_t, nullptr);
+      cache.tested(k, settled);
+      if (settled) {
+        batch.occluded[i] = 1;
+        continue;
+      }
+    }
+    pending[n] = i;
+    pending_slot[n++] = k;
+    if (n == 2) trace_pending();
+  }
+  if (n != 0) trace_pending();
+  return i;
 }
 
 // The integer order (kInt) is chosen for a whole batch, the lowest of its rays' (WideBatch::int_order):
@@ -1212,6 +1356,9 @@ void trace_batch(const WideBatch& batch) {
     if (kBox != BoxTestKind::kFma || rays == kAllRays) {
       if constexpr (kCount) batch.counts->rays += batch.count;
       std::size_t i = 0;
+      if constexpr (kAnyHit && !kCount) {
+        if (batch.shadow_cache) i = trace_shadow_cached<N, kTri, kRayBox, kOrder, kInt>(batch);
+      }
       for (; i + 1 < batch.count; i += 2) {
         Hit h0, h1;
         trace_ray_pair<N, kTri, kRayBox, kAnyHit, kCount, kOrder, kInt>(

@@ -21,13 +21,14 @@ template <uint32_t N>
 class WideLayout final : public CompiledLayout {
  public:
   WideLayout(WideBvh<N> bvh, std::size_t triangle_count, KernelIsa isa, const KernelVariant& variant,
-             AnyHitOrder any_hit_order, uint32_t packet)
+             AnyHitOrder any_hit_order, uint32_t packet, bool shadow_cache)
       : bvh_(std::move(bvh)),
         triangle_count_(triangle_count),
         isa_(isa),
         shear_(variant.triangle == TriangleTestKind::kWatertight),
         box_(variant.box),
-        any_hit_order_(any_hit_order) {
+        any_hit_order_(any_hit_order),
+        shadow_cache_(shadow_cache && packet == 1) {
     if (bvh_.form != block_form_for(variant.triangle))
       throw Error("layout bvh" + std::to_string(N) + ": blocks compiled in the wrong form for the " +
                   std::string(to_string(variant.triangle)) + " test");
@@ -82,7 +83,7 @@ class WideLayout final : public CompiledLayout {
         const std::size_t n = std::min(kWideChunk, end - i);
         const WideRaysInfo info = make_wide_rays(rays.subspan(i, n), setup, shear_, box_);
         kernel(WideBatch{bvh_.root_planes, bvh_.arena.data(), setup, n, nullptr, nullptr, nullptr,
-                         any_hit_order_, info.int_order, info.robust_box},
+                         any_hit_order_, info.int_order, info.robust_box, shadow_cache_},
                i);
       }
     });
@@ -116,6 +117,7 @@ class WideLayout final : public CompiledLayout {
   bool shear_;  // the rays need the watertight shear (make_wide_ray)
   BoxTestKind box_;
   AnyHitOrder any_hit_order_;  // resolved (bvh2_traversal.h: resolve_any_hit_order)
+  bool shadow_cache_;          // LayoutSpec::shadow_cache, single-ray kernels only
   WideKernel closest_ = nullptr, any_ = nullptr, count_closest_ = nullptr, count_any_ = nullptr;
 };
 
@@ -129,10 +131,10 @@ std::unique_ptr<CompiledLayout> compile_wide_layout(uint32_t width, const Bvh& b
   const BlockForm form = block_form_for(spec.variant.triangle);
   if (width == 4)
     return std::make_unique<WideLayout<4>>(compile_wide<4>(bvh, triangles, form), triangles.size(), isa,
-                                           spec.variant, any_hit_order, spec.packet);
+                                           spec.variant, any_hit_order, spec.packet, spec.shadow_cache);
   if (width == 8)
     return std::make_unique<WideLayout<8>>(compile_wide<8>(bvh, triangles, form), triangles.size(), isa,
-                                           spec.variant, any_hit_order, spec.packet);
+                                           spec.variant, any_hit_order, spec.packet, spec.shadow_cache);
   throw Error("no " + std::to_string(width) + "-wide layout");
 }
 

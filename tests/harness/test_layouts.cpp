@@ -151,6 +151,9 @@ TEST_P(LayoutVsReference, EveryVariantMatchesTheScalarKernelOnTheSameTreeAndBrut
     for (const Ray& r : test::diverging_rays(scene.triangles, 400, 8, kMaxWidePacket)) rays.push_back(r);
     for (const Ray& r : test::interleaved_rays(scene.triangles, 6 * 4 * kMaxWidePacket, 9, kMaxWidePacket, 4))
       rays.push_back(r);
+    // Shadow rays to four points, ray i to point i % 4, two whole chunks of the wide layouts' 256 rays
+    // among them: the wide kernels test the leaf that blocked the last ray to the same point first.
+    for (const Ray& r : test::shadow_rays(scene.triangles, 36 * kMaxWidePacket, 10, 4)) rays.push_back(r);
     // An odd count: the binary layouts trace rays in groups of eight walks, the last group partial; and the
     // packet layouts' last packet holds 7 rays, its other lanes unused.
     for (const Ray& r : test::coherent_rays(scene.triangles, 7, 7, 7)) rays.push_back(r);
@@ -602,6 +605,54 @@ TEST(Layouts, PacketsOfOneRayEnterTheBoxesItGrazesAtAVertex) {
   SAHBENCH_REPORT_SKIPS(skips);
 }
 
+// The shadow cache (wide_kernels.inl: ShadowCache) changes how an any-hit answer is found, never the answer:
+// on rays to one, four and nine points (more than it has slots: it gives up within the first chunk), rays
+// to points that change within a chunk, and rays without an end point (tmax infinite), every answer is the
+// walk's alone and, for the default variant, brute force's.
+TEST(Layouts, ShadowCacheAnswersAsTheWalkAlone) {
+  test::Skips skips;
+  const std::string best(to_string(best_kernel_isa()));
+  const BuilderInfo& builder = find_builder("wide_collapse");
+  for (const auto& [name, triangles] :
+       {std::pair<std::string, std::vector<Triangle>>{"cube_grid", test::cube_grid(12, 2.0f)},
+        {"random2000", test::random_triangles(2000, 41)}}) {
+    SCOPED_TRACE(name);
+    std::vector<Ray> rays;
+    for (std::size_t lights : {1, 4, 9, 4})
+      for (const Ray& r : test::shadow_rays(triangles, 700, 50 + lights, lights)) rays.push_back(r);
+    // Rays to other points and without an end in the middle of a chunk, then shadow rays again.
+    const std::vector<Ray> others = test::random_rays(triangles, 300, 51);
+    rays.insert(rays.begin() + 1000, others.begin(), others.end());
+    for (const Ray& r : test::shadow_rays(triangles, 300, 52, 2)) rays.push_back(r);
+    std::vector<uint8_t> reference(rays.size());
+    for (std::size_t i = 0; i < rays.size(); ++i) reference[i] = brute_force_any(triangles, rays[i]);
+    const auto blocked = std::count(reference.begin(), reference.end(), 1);
+    ASSERT_GT(blocked, 500);
+    ASSERT_LT(blocked, static_cast<long>(rays.size()) - 500);
+
+    for (const std::string arity : {"4", "8"}) {
+      const Bvh bvh = builder.build(BuildInput::from_triangles(triangles),
+                                    resolve_params("wide_collapse", builder.params, {{"arity", arity}}));
+      for (const std::string variant : {"", "tri=mtn,box=fma,", "tri=mt0,box=fast,anyhit=nearest,"})
+        for (const std::string& isa : {std::string("scalar"), best}) {
+          const std::string spec = "bvh" + arity + ":" + variant + "isa=" + isa;
+          SCOPED_TRACE(spec);
+          const LayoutSpec on = parse_layout_spec(spec), off = parse_layout_spec(spec + ",shadow_cache=off");
+          ASSERT_TRUE(on.shadow_cache);
+          ASSERT_FALSE(off.shadow_cache);
+          std::vector<uint8_t> cached(rays.size()), walked(rays.size());
+          compile_layout(on, bvh, triangles)->trace_any(rays, cached);
+          compile_layout(off, bvh, triangles)->trace_any(rays, walked);
+          for (std::size_t i = 0; i < rays.size(); ++i) {
+            ASSERT_EQ(cached[i], walked[i]) << "ray " << i;
+            if (variant.empty()) ASSERT_EQ(cached[i], reference[i]) << "ray " << i;
+          }
+        }
+    }
+  }
+  SAHBENCH_REPORT_SKIPS(skips);
+}
+
 TEST(Layouts, RefitRejectsADifferentTriangleCount) {
   const auto tris = test::random_triangles(100, 2);
   const Bvh binary = find_builder("binned_sah")
@@ -710,10 +761,18 @@ TEST(Layouts, SpecsParseToCanonicalTextAndRejectBadOptionsByName) {
   EXPECT_NE(error_of("bvh2:isa=sse,packet=8").find("no sse kernels for packet=8"), std::string::npos);
   EXPECT_NE(error_of("bvh2_packed:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
   EXPECT_NE(error_of("bvh2:packet").find("(keys: tri, box, anyhit, isa, packet)"), std::string::npos);
-  EXPECT_NE(error_of("bvh8:packet").find("(keys: tri, box, anyhit, isa, packet)"), std::string::npos);
   EXPECT_NE(error_of("bvh8:isa=neon").find("isa = 'neon'"), std::string::npos);
   EXPECT_NE(error_of("bvh8:packet=4").find("packet = '4' is not one of 1, 8, 16"), std::string::npos);
   EXPECT_EQ(parse_layout_spec("bvh2:packet=8").packet, 8u);
+  // The shadow cache: on by default, off by name, for the wide layouts' single-ray kernels only.
+  EXPECT_EQ(parse_layout_spec("bvh8:shadow_cache=on").text(), "bvh8");
+  EXPECT_EQ(parse_layout_spec("bvh4:shadow_cache=off,tri=mt").text(), "bvh4:tri=mt,shadow_cache=off");
+  EXPECT_NE(error_of("bvh8:shadow_cache=no").find("shadow_cache = 'no' is not on or off"), std::string::npos);
+  EXPECT_NE(error_of("bvh2:shadow_cache=off").find("unknown option 'shadow_cache'"), std::string::npos);
+  EXPECT_NE(error_of("bvh8:packet=8,shadow_cache=off").find("shadow_cache applies to the single-ray kernels"),
+            std::string::npos);
+  EXPECT_NE(error_of("bvh8:packet").find("(keys: tri, box, anyhit, isa, packet, shadow_cache)"),
+            std::string::npos);
   EXPECT_NE(error_of("bvh8:box").find("'box' is not of the form key=value"), std::string::npos);
   EXPECT_NE(error_of("bvh8:box=fast,box=robust").find("'box' is given twice"), std::string::npos);
 }

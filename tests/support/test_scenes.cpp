@@ -205,4 +205,31 @@ std::vector<Ray> interleaved_rays(const std::vector<Triangle>& scene, std::size_
   return rays;
 }
 
+std::vector<Ray> shadow_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
+                             std::size_t lights) {
+  Aabb box;
+  for (const auto& t : scene) box.extend(t.bounds());
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::uniform_int_distribution<std::size_t> pick(0, scene.size() - 1);
+  std::vector<Vec3> light(lights);
+  for (Vec3& l : light)
+    l = box.min - box.extent() * 0.25f + box.extent() * 1.5f * Vec3{unit(rng), unit(rng), unit(rng)};
+  light.back() = scene[pick(rng)].v1;
+  std::vector<Ray> rays(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Triangle& t = scene[pick(rng)];
+    float a = unit(rng), b = unit(rng);
+    if (a + b > 1.0f) a = 1.0f - a, b = 1.0f - b;
+    Ray& r = rays[i];
+    const Vec3& l = light[i % lights];
+    r.org = t.v0 + (t.v1 - t.v0) * a + (t.v2 - t.v0) * b;
+    if (i % 5 == 0) r.org[i / 5 % 3] = l[i / 5 % 3];
+    r.dir = l - r.org;
+    r.tmin = i % 2 ? 0.0f : 1e-4f;
+    r.tmax = 1.0f - 1e-4f;
+  }
+  return rays;
+}
+
 }  // namespace sahbench::test

@@ -45,4 +45,11 @@ std::vector<Ray> diverging_rays(const std::vector<Triangle>& scene, std::size_t 
 std::vector<Ray> interleaved_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
                                   std::size_t group, std::size_t streams);
 
+/// Shadow rays as a point-light set makes them: from points on the scene's triangles to `lights` points in
+/// and around its box, ray i to light i % lights, unnormalised (t in [tmin, 1 - 1e-4]), tmin 0 or just
+/// above it; every fifth ray starts level with its light on one axis (a +0 direction component), and the
+/// last light sits on a vertex of the scene.
+std::vector<Ray> shadow_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
+                             std::size_t lights);
+
 }  // namespace sahbench::test

@@ -245,6 +245,8 @@ struct WideBatch {
   /// Any hit, single-ray kernels: test first the leaf that blocked the last ray to the same end point
   /// (wide_kernels.inl: ShadowCache; LayoutSpec::shadow_cache).
   bool shadow_cache = false;
+  /// For the tests: where set, counts the rays the shadow cache settled.
+  std::size_t* shadow_cache_settled = nullptr;
 };
 
 using WideKernel = void (*)(const WideBatch&);

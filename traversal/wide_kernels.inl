@@ -820,6 +820,14 @@ struct WideStackEntry {
   float t_entry;
 };
 
+// Where an any-hit walk found its hit: the leaf (`count` blocks from `leaf`), and the last inner node the
+// walk visited, most often the leaf's parent, whose subtree holds the leaf's neighbours (ShadowCache).
+struct Occluder {
+  uint32_t leaf;
+  uint32_t count;
+  uint32_t node;
+};
+
 // Stack bound: compile_wide() rejects wide nodes deeper than kMaxDepth - 1, and popping a node then
 // pushing its at most N children leaves at most N - 1 entries per level, so (N - 1) kMaxDepth + 1 entries
 // suffice: 449 for N = 8.
@@ -1101,6 +1109,7 @@ class WideWalk {
       // that it arrives with the planes rather than one memory latency after them.
       __builtin_prefetch(node.child);
       if constexpr (kCount) ++counts_->inner_visits;
+      if constexpr (kAnyHit) node_ = entry_.child;
       alignas(32) float t_entry[N];
       const uint32_t mask = intersect_children<N, kBox, kInt>(node, r_, slabs_, r_.tmin, best_t_, t_entry);
       if (mask != 0) {
@@ -1122,8 +1131,8 @@ class WideWalk {
   float best_t() const { return best_t_; }
   /// Any hit: whether the walk ended on a hit.
   bool found_any() const { return found_any_; }
-  /// Any hit, once found_any(): the leaf whose triangle ended the walk.
-  const WideStackEntry& leaf() const { return entry_; }
+  /// Any hit, once found_any(): where the walk found its hit.
+  Occluder occluder() const { return {entry_.child, entry_.count, node_}; }
 
  private:
   const WideUnit* arena_;
@@ -1134,6 +1143,7 @@ class WideWalk {
   float best_t_;
   [[maybe_unused]] WideCounts* counts_;
   uint32_t size_ = 0;
+  uint32_t node_ = 0;
   bool found_any_ = false;
   WideStackEntry stack_[kWideStackCapacity];
 };
@@ -1143,26 +1153,26 @@ template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, boo
           IntOrder kInt>
 SAHBENCH_KERNEL_INLINE bool trace_subtree(const WideUnit* arena, const WideRay& r, WideStackEntry entry,
                                           Hit& best, float& best_t, WideCounts* counts,
-                                          WideStackEntry* leaf = nullptr) {
+                                          Occluder* occluder = nullptr) {
   WideWalk<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt> walk(arena, r, entry, best, best_t, counts);
   while (walk.step()) {
   }
   best = walk.best();
   best_t = walk.best_t();
-  if (leaf && walk.found_any()) *leaf = walk.leaf();
+  if (occluder && walk.found_any()) *occluder = walk.occluder();
   return walk.found_any();
 }
 
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, bool kCount, AnyHitOrder kOrder,
           IntOrder kInt>
 inline Hit trace_ray(const float* root_planes, const WideUnit* arena, const WideRay& r, WideCounts* counts,
-                     WideStackEntry* leaf = nullptr) {
+                     Occluder* occluder = nullptr) {
   Hit best;
   float t_root;
   if (!intersect_root<kBox>(root_planes, r, t_root)) return best;
   float best_t = r.tmax;
   trace_subtree<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(arena, r, {0, 0, t_root}, best, best_t, counts,
-                                                              leaf);
+                                                              occluder);
   return best;
 }
 
@@ -1172,17 +1182,17 @@ template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, boo
           IntOrder kInt>
 inline void trace_ray_pair(const float* root_planes, const WideUnit* arena, const WideRay& r0,
                            const WideRay& r1, WideCounts* counts, Hit& hit0, Hit& hit1,
-                           WideStackEntry* leaf0 = nullptr, WideStackEntry* leaf1 = nullptr) {
+                           Occluder* occluder0 = nullptr, Occluder* occluder1 = nullptr) {
   using Walk = WideWalk<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>;
   float t0, t1;
   const bool in0 = intersect_root<kBox>(root_planes, r0, t0), in1 = intersect_root<kBox>(root_planes, r1, t1);
   if (!in0 || !in1) {
-    hit0 =
-        in0 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r0, counts, leaf0)
-            : Hit{};
-    hit1 =
-        in1 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r1, counts, leaf1)
-            : Hit{};
+    hit0 = in0 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r0, counts,
+                                                                         occluder0)
+               : Hit{};
+    hit1 = in1 ? trace_ray<N, kTri, kBox, kAnyHit, kCount, kOrder, kInt>(root_planes, arena, r1, counts,
+                                                                         occluder1)
+               : Hit{};
     return;
   }
   Walk a(arena, r0, {0, 0, t0}, Hit{}, r0.tmax, counts), b(arena, r1, {0, 0, t1}, Hit{}, r1.tmax, counts);
@@ -1195,21 +1205,25 @@ inline void trace_ray_pair(const float* root_planes, const WideUnit* arena, cons
   while (more_b) more_b = b.step();
   hit0 = a.best();
   hit1 = b.best();
-  if (leaf0 && a.found_any()) *leaf0 = a.leaf();
-  if (leaf1 && b.found_any()) *leaf1 = b.leaf();
+  if (occluder0 && a.found_any()) *occluder0 = a.occluder();
+  if (occluder1 && b.found_any()) *occluder1 = b.occluder();
 }
 
 // A shadow cache (Haines and Greenberg, "The Light Buffer: A Shadow-Testing Accelerator", IEEE CG&A
 // 6(9), 1986: test first the object that blocked the last shadow ray towards the same light). Rays that
-// end at one point, as a point light's shadow rays do, are keyed by that point, and the leaf that ended
-// the last such ray's walk is tested before walking the tree. The answer cannot change: a triangle the
-// leaf test hits in [tmin, tmax] occludes the ray however it is found.
+// end at one point, as a point light's shadow rays do, are keyed by that point; before a ray's walk, the
+// leaf where the last such ray found its hit is tested, then the subtree of the last inner node that walk
+// visited (its neighbours, which block the next ray where the leaf itself does not). With the robust box
+// test the answer cannot change: a triangle the leaf test hits in [tmin, tmax] occludes the ray however
+// it is found, and the walk's box tests never cull a leaf the ray reaches. A non-robust box test may cull
+// a leaf whose triangle the ray grazes, and the cache then finds that hit where the walk would not.
 class ShadowCache {
  public:
   static constexpr int kSlots = 8;
 
   /// The slot of the point where `r` ends: that of an earlier ray ending there (within a thousandth of
-  /// the longer reach along an axis), else a new one; -1 once kSlots other points hold every slot.
+  /// the longer of the two rays' reach along an axis), else a new one; -1 once kSlots other points hold
+  /// every slot, or where the ray has no finite end (an unbounded ray's reach overflows).
   SAHBENCH_KERNEL_INLINE int slot(const WideRay& r) {
     float e[3], reach = 0.0f;
     for (int a = 0; a < 3; ++a) {
@@ -1218,6 +1232,7 @@ class ShadowCache {
       reach = __builtin_fmaxf(reach, __builtin_fabsf(d));
     }
     const float tol = kTolerance * reach;
+    if (!(tol < __builtin_inff())) return -1;
     // Shadow rays usually take their lights in turn: the ray `used_` rays back most likely shares this
     // one's end point.
     int k = used_ != 0 ? recent_[(rays_ - used_) % kRecent] : -1;
@@ -1230,34 +1245,41 @@ class ShadowCache {
         }
       if (k < 0) {
         if (used_ == kSlots) return -1;
-        k = used_++;
-        for (int a = 0; a < 3; ++a) end_[k][a] = e[a];
-        leaf_[k].count = 0;
-        tests_[k] = served_[k] = 0;
-        retired_[k] = false;
+        k = open(e, tol);
       }
     }
     recent_[rays_++ % kRecent] = static_cast<int8_t>(k);
     return k;
   }
 
-  /// The leaf to test first for rays of slot k; count 0 when there is none.
-  const WideStackEntry& leaf(int k) const { return leaf_[k]; }
-  /// The leaf that ended the walk of a ray of slot k.
-  void remember(int k, const WideStackEntry& leaf) {
-    if (!retired_[k]) leaf_[k] = leaf;
+  /// Whether the batch's first 2 kSlots rays end at kSlots points or fewer: a look that traces nothing,
+  /// so that a batch of AO or diffuse rays never runs the cache's loop, whose code would displace the
+  /// plain loop's from the instruction caches.
+  SAHBENCH_KERNEL_INLINE static bool takes(const WideBatch& batch) {
+    ShadowCache look;
+    const std::size_t n = batch.count < 2 * kSlots ? batch.count : 2 * kSlots;
+    for (std::size_t i = 0; i < n; ++i)
+      if (look.slot(batch.rays[i]) < 0) return false;
+    return true;
   }
-  /// Whether slot k's leaf settled the ray it was tested on. A slot whose leaves settle fewer than a quarter
-  /// of kWindow tests in a row is tested no more in this batch: where occluders change from ray to ray (a
-  /// terrain's), each failed test only adds to the walk.
+
+  /// What to test first for rays of slot k; its count is 0 when there is nothing.
+  SAHBENCH_KERNEL_INLINE const Occluder& occluder(int k) const { return occluder_[k]; }
+  /// Where the walk of a ray of slot k found its hit.
+  SAHBENCH_KERNEL_INLINE void remember(int k, const Occluder& occluder) {
+    if (!retired_[k]) occluder_[k] = occluder;
+  }
+  /// Whether slot k's occluder settled the ray it was tested on. A slot retires (is tested no more in
+  /// this batch) when its occluders settle fewer than a quarter of a run of kWindow tests: where occluders
+  /// change from ray to ray, each failed test only adds to the walk.
   SAHBENCH_KERNEL_INLINE void tested(int k, bool settled) {
-    served_[k] += settled;
+    settled_[k] += settled;
     if (++tests_[k] < kWindow) return;
-    if (served_[k] < kWindow / 4) {
+    if (settled_[k] < kWindow / 4) {
       retired_[k] = true;
-      leaf_[k].count = 0;
+      occluder_[k].count = 0;
     }
-    tests_[k] = served_[k] = 0;
+    tests_[k] = settled_[k] = 0;
   }
 
  private:
@@ -1265,45 +1287,57 @@ class ShadowCache {
   static constexpr uint8_t kWindow = 16;
   static constexpr uint32_t kRecent = 16;  // a power of two above kSlots
 
+  // A new slot for rays that end at e; the caller has checked that one is free.
+  SAHBENCH_KERNEL_INLINE int open(const float* e, float tol) {
+    const uint32_t k = static_cast<uint32_t>(used_++) % kSlots;
+    for (int a = 0; a < 3; ++a) end_[k][a] = e[a];
+    tol_[k] = tol;
+    occluder_[k].count = 0;
+    tests_[k] = settled_[k] = 0;
+    retired_[k] = false;
+    return static_cast<int>(k);
+  }
+
   SAHBENCH_KERNEL_INLINE bool ends_at(int k, const float* e, float tol) const {
     const float d = __builtin_fmaxf(
         __builtin_fmaxf(__builtin_fabsf(end_[k][0] - e[0]), __builtin_fabsf(end_[k][1] - e[1])),
         __builtin_fabsf(end_[k][2] - e[2]));
-    return d <= tol;
+    return d <= __builtin_fmaxf(tol, tol_[k]);
   }
 
   float end_[kSlots][3];
-  WideStackEntry leaf_[kSlots];
-  uint8_t tests_[kSlots], served_[kSlots];
+  float tol_[kSlots];  // of the ray that opened the slot
+  Occluder occluder_[kSlots];
+  uint8_t tests_[kSlots], settled_[kSlots];
   bool retired_[kSlots];
   int8_t recent_[kRecent];
   uint32_t rays_ = 0;
   int used_ = 0;
 };
 
-// Any hit through a ShadowCache, from the batch's first ray until one ends at a point no slot takes (then
-// the batch is not rays to a few points, and the caller traces the rest as before, from the index this
-// returns). The rays the cached leaf does not settle are traced two at a time (trace_ray_pair). Out of
-// line, so that the batch loop without it compiles as it would alone.
+// Any hit through a ShadowCache, from the batch's first ray up to the first that ends at a point no slot
+// takes (then the batch is not rays to a few points, and the caller traces the rest, that ray included,
+// from the index this returns). The rays the cache does not settle are traced two at a time
+// (trace_ray_pair). Out of line, so that the batch loop without it compiles as it would alone.
 template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrder, IntOrder kInt>
 [[gnu::noinline]] std::size_t trace_shadow_cached(const WideBatch& batch) {
   ShadowCache cache;
   std::size_t pending[2];
   int pending_slot[2], n = 0;
   auto trace_pending = [&] {
-    WideStackEntry leaf[2];
+    Occluder found[2];
     Hit hit[2];
     if (n == 2)
       trace_ray_pair<N, kTri, kBox, true, false, kOrder, kInt>(batch.root_planes, batch.arena,
                                                                batch.rays[pending[0]], batch.rays[pending[1]],
-                                                               nullptr, hit[0], hit[1], &leaf[0], &leaf[1]);
+                                                               nullptr, hit[0], hit[1], &found[0], &found[1]);
     else
-      hit[0] = trace_ray<N, kTri, kBox, true, false, kOrder, kInt>(batch.root_planes, batch.arena,
-                                                                   batch.rays[pending[0]], nullptr, &leaf[0]);
+      hit[0] = trace_ray<N, kTri, kBox, true, false, kOrder, kInt>(
+          batch.root_planes, batch.arena, batch.rays[pending[0]], nullptr, &found[0]);
     for (int j = 0; j < n; ++j) {
       const bool occluded = hit[j].prim != kInvalidPrim;
       batch.occluded[pending[j]] = occluded;
-      if (occluded) cache.remember(pending_slot[j], leaf[j]);
+      if (occluded) cache.remember(pending_slot[j], found[j]);
     }
     n = 0;
   };
@@ -1312,15 +1346,25 @@ template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrde
     const WideRay& r = batch.rays[i];
     const int k = cache.slot(r);
     if (k < 0) break;
-    const WideStackEntry& leaf = cache.leaf(k);
-    if (leaf.count != 0) {
+    const Occluder& last = cache.occluder(k);
+    if (last.count != 0) {
       Hit hit;
       float best_t = r.tmax;
-      const bool settled = intersect_leaf<kTri, true, false>(&at<BlockOf<kTri>>(batch.arena, leaf.child),
-                                                             leaf.count, r, hit, best_t, nullptr);
+      bool settled = intersect_leaf<kTri, true, false>(&at<BlockOf<kTri>>(batch.arena, last.leaf), last.count,
+                                                       r, hit, best_t, nullptr);
+      // Not from the root: that is the walk itself, which the ray takes next if this fails.
+      if (!settled && last.node != 0) {
+        Occluder found;
+        settled = trace_subtree<N, kTri, kBox, true, false, kOrder, kInt>(
+            batch.arena, r, {last.node, 0, r.tmin}, hit, best_t, nullptr, &found);
+        // The leaf found, under the same node: the subtree walk's own last node lies deeper, and testing
+        // from there would narrow the cache's reach with every hit.
+        if (settled) cache.remember(k, {found.leaf, found.count, last.node});
+      }
       cache.tested(k, settled);
       if (settled) {
         batch.occluded[i] = 1;
+        if (batch.shadow_cache_settled) ++*batch.shadow_cache_settled;
         continue;
       }
     }
@@ -1357,7 +1401,8 @@ void trace_batch(const WideBatch& batch) {
       if constexpr (kCount) batch.counts->rays += batch.count;
       std::size_t i = 0;
       if constexpr (kAnyHit && !kCount) {
-        if (batch.shadow_cache) i = trace_shadow_cached<N, kTri, kRayBox, kOrder, kInt>(batch);
+        if (batch.shadow_cache && ShadowCache::takes(batch))
+          i = trace_shadow_cached<N, kTri, kRayBox, kOrder, kInt>(batch);
       }
       for (; i + 1 < batch.count; i += 2) {
         Hit h0, h1;

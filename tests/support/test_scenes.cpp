@@ -206,7 +206,7 @@ std::vector<Ray> interleaved_rays(const std::vector<Triangle>& scene, std::size_
 }
 
 std::vector<Ray> shadow_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
-                             std::size_t lights) {
+                             std::size_t lights, bool level) {
   Aabb box;
   for (const auto& t : scene) box.extend(t.bounds());
   std::mt19937_64 rng(seed);
@@ -224,7 +224,7 @@ std::vector<Ray> shadow_rays(const std::vector<Triangle>& scene, std::size_t cou
     Ray& r = rays[i];
     const Vec3& l = light[i % lights];
     r.org = t.v0 + (t.v1 - t.v0) * a + (t.v2 - t.v0) * b;
-    if (i % 5 == 0) r.org[i / 5 % 3] = l[i / 5 % 3];
+    if (level && i % 5 == 0) r.org[i / 5 % 3] = l[i / 5 % 3];
     r.dir = l - r.org;
     r.tmin = i % 2 ? 0.0f : 1e-4f;
     r.tmax = 1.0f - 1e-4f;

@@ -47,9 +47,9 @@ std::vector<Ray> interleaved_rays(const std::vector<Triangle>& scene, std::size_
 
 /// Shadow rays as a point-light set makes them: from points on the scene's triangles to `lights` points in
 /// and around its box, ray i to light i % lights, unnormalised (t in [tmin, 1 - 1e-4]), tmin 0 or just
-/// above it; every fifth ray starts level with its light on one axis (a +0 direction component), and the
-/// last light sits on a vertex of the scene.
+/// above it; the last light sits on a vertex of the scene. With `level`, every fifth ray starts level
+/// with its light on one axis (a +0 direction component, which box=fma sends to the robust box test).
 std::vector<Ray> shadow_rays(const std::vector<Triangle>& scene, std::size_t count, uint64_t seed,
-                             std::size_t lights);
+                             std::size_t lights, bool level = true);
 
 }  // namespace sahbench::test

@@ -312,8 +312,8 @@ SAHBENCH_KERNEL_INLINE bool lane_range_holds(const TriangleBlock& b, const WideR
 // so every instruction set returns the same t as the scalar test. Any hit (kAnyHit) refines only the
 // lanes whose float decision cannot stand (lane_range_holds), as WatertightTriangleTest::intersect_any.
 template <bool kAnyHit>
-inline uint32_t refine_lanes(const TriangleBlock& b, const WideRay& r, float tmin, float tmax, uint32_t mask,
-                             float* t_out) {
+SAHBENCH_KERNEL_INLINE uint32_t refine_lanes(const TriangleBlock& b, const WideRay& r, float tmin, float tmax,
+                                             uint32_t mask, float* t_out) {
   for (uint32_t hits = mask; hits; hits &= hits - 1) {
     const uint32_t i = static_cast<uint32_t>(__builtin_ctz(hits));
     if constexpr (kAnyHit) {
@@ -821,7 +821,8 @@ struct WideStackEntry {
 };
 
 // Where an any-hit walk found its hit: the leaf (`count` blocks from `leaf`), and the last inner node the
-// walk visited, most often the leaf's parent, whose subtree holds the leaf's neighbours (ShadowCache).
+// walk visited (ShadowCache): the leaf's parent, whose subtree holds its neighbours, where the walk went
+// straight down to it; a node of a subtree the walk left empty-handed where it took the leaf off its stack.
 struct Occluder {
   uint32_t leaf;
   uint32_t count;
@@ -1252,9 +1253,9 @@ class ShadowCache {
     return k;
   }
 
-  /// Whether the batch's first 2 kSlots rays end at kSlots points or fewer: a look that traces nothing,
-  /// so that a batch of AO or diffuse rays never runs the cache's loop, whose code would displace the
-  /// plain loop's from the instruction caches.
+  /// Whether the batch's first 2 kSlots rays end at kSlots points or fewer, each at a finite one: a look
+  /// that traces nothing, so that a batch of AO or diffuse rays never runs the cache's loop, whose code
+  /// would displace the plain loop's from the instruction caches.
   SAHBENCH_KERNEL_INLINE static bool takes(const WideBatch& batch) {
     ShadowCache look;
     const std::size_t n = batch.count < 2 * kSlots ? batch.count : 2 * kSlots;
@@ -1352,6 +1353,7 @@ template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrde
       float best_t = r.tmax;
       bool settled = intersect_leaf<kTri, true, false>(&at<BlockOf<kTri>>(batch.arena, last.leaf), last.count,
                                                        r, hit, best_t, nullptr);
+      const bool by_subtree = !settled;
       // Not from the root: that is the walk itself, which the ray takes next if this fails.
       if (!settled && last.node != 0) {
         Occluder found;
@@ -1364,7 +1366,7 @@ template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrde
       cache.tested(k, settled);
       if (settled) {
         batch.occluded[i] = 1;
-        if (batch.shadow_cache_settled) ++*batch.shadow_cache_settled;
+        if (batch.shadow_cache_settled) ++batch.shadow_cache_settled[by_subtree];
         continue;
       }
     }

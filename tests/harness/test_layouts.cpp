@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <deque>
@@ -675,7 +676,9 @@ TEST(Layouts, ShadowCacheAnswersAsTheWalkAlone) {
                 continue;
               }
               ASSERT_EQ(cached[i], walked[i]) << "ray " << i;
-              if (variant.empty()) ASSERT_EQ(cached[i], reference[i]) << "ray " << i;
+              if (variant.empty()) {
+                ASSERT_EQ(cached[i], reference[i]) << "ray " << i;
+              }
             }
           });
         }
@@ -685,8 +688,9 @@ TEST(Layouts, ShadowCacheAnswersAsTheWalkAlone) {
 }
 
 // The kernels' shadow cache settles rays, so the test above compares two ways of answering: a good share of
-// shadow rays to four points (the walks behind them must have filled the slots), none of the rays that end
-// each at a point of its own (AO-like: every slot opened empty, then the batch gives up).
+// shadow rays to four points, by the leaf and by its subtree (the walks behind them must have filled the
+// slots), and none of the rays that end each at a point of its own (AO-like: the batch never runs the cache)
+// or have no finite end.
 TEST(Layouts, ShadowCacheSettlesShadowRaysAndNoOthers) {
   const auto triangles = test::cube_grid(12, 2.0f);
   const BuilderInfo& builder = find_builder("wide_collapse");
@@ -696,7 +700,7 @@ TEST(Layouts, ShadowCacheSettlesShadowRaysAndNoOthers) {
   const WideKernel kernel = find_wide_kernel(KernelIsa::kScalar, 8, KernelVariant{}, true, false);
   ASSERT_NE(kernel, nullptr);
   auto settled_by_cache = [&](const std::vector<Ray>& rays) {
-    std::size_t settled = 0;
+    std::array<std::size_t, 2> settled{};  // by the leaf, by its subtree
     std::vector<WideRay> setup(rays.size());
     std::vector<uint8_t> occluded(rays.size());
     for (std::size_t first = 0; first < rays.size(); first += 256) {
@@ -704,17 +708,33 @@ TEST(Layouts, ShadowCacheSettlesShadowRaysAndNoOthers) {
       const WideRaysInfo info =
           make_wide_rays(std::span(rays).subspan(first, n), setup.data(), true, BoxTestKind::kRobust);
       kernel(WideBatch{wide.root_planes, wide.arena.data(), setup.data(), n, nullptr, occluded.data() + first,
-                       nullptr, resolve_any_hit_order(bvh), info.int_order, info.robust_box, true, &settled});
+                       nullptr, resolve_any_hit_order(bvh), info.int_order, info.robust_box, true,
+                       settled.data()});
     }
     for (std::size_t i = 0; i < rays.size(); ++i)
       EXPECT_EQ(occluded[i], brute_force_any(triangles, rays[i])) << "ray " << i;
     return settled;
   };
-  // Lights inside and around the closed cube: about half the rays leave its faces towards a light behind
-  // another face.
+  // From the cube's faces to four points in and around it: the rays towards a point behind another face
+  // are blocked, those of neighbouring origins mostly by the same quad or its neighbours.
   const std::vector<Ray> shadow = test::shadow_rays(triangles, 2048, 60, 4, false);
-  EXPECT_GT(settled_by_cache(shadow), shadow.size() / 8);
-  EXPECT_EQ(settled_by_cache(test::random_rays(triangles, 2048, 61)), 0u);
+  const auto blocked = static_cast<std::size_t>(std::count_if(
+      shadow.begin(), shadow.end(), [&](const Ray& r) { return brute_force_any(triangles, r); }));
+  ASSERT_GT(blocked, shadow.size() / 4);
+  const auto settled = settled_by_cache(shadow);
+  // 265 of the 1221 blocked rays with the standard library's generators on Debian 12.
+  EXPECT_GT(settled[0] + settled[1], blocked / 8) << "of " << blocked << " blocked";
+  EXPECT_GT(settled[0], 0u);
+  EXPECT_GT(settled[1], 0u);
+  // Random rays, each ending at a point of its own, and the same without an end.
+  std::vector<Ray> own_ends = test::random_rays(triangles, 2048, 61);
+  for (Ray& r : own_ends) r.tmax = std::min(r.tmax, 3.0f);
+  const auto own = settled_by_cache(own_ends);
+  EXPECT_EQ(own[0] + own[1], 0u);
+  std::vector<Ray> unbounded = own_ends;
+  for (Ray& r : unbounded) r.tmax = std::numeric_limits<float>::infinity();
+  const auto none = settled_by_cache(unbounded);
+  EXPECT_EQ(none[0] + none[1], 0u);
 }
 
 TEST(Layouts, RefitRejectsADifferentTriangleCount) {

@@ -70,9 +70,9 @@ struct LayoutSpec {
   KernelIsa isa = KernelIsa::kAuto;
   /// Rays per packet: 1 (single-ray kernels), 8 or 16.
   uint32_t packet = 1;
-  /// The wide layouts' single-ray any-hit kernels: test first the leaf that blocked the last ray ending at
-  /// the same point, a shadow cache (wide_kernels.inl: ShadowCache). `shadow_cache=off` measures the walk
-  /// alone.
+  /// The wide layouts' any-hit kernels, single-ray and packets: test first the leaf that blocked the last
+  /// ray ending at the same point, a shadow cache (wide_kernels.inl: ShadowCache). `shadow_cache=off`
+  /// measures the walk alone.
   bool shadow_cache = true;
 
   /// The canonical text: the name, then the options that differ from the defaults, in the order above.

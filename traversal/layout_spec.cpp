@@ -136,8 +136,6 @@ LayoutSpec parse_layout_spec(std::string_view text) {
     if (comma == std::string_view::npos) break;
     rest = rest.substr(comma + 1);
   }
-  if (spec.packet != 1 && std::find(seen.begin(), seen.end(), "shadow_cache") != seen.end())
-    throw Error(where + ": shadow_cache applies to the single-ray kernels (packet=1), not to packets");
   if (!info.has_isa && spec.isa != KernelIsa::kAuto && spec.packet == 1)
     throw Error(where + ": isa picks the build of " + spec.name +
                 "'s packet kernels; its single-ray kernel has one build (add packet=8 or packet=16)");

@@ -242,8 +242,8 @@ struct WideBatch {
   IntOrder int_order = IntOrder::kNone;
   /// box=fma: some rays take the robust box test (WideRay::robust_box).
   bool robust_box = false;
-  /// Any hit, single-ray kernels: test first where the last ray to the same end point found its hit
-  /// (wide_kernels.inl: ShadowCache; LayoutSpec::shadow_cache).
+  /// Any hit: test first where the last ray to the same end point found its hit (wide_kernels.inl:
+  /// ShadowCache; LayoutSpec::shadow_cache).
   bool shadow_cache = false;
   /// For the tests: where set, [0] counts the rays the shadow cache settled by its leaf, [1] those it
   /// settled by the leaf's subtree.

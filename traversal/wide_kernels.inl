@@ -1264,6 +1264,51 @@ class ShadowCache {
     return true;
   }
 
+  /// Whether slot k's occluder blocks `r`, a ray of slot k: the leaf, then the subtree of the last inner
+  /// node (not from the root: that is the walk itself, which the ray takes next if this fails). Counts the
+  /// test for the slot's retirement (tested).
+  struct Settle {
+    bool settled = false;
+    bool by_subtree = false;
+  };
+  template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrder, IntOrder kInt>
+  SAHBENCH_KERNEL_INLINE Settle test(const WideUnit* arena, int k, const WideRay& r) {
+    if (occluder_[k].count == 0) return {};
+    Settle s;
+    s.settled = test_leaf<kTri>(arena, k, r);
+    if (!s.settled) {
+      s.by_subtree = true;
+      s.settled = test_subtree<N, kTri, kBox, kOrder, kInt>(arena, k, r);
+    }
+    tested(k, s.settled);
+    return s;
+  }
+  /// The two parts of test, without the count. Whether slot k's leaf blocks `r`.
+  template <TriangleTestKind kTri>
+  SAHBENCH_KERNEL_INLINE bool test_leaf(const WideUnit* arena, int k, const WideRay& r) const {
+    const Occluder& last = occluder_[k];
+    if (last.count == 0) return false;
+    Hit hit;
+    float best_t = r.tmax;
+    return intersect_leaf<kTri, true, false>(&at<BlockOf<kTri>>(arena, last.leaf), last.count, r, hit, best_t,
+                                             nullptr);
+  }
+  /// Whether a leaf under slot k's last inner node blocks `r`; keeps that leaf as the slot's occluder.
+  template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrder, IntOrder kInt>
+  SAHBENCH_KERNEL_INLINE bool test_subtree(const WideUnit* arena, int k, const WideRay& r) {
+    const Occluder last = occluder_[k];
+    if (last.count == 0 || last.node == 0) return false;
+    Hit hit;
+    float best_t = r.tmax;
+    Occluder found;
+    if (!trace_subtree<N, kTri, kBox, true, false, kOrder, kInt>(arena, r, {last.node, 0, r.tmin}, hit,
+                                                                 best_t, nullptr, &found))
+      return false;
+    // The leaf found, under the same node: the subtree walk's own last node lies deeper, and testing from
+    // there would narrow the cache's reach with every hit.
+    remember(k, {found.leaf, found.count, last.node});
+    return true;
+  }
   /// What to test first for rays of slot k; its count is 0 when there is nothing.
   SAHBENCH_KERNEL_INLINE const Occluder& occluder(int k) const { return occluder_[k]; }
   /// Where the walk of a ray of slot k found its hit.
@@ -1347,28 +1392,11 @@ template <uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrde
     const WideRay& r = batch.rays[i];
     const int k = cache.slot(r);
     if (k < 0) break;
-    const Occluder& last = cache.occluder(k);
-    if (last.count != 0) {
-      Hit hit;
-      float best_t = r.tmax;
-      bool settled = intersect_leaf<kTri, true, false>(&at<BlockOf<kTri>>(batch.arena, last.leaf), last.count,
-                                                       r, hit, best_t, nullptr);
-      const bool by_subtree = !settled;
-      // Not from the root: that is the walk itself, which the ray takes next if this fails.
-      if (!settled && last.node != 0) {
-        Occluder found;
-        settled = trace_subtree<N, kTri, kBox, true, false, kOrder, kInt>(
-            batch.arena, r, {last.node, 0, r.tmin}, hit, best_t, nullptr, &found);
-        // The leaf found, under the same node: the subtree walk's own last node lies deeper, and testing
-        // from there would narrow the cache's reach with every hit.
-        if (settled) cache.remember(k, {found.leaf, found.count, last.node});
-      }
-      cache.tested(k, settled);
-      if (settled) {
-        batch.occluded[i] = 1;
-        if (batch.shadow_cache_settled) ++batch.shadow_cache_settled[by_subtree];
-        continue;
-      }
+    const ShadowCache::Settle s = cache.test<N, kTri, kBox, kOrder, kInt>(batch.arena, k, r);
+    if (s.settled) {
+      batch.occluded[i] = 1;
+      if (batch.shadow_cache_settled) ++batch.shadow_cache_settled[s.by_subtree];
+      continue;
     }
     pending[n] = i;
     pending_slot[n++] = k;

@@ -28,7 +28,7 @@ class WideLayout final : public CompiledLayout {
         shear_(variant.triangle == TriangleTestKind::kWatertight),
         box_(variant.box),
         any_hit_order_(any_hit_order),
-        shadow_cache_(shadow_cache && packet == 1) {
+        shadow_cache_(shadow_cache) {
     if (bvh_.form != block_form_for(variant.triangle))
       throw Error("layout bvh" + std::to_string(N) + ": blocks compiled in the wrong form for the " +
                   std::string(to_string(variant.triangle)) + " test");
@@ -117,7 +117,7 @@ class WideLayout final : public CompiledLayout {
   bool shear_;  // the rays need the watertight shear (make_wide_ray)
   BoxTestKind box_;
   AnyHitOrder any_hit_order_;  // resolved (bvh2_traversal.h: resolve_any_hit_order)
-  bool shadow_cache_;          // LayoutSpec::shadow_cache, single-ray kernels only
+  bool shadow_cache_;          // LayoutSpec::shadow_cache
   WideKernel closest_ = nullptr, any_ = nullptr, count_closest_ = nullptr, count_any_ = nullptr;
 };
 

@@ -408,10 +408,11 @@ SAHBENCH_KERNEL_INLINE void packet_leaf_mtn(const NormalBlock* blocks, uint32_t 
 // children the packet enters nearest first by their nearest ray's entry (ties to the higher slot), and
 // skips, per lane, entries beyond that ray's closest hit so far; any hit visits them in slot order (the
 // nearest or farthest of eight rays is not one child; a ray that goes on alone takes kOrder as descend()
-// does), and drops each ray from the packet at its first hit.
+// does), drops each ray from the packet at its first hit and, where `found` is given, puts where it found
+// it in found[j] (Occluder: the leaf, and the last inner node the packet or the ray alone visited).
 template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit, AnyHitOrder kOrder>
 inline void trace_packet(const float* root_planes, const WideUnit* arena, const WideRay* rays, uint32_t n,
-                         Hit* hits, uint8_t* occluded) {
+                         Hit* hits, uint8_t* occluded, Occluder* found = nullptr) {
   using V = typename P::V;
   constexpr uint32_t K = P::kWidth;
   const PacketRays<P> p = make_packet<P>(rays, n);
@@ -430,6 +431,7 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
     }
     return;
   }
+  [[maybe_unused]] uint32_t node = 0;  // any hit: the last inner node the packet visited
   const PacketBounds bounds = kBox == BoxTestKind::kFma ? PacketBounds{} : make_packet_bounds(rays, n);
   PacketEntry<P> stack[kWideStackCapacity];
   uint32_t size = 0;
@@ -448,7 +450,8 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
         for (uint32_t m = lanes; m; m &= m - 1) {
           const uint32_t j = static_cast<uint32_t>(__builtin_ctz(m));
           if (trace_subtree<N, kTri, kBox, kAnyHit, false, kOrder, IntOrder::kNone>(
-                  arena, rays[j], {entry.child, 0, t_entry[j]}, best[j], best_t[j], nullptr))
+                  arena, rays[j], {entry.child, 0, t_entry[j]}, best[j], best_t[j], nullptr,
+                  found ? &found[j] : nullptr))
             best_t[j] = __builtin_nanf("");
         }
       } else if (entry.count != 0) {
@@ -469,24 +472,30 @@ inline void trace_packet(const float* root_planes, const WideUnit* arena, const 
             best_t[j] = __builtin_nanf("");
         }
         if constexpr (kAnyHit) {
-          if (P::ordered(P::load(best_t)) == 0) break;
+          const uint32_t left = P::ordered(P::load(best_t));
+          if (found) {
+            for (uint32_t m = lanes & ~left; m; m &= m - 1)
+              found[__builtin_ctz(m)] = {entry.child, entry.count, node};
+          }
+          if (left == 0) break;
         }
       } else {
-        const WideNode<N>& node = at<WideNode<N>>(arena, entry.child);
+        if constexpr (kAnyHit) node = entry.child;
+        const WideNode<N>& wide = at<WideNode<N>>(arena, entry.child);
         const V active_tmax = P::select(lanes, tmax, nan);
         PacketEntry<P> entered[N];
         uint64_t keys[N < 4 ? 4 : N];
         uint32_t k = 0;
-        uint32_t slots = occupied_slots(node);
+        uint32_t slots = occupied_slots(wide);
         if constexpr (kBox != BoxTestKind::kFma) {
-          if (bounds.valid) slots &= packet_cull<N, kBox>(node, p.near_plane, p.far_plane, bounds);
+          if (bounds.valid) slots &= packet_cull<N, kBox>(wide, p.near_plane, p.far_plane, bounds);
         }
         for (; slots; slots &= slots - 1) {
           const uint32_t i = static_cast<uint32_t>(__builtin_ctz(slots));
           uint32_t mask;
-          const V t = packet_enter<P, kBox>(&node.planes[0][i], N, p, active_tmax, mask);
+          const V t = packet_enter<P, kBox>(&wide.planes[0][i], N, p, active_tmax, mask);
           if (mask == 0) continue;
-          entered[k] = {P::select(mask, t, nan), node.child[i], node.count[i]};
+          entered[k] = {P::select(mask, t, nan), wide.child[i], wide.count[i]};
           if constexpr (kAnyHit && kOrder != AnyHitOrder::kNearest) {
             keys[k] = k;
           } else {
@@ -545,6 +554,8 @@ void trace_alone(const WideBatch& batch, std::size_t begin, std::size_t end) {
   part.counts = nullptr;
   part.int_order = IntOrder::kFree;
   part.robust_box = false;
+  // trace_packet_batch has run the batch through the shadow cache where it takes it.
+  part.shadow_cache = false;
   // As make_wide_rays: a ray that takes the robust box test does not lower the others' path.
   for (std::size_t i = begin; i < end; ++i) {
     if (batch.rays[i].robust_box)
@@ -555,17 +566,106 @@ void trace_alone(const WideBatch& batch, std::size_t begin, std::size_t end) {
   trace_batch<N, kTri, kBox, kAnyHit, false>(part);
 }
 
+// Any hit in packets through a ShadowCache (wide_kernels.inl), from the batch's first packet up to the
+// first with a ray that ends at a point no slot takes (then the caller traces the rest, from the index
+// this returns, a packet's first ray). A packet that can go down the tree together (packet_coherent) is
+// settled whole or not at all: its rays are tested against their slots' leaves up to the first that
+// fails, and if one fails the whole packet walks as without the cache. Its walk visits each node once for
+// all its rays, so it costs each ray less than its own walk: a ray settled out of a packet that walks
+// anyway saves little, and a packet of three rays or fewer left would go on ray by ray, which costs more
+// than the packet walk. The rays of the other packets (rays to lights taken in turn often differ in the
+// sign of a direction component) are each tested as trace_shadow_cached tests them, and those left go on
+// two at a time (trace_ray_pair), as trace_alone traces them without the cache. The walks' hits fill the
+// slots for the next rays. The box=fma kernels take this only where no ray of the batch takes the robust
+// box test (WideBatch::robust_box), as trace_batch does.
+template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrder>
+[[gnu::noinline]] std::size_t trace_packets_shadow_cached(const WideBatch& batch) {
+  constexpr uint32_t K = P::kWidth;
+  ShadowCache cache;
+  std::size_t pending[2];
+  int pending_slot[2], waiting = 0;
+  auto trace_pending = [&] {
+    Occluder found[2];
+    Hit hit[2];
+    if (waiting == 2)
+      trace_ray_pair<N, kTri, kBox, true, false, kOrder, IntOrder::kNone>(
+          batch.root_planes, batch.arena, batch.rays[pending[0]], batch.rays[pending[1]], nullptr, hit[0],
+          hit[1], &found[0], &found[1]);
+    else
+      hit[0] = trace_ray<N, kTri, kBox, true, false, kOrder, IntOrder::kNone>(
+          batch.root_planes, batch.arena, batch.rays[pending[0]], nullptr, &found[0]);
+    for (int j = 0; j < waiting; ++j) {
+      const bool occluded = hit[j].prim != kInvalidPrim;
+      batch.occluded[pending[j]] = occluded;
+      if (occluded) cache.remember(pending_slot[j], found[j]);
+    }
+    waiting = 0;
+  };
+  for (std::size_t first = 0; first < batch.count; first += K) {
+    const uint32_t n = static_cast<uint32_t>(batch.count - first < K ? batch.count - first : K);
+    const WideRay* rays = batch.rays + first;
+    uint8_t* occluded = batch.occluded + first;
+    int slot[K];
+    for (uint32_t j = 0; j < n; ++j) {
+      slot[j] = cache.slot(rays[j]);
+      if (slot[j] >= 0) continue;
+      if (waiting != 0) trace_pending();
+      return first;
+    }
+    if (packet_coherent<kBox>(rays, n)) {
+      uint32_t settled = 0;
+      while (settled < n && cache.occluder(slot[settled]).count != 0) {
+        const bool blocked = cache.test_leaf<kTri>(batch.arena, slot[settled], rays[settled]);
+        cache.tested(slot[settled], blocked);
+        if (!blocked) break;
+        ++settled;
+      }
+      if (settled == n) {
+        for (uint32_t j = 0; j < n; ++j) occluded[j] = 1;
+        if (batch.shadow_cache_settled) batch.shadow_cache_settled[0] += n;
+        continue;
+      }
+      Occluder found[K];
+      trace_packet<P, N, kTri, kBox, true, kOrder>(batch.root_planes, batch.arena, rays, n, nullptr, occluded,
+                                                   found);
+      for (uint32_t j = 0; j < n; ++j)
+        if (occluded[j]) cache.remember(slot[j], found[j]);
+      continue;
+    }
+    for (uint32_t j = 0; j < n; ++j) {
+      const ShadowCache::Settle s =
+          cache.test<N, kTri, kBox, kOrder, IntOrder::kNone>(batch.arena, slot[j], rays[j]);
+      if (s.settled) {
+        occluded[j] = 1;
+        if (batch.shadow_cache_settled) ++batch.shadow_cache_settled[s.by_subtree];
+        continue;
+      }
+      pending[waiting] = first + j;
+      pending_slot[waiting++] = slot[j];
+      if (waiting == 2) trace_pending();
+    }
+  }
+  if (waiting != 0) trace_pending();
+  return batch.count;
+}
+
 // A batch in packets of P::kWidth rays, in the batch's order; the rays of packets that are not coherent
 // (packet_coherent) go one at a time (trace_alone), each run of such packets in one call. Splitting such
 // a packet by octant into smaller packets, as Embree's hybrid kernels do, or keeping it whole with
 // per-lane planes (packet_enter's kPerLane, which the binary layouts' packets gain by), was slower than
-// tracing its rays alone on most shadow and diffuse cells of configs/tune.toml (README, "Packets").
+// tracing its rays alone on most shadow and diffuse cells of configs/tune.toml (README, "Packets"). Any
+// hit first runs the batch through the shadow cache where it takes it (trace_packets_shadow_cached).
 template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, bool kAnyHit>
 void trace_packet_batch(const WideBatch& batch) {
   constexpr uint32_t K = P::kWidth;
   auto run = [&]<AnyHitOrder kOrder>() {
-    std::size_t alone = 0;  // the first ray of the run of incoherent packets before `first`
-    for (std::size_t first = 0; first < batch.count; first += K) {
+    std::size_t start = 0;
+    if constexpr (kAnyHit) {
+      if (batch.shadow_cache && !(kBox == BoxTestKind::kFma && batch.robust_box) && ShadowCache::takes(batch))
+        start = trace_packets_shadow_cached<P, N, kTri, kBox, kOrder>(batch);
+    }
+    std::size_t alone = start;  // the first ray of the run of incoherent packets before `first`
+    for (std::size_t first = start; first < batch.count; first += K) {
       const uint32_t n = static_cast<uint32_t>(batch.count - first < K ? batch.count - first : K);
       const WideRay* rays = batch.rays + first;
       if (!packet_coherent<kBox>(rays, n)) continue;

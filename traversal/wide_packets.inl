@@ -575,9 +575,9 @@ void trace_alone(const WideBatch& batch, std::size_t begin, std::size_t end) {
 // anyway saves little, and a packet of three rays or fewer left would go on ray by ray, which costs more
 // than the packet walk. The rays of the other packets (rays to lights taken in turn often differ in the
 // sign of a direction component) are each tested as trace_shadow_cached tests them, and those left go on
-// two at a time (trace_ray_pair), as trace_alone traces them without the cache. The walks' hits fill the
-// slots for the next rays. The box=fma kernels take this only where no ray of the batch takes the robust
-// box test (WideBatch::robust_box), as trace_batch does.
+// two at a time (trace_ray_pair; box=fma on the float path, where trace_alone takes the integer path the
+// rays allow). The walks' hits fill the slots for the next rays. The box=fma kernels take this only where
+// no ray of the batch takes the robust box test (WideBatch::robust_box), as trace_batch does.
 template <class P, uint32_t N, TriangleTestKind kTri, BoxTestKind kBox, AnyHitOrder kOrder>
 [[gnu::noinline]] std::size_t trace_packets_shadow_cached(const WideBatch& batch) {
   constexpr uint32_t K = P::kWidth;

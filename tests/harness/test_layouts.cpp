@@ -716,7 +716,7 @@ TEST(Layouts, ShadowCacheSettlesShadowRaysAndNoOthers) {
     auto settled_by_cache = [&](const std::vector<Ray>& rays) {
       std::array<std::size_t, 2> settled{};  // by the leaf, by its subtree
       std::vector<WideRay> setup(rays.size());
-      std::vector<uint8_t> occluded(rays.size());
+      std::vector<uint8_t> occluded(rays.size(), 2);  // neither answer: a ray left unanswered fails
       for (std::size_t first = 0; first < rays.size(); first += 256) {
         const std::size_t n = std::min<std::size_t>(256, rays.size() - first);
         const WideRaysInfo info =
@@ -753,6 +753,19 @@ TEST(Layouts, ShadowCacheSettlesShadowRaysAndNoOthers) {
     }
     const auto from_patch = settled_by_cache(patch);
     EXPECT_GT(from_patch[0], patch.size() / 2);
+    // The same with every eighth ray from a point off to the side, whose ray passes by the cube in the
+    // same octant: every packet goes down together, its first seven rays are blocked where the packet
+    // before them was, and its eighth is not. A packet is settled only where all its rays are blocked: one
+    // that marked the passing ray would fail brute force above.
+    std::vector<Ray> mixed = patch;
+    for (std::size_t i = 7; i < mixed.size(); i += 8) {
+      mixed[i].org = {-9.0f, -3.0f, 2.9f};
+      mixed[i].dir = Vec3{3.0f, 3.0f, 3.0f} - mixed[i].org;
+    }
+    const auto mixed_blocked = static_cast<std::size_t>(std::count_if(
+        mixed.begin(), mixed.end(), [&](const Ray& r) { return brute_force_any(triangles, r); }));
+    ASSERT_EQ(mixed_blocked, mixed.size() / 8 * 7);
+    settled_by_cache(mixed);
     // Random rays, each ending at a point of its own, and the same without an end.
     std::vector<Ray> own_ends = test::random_rays(triangles, 2048, 61);
     for (Ray& r : own_ends) r.tmax = std::min(r.tmax, 3.0f);
